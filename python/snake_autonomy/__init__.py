@@ -1,0 +1,1 @@
+"""snake_autonomy: autonomy stack for modular snake robots (COBRA first)."""
