@@ -88,6 +88,18 @@ std::string to_string(ChassisMethod method) {
   return method == ChassisMethod::kMeanAxis ? "mean_axis" : "svd";
 }
 
+std::vector<std::string> RobotModel::frame_names() const {
+  std::vector<std::string> out{"base_link", "head_link"};
+  for (int i = 1; i <= num_joints; ++i) out.push_back("link_" + std::to_string(i));
+  return out;
+}
+
+std::vector<std::string> RobotModel::joint_names() const {
+  std::vector<std::string> out;
+  for (int i = 1; i <= num_joints; ++i) out.push_back("joint_" + std::to_string(i));
+  return out;
+}
+
 std::vector<int> RobotModel::yaw_joints() const {
   std::vector<int> out;
   for (int i = 0; i < static_cast<int>(axes.size()); ++i)

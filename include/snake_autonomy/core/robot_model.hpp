@@ -57,6 +57,10 @@ struct RobotModel {
   double bbox_padding_m = 0.1;        // eq. 3.20
 
   int num_frames() const { return num_joints + 2; }
+  // Frame names in chain order (URDF links, TF frames): base_link, head_link, link_1..link_N.
+  std::vector<std::string> frame_names() const;
+  // Joint names in order: joint_1..joint_N.
+  std::vector<std::string> joint_names() const;
   // Indices (0-based joint numbers) of the yaw / pitch joints, head to tail.
   std::vector<int> yaw_joints() const;
   std::vector<int> pitch_joints() const;

@@ -1,0 +1,1 @@
+"""snake_autonomy.estimation"""
