@@ -1,39 +1,18 @@
 #include "snake_autonomy/core/gait_library.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <stdexcept>
+
+#include "snake_autonomy/core/config_reader.hpp"
 
 namespace snake_autonomy::core {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
 
-bool read_number(const YAML::Node& parent, const std::string& key, const std::string& where, bool required,
-                 double* out, std::vector<std::string>* errors) {
-  const YAML::Node n = parent[key];
-  if (!n) {
-    if (required) errors->push_back(where + "." + key + ": missing");
-    return false;
-  }
-  try {
-    *out = n.as<double>();
-  } catch (const YAML::Exception&) {
-    errors->push_back(where + "." + key + ": expected a number, got '" + YAML::Dump(n) + "'");
-    return false;
-  }
-  if (!std::isfinite(*out)) {
-    errors->push_back(where + "." + key + ": must be finite, got " + YAML::Dump(n));
-    return false;
-  }
-  return true;
-}
-
 void read_wave(const YAML::Node& gait, const std::string& axis, const std::string& where, WaveSpec* w,
                std::vector<std::string>* errors) {
+  ConfigReader r(errors);
   const YAML::Node n = gait[axis];
   if (!n || !n.IsMap()) {
     errors->push_back(where + "." + axis + ": missing (a mapping with amplitude_deg, lag_deg, offset_deg, bias_deg)");
@@ -45,14 +24,14 @@ void read_wave(const YAML::Node& gait, const std::string& axis, const std::strin
     if (key != "amplitude_deg" && key != "lag_deg" && key != "offset_deg" && key != "bias_deg")
       errors->push_back(at + "." + key + ": unknown key (expected amplitude_deg, lag_deg, offset_deg, bias_deg)");
   }
-  double v = 0.0;
-  if (read_number(n, "amplitude_deg", at, true, &v, errors)) w->amplitude_rad = v * kDegToRad;
-  v = 0.0;
-  if (read_number(n, "lag_deg", at, false, &v, errors)) w->lag_rad = v * kDegToRad;
-  v = 0.0;
-  if (read_number(n, "offset_deg", at, false, &v, errors)) w->offset_rad = v * kDegToRad;
-  v = 0.0;
-  if (read_number(n, "bias_deg", at, false, &v, errors)) w->bias_rad = v * kDegToRad;
+  auto angle = [&](const char* key, bool required, double* out_rad) {
+    double deg = 0.0;
+    if (r.scalar(r.child(n, key, at + "." + key, required), at + "." + key, &deg)) *out_rad = deg * kDegToRad;
+  };
+  angle("amplitude_deg", true, &w->amplitude_rad);
+  angle("lag_deg", false, &w->lag_rad);
+  angle("offset_deg", false, &w->offset_rad);
+  angle("bias_deg", false, &w->bias_rad);
 }
 
 }  // namespace
@@ -78,34 +57,22 @@ GaitLibrary GaitLibrary::from_yaml_string(const std::string& text, const std::st
       continue;
     }
     if (n["description"]) g.description = n["description"].as<std::string>();
-    if (read_number(n, "frequency_hz", where, true, &g.frequency_hz, &errors) && g.frequency_hz < 0.0)
+    ConfigReader r(&errors);
+    if (r.scalar(r.child(n, "frequency_hz", where + ".frequency_hz"), where + ".frequency_hz", &g.frequency_hz) &&
+        g.frequency_hz < 0.0)
       errors.push_back(where + ".frequency_hz: must be >= 0, got " + std::to_string(g.frequency_hz));
     read_wave(n, "pitch", where, &g.pitch, &errors);
     read_wave(n, "yaw", where, &g.yaw, &errors);
-    if (n["steerable"]) {
-      try {
-        g.steerable = n["steerable"].as<bool>();
-      } catch (const YAML::Exception&) {
-        errors.push_back(where + ".steerable: expected true or false, got '" + YAML::Dump(n["steerable"]) + "'");
-      }
-    }
+    r.scalar(r.child(n, "steerable", where + ".steerable", false), where + ".steerable", &g.steerable);
     lib.gaits_[g.name] = g;
   }
   if (lib.gaits_.empty()) errors.push_back("gaits: no gait defined");
-  if (!errors.empty()) {
-    std::string msg = source + ": invalid gait library (" + std::to_string(errors.size()) + " problems):";
-    for (const auto& e : errors) msg += "\n  " + e;
-    throw ConfigError(msg);
-  }
+  throw_if_errors(errors, source, "gait library");
   return lib;
 }
 
 GaitLibrary GaitLibrary::from_yaml_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot open gait library");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return from_yaml_string(buffer.str(), path);
+  return from_yaml_string(read_config_file(path, "gait library"), path);
 }
 
 std::vector<std::string> GaitLibrary::names() const {

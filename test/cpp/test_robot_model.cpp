@@ -77,7 +77,7 @@ TEST(RobotModel, YamlErrorsNameTheFile) {
   } catch (const ConfigError& e) {
     const std::string w = e.what();
     EXPECT_NE(w.find("robots/x.yaml"), std::string::npos) << w;
-    EXPECT_NE(w.find("num_joints: expected a integer, got 'seven'"), std::string::npos) << w;
+    EXPECT_NE(w.find("num_joints: expected an integer, got 'seven'"), std::string::npos) << w;
     EXPECT_NE(w.find("head_length_m: missing"), std::string::npos) << w;
   }
   EXPECT_THROW(RobotModel::from_yaml_file("/nonexistent.yaml"), ConfigError);
