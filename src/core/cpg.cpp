@@ -8,6 +8,9 @@
 namespace snake_autonomy::core {
 namespace {
 
+// Amplitude (rad) and amplitude rate (rad/s) below which the oscillators count as at rest.
+constexpr double kRestAmplitude = 1e-3;
+
 // Exact step of x'' = γ² (target − x) − 2γ x' over dt (critically damped, no overshoot).
 inline void critically_damped_step(double target, double gamma, double decay, double dt, double& x,
                                    double& x_dot) noexcept {
@@ -96,6 +99,12 @@ bool Cpg::apply(const GaitParameters& p) noexcept {
     const double wanted = p.phase(i + 1) - p.phase(i);
     const double d = wanted - lag_(i);
     lag_target_(i) = lag_(i) + std::atan2(std::sin(d), std::cos(d));
+  }
+  // At rest (no amplitude, none building up) q does not depend on θ: the lags may jump, so a gait
+  // starts with its travelling wave instead of gliding in from the previous lags.
+  if (r_.cwiseAbs().maxCoeff() < kRestAmplitude && r_dot_.cwiseAbs().maxCoeff() < kRestAmplitude) {
+    lag_ = lag_target_;
+    lag_dot_.setZero();
   }
   return true;
 }

@@ -200,3 +200,20 @@ TEST(Cpg, SidewindingGaitHasNinetyDegreesBetweenWaves) {
   EXPECT_NEAR(cpg.amplitudes()(0), 15.0 * M_PI / 180.0, 1e-6);
   EXPECT_NEAR(cpg.amplitudes()(1), 45.0 * M_PI / 180.0, 1e-6);
 }
+
+TEST(Cpg, LagsGlideWhileMovingAndJumpAtRest) {
+  const RobotModel model = cobra();
+  Cpg cpg(model);
+  GaitParameters p = GaitParameters::zeros(model.num_joints);
+  p.amplitude.setConstant(0.5);
+  p.phase = Eigen::VectorXd::LinSpaced(model.num_joints, 0.0, 2.0);  // lags 0.2
+  cpg.set_parameters(p);  // from rest: lags at their targets at once
+  EXPECT_NEAR(cpg.lags()(3), 0.2, 1e-12);
+  for (int k = 0; k < 500; ++k) cpg.step(0.01);
+  p.phase = Eigen::VectorXd::LinSpaced(model.num_joints, 0.0, -2.0);  // lags −0.2 while oscillating
+  cpg.set_parameters(p);
+  cpg.step(0.01);
+  EXPECT_GT(cpg.lags()(3), 0.19);  // still near the old lag: gliding, not jumping
+  for (int k = 0; k < 1000; ++k) cpg.step(0.01);
+  EXPECT_NEAR(cpg.lags()(3), -0.2, 1e-6);
+}

@@ -9,6 +9,8 @@
 // so no parameter change ever makes q jump: a lag change fed straight into the linear coupling
 // would drive the phases at μ·Δlag (about 30 rad/s for a half-turn at μ = 10). A new lag target is
 // unwrapped to the nearest equivalent of the current lag (same sin θ, no needless full turns).
+// When the oscillators are at rest (r and dr/dt about zero) q does not depend on θ, and the lags
+// take their new targets at once.
 //
 // Both linear systems are integrated exactly (eigen-decomposition of the symmetric A, closed-form
 // critically damped response), the filtered lags entering the phase step at their mid-step value,
