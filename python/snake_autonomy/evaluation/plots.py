@@ -12,7 +12,24 @@ import numpy as np
 
 LOSS_COLOR = "tab:red"
 REF_STYLE = dict(color="0.35", linestyle="--", linewidth=1.2, label="reference")
-EST_STYLE = dict(color="tab:blue", linewidth=1.2, label="estimate (aligned)")
+EST_STYLE = dict(color="tab:blue", linewidth=1.2)
+
+
+def est_label(result) -> str:
+    return "estimate" if result.options.align == "none" else f"estimate ({result.options.align}-aligned)"
+
+
+def break_at_loss(t_s: np.ndarray, values: np.ndarray, result) -> tuple:
+    """(t, values) with a NaN row between consecutive samples that span a loss interval, so that
+    lines are not drawn across it. t_s are absolute stamps (estimate time)."""
+    t_s = np.asarray(t_s, dtype=float)
+    values = np.asarray(values, dtype=float)
+    if len(t_s) < 2 or not result.loss_intervals:
+        return t_s, values
+    from .tracking_loss import spans_in_loss
+    cut = np.nonzero(spans_in_loss(t_s[:-1], t_s[1:], result.loss_intervals))[0] + 1
+    nan_row = np.full((len(cut),) + values.shape[1:], np.nan)
+    return np.insert(t_s, cut, np.nan), np.insert(values, cut, nan_row, axis=0)
 
 
 def time_origin(result) -> float:
@@ -50,7 +67,8 @@ def plot_xy(ax, result) -> None:
     ref = np.asarray(ref_full.positions_xyz)
     est = full_estimate_xyz(result)
     ax.plot(ref[:, 0], ref[:, 1], **REF_STYLE)
-    ax.plot(est[:, 0], est[:, 1], **EST_STYLE)
+    _, est_xy = break_at_loss(result.traj_est.timestamps, est[:, :2], result)
+    ax.plot(est_xy[:, 0], est_xy[:, 1], label=est_label(result), **EST_STYLE)
     ax.plot(est[0, 0], est[0, 1], "o", color="tab:green", markersize=4, label="start")
     if result.loss_intervals:
         stamps = np.asarray(ref_full.timestamps, dtype=float) - result.options.t_offset_s
@@ -66,12 +84,14 @@ def plot_xy(ax, result) -> None:
 
 def plot_xyz(axes, result) -> None:
     t0 = time_origin(result)
-    t = np.asarray(result.traj_est.timestamps, dtype=float) - t0
-    ref = np.asarray(result.traj_ref.positions_xyz)
-    est = np.asarray(result.traj_est.positions_xyz)
+    ref_full = result.traj_ref_full if result.traj_ref_full is not None else result.traj_ref
+    t_ref = np.asarray(ref_full.timestamps, dtype=float) - result.options.t_offset_s - t0
+    ref = np.asarray(ref_full.positions_xyz)
+    t, est = break_at_loss(result.traj_est.timestamps, result.traj_est.positions_xyz, result)
+    t = t - t0
     for k, (ax, name) in enumerate(zip(axes, "xyz")):
-        ax.plot(t, ref[:, k], **REF_STYLE)
-        ax.plot(t, est[:, k], **EST_STYLE)
+        ax.plot(t_ref, ref[:, k], **REF_STYLE)
+        ax.plot(t, est[:, k], label=est_label(result), **EST_STYLE)
         shade_loss(ax, result, t0, label=(k == 0))
         ax.set_ylabel(f"{name} (m)")
         ax.grid(True, alpha=0.3)
@@ -82,8 +102,9 @@ def plot_xyz(axes, result) -> None:
 
 def plot_axis_error(ax, result) -> None:
     t0 = time_origin(result)
-    t = np.asarray(result.traj_est.timestamps, dtype=float) - t0
     diff = np.asarray(result.traj_est.positions_xyz) - np.asarray(result.traj_ref.positions_xyz)
+    t, diff = break_at_loss(result.traj_est.timestamps, diff, result)
+    t = t - t0
     for k, (name, color) in enumerate(zip("xyz", ("tab:red", "tab:green", "tab:blue"))):
         ax.plot(t, diff[:, k], color=color, linewidth=1.0, label=f"{name} error")
     shade_loss(ax, result, t0, label=False)
@@ -97,9 +118,10 @@ def plot_axis_error(ax, result) -> None:
 
 def plot_error(ax, result, segment_key: str = "leg") -> None:
     t0 = time_origin(result)
-    t = np.asarray(result.stamps_s, dtype=float) - t0
+    t, errors = break_at_loss(result.stamps_s, result.errors, result)
+    t = t - t0
     shade_segments(ax, result, t0, segment_key)
-    ax.plot(t, result.errors, color="tab:blue", linewidth=1.0, label=result.options.metric.upper())
+    ax.plot(t, errors, color="tab:blue", linewidth=1.0, label=result.options.metric.upper())
     ax.axhline(result.stats["rmse"], color="tab:orange", linewidth=1.0, label=f"rmse {result.stats['rmse']:.4g}")
     ax.axhline(result.stats["mean"], color="tab:purple", linewidth=1.0, linestyle=":",
                label=f"mean {result.stats['mean']:.4g}")

@@ -187,9 +187,8 @@ def _read_bag_topic(path: str, topic: str, lost_covariance: float):
 
 def _covariance_lost(reader, topic: str, lost_covariance: float) -> np.ndarray:
     """Per message, in bag order (evo's order): does the pose covariance diagonal reach the threshold."""
-    from rosbags.typesys import Stores, get_typestore
-    typestore = get_typestore(Stores.ROS1_NOETIC)
     connections = [c for c in reader.connections if c.topic == topic]
+    typestore = typestore_for(connections)
     flags = []
     for connection, _, raw in reader.messages(connections=connections):
         msg = typestore.deserialize_ros1(raw, connection.msgtype)
@@ -217,11 +216,21 @@ def _tf_identifier(reader, path: str, topic: str) -> str:
     return f"{tf_topic}:{root}.{child}"
 
 
-def _tf_parents(reader, tf_topic: str) -> Dict[str, str]:
-    from rosbags.typesys import Stores, get_typestore
+def typestore_for(connections):
+    """rosbags' ROS 1 typestore plus the message types these connections define in the bag
+    (tf2_msgs/TFMessage and snake_autonomy/TrackingStatus are not in rosbags' own store)."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
     typestore = get_typestore(Stores.ROS1_NOETIC)
+    for c in connections:
+        if c.msgtype not in typestore.fielddefs:
+            typestore.register(get_types_from_msg(c.msgdef.data, c.msgtype))
+    return typestore
+
+
+def _tf_parents(reader, tf_topic: str) -> Dict[str, str]:
     topics = {tf_topic, "/" + tf_topic.lstrip("/"), "/tf_static"}
     connections = [c for c in reader.connections if c.topic in topics]
+    typestore = typestore_for(connections)
     parents: Dict[str, str] = {}
     for connection, _, raw in reader.messages(connections=connections):
         msg = typestore.deserialize_ros1(raw, connection.msgtype)

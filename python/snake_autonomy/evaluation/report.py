@@ -21,8 +21,7 @@ def format_table(result) -> str:
                                                        if result.excluded_pairs else ""))
     if result.loss_intervals:
         total = sum(iv.duration_s for iv in result.loss_intervals)
-        kinds = sorted({iv.kind for iv in result.loss_intervals})
-        lines.append(f"{'loss':>10}\t{len(result.loss_intervals)} intervals, {total:.2f} s ({', '.join(kinds)})")
+        lines.append(f"{'loss':>10}\t{len(result.loss_intervals)} intervals, {total:.2f} s")
     for key, groups in result.segments.items():
         lines.append("")
         lines.append(segment_table(key, groups, result.unit))
@@ -66,7 +65,7 @@ def write_report(result, out_dir, name: str = "report") -> Dict[str, str]:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     fig = plt.figure(figsize=(11.69, 8.27))
-    grid = fig.add_gridspec(3, 3, width_ratios=[1.0, 1.2, 1.2], hspace=0.45, wspace=0.3,
+    grid = fig.add_gridspec(3, 3, width_ratios=[1.3, 1.2, 1.2], hspace=0.45, wspace=0.3,
                             left=0.04, right=0.98, top=0.93, bottom=0.07)
     fig.suptitle(f"{result.options.metric.upper()}: {result.est_name} vs {result.ref_name}", fontsize=11)
     text_ax = fig.add_subplot(grid[:, 0])

@@ -53,9 +53,8 @@ def read_tracking_status(bag_path: str, topic: str = STATUS_TOPIC) -> List[Statu
     The message definition is taken from the bag itself, so this works without the package built.
     """
     from rosbags.rosbag1 import Reader
-    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-    from .readers import _resolve_topic, describe_topics
+    from .readers import _resolve_topic, describe_topics, typestore_for
 
     try:
         reader = Reader(bag_path)
@@ -67,13 +66,11 @@ def read_tracking_status(bag_path: str, topic: str = STATUS_TOPIC) -> List[Statu
         if stored is None:
             raise EvaluationError(f"{bag_path}: no topic {topic!r} for segments. "
                                   f"Topics in it: {describe_topics(bag_path)}")
-        typestore = get_typestore(Stores.ROS1_NOETIC)
         connections = [c for c in reader.connections if c.topic == stored]
         for c in connections:
             if not c.msgtype.endswith("TrackingStatus"):
                 raise EvaluationError(f"{bag_path}: topic {stored!r} is {c.msgtype}, not TrackingStatus")
-            if c.msgtype not in typestore.types:
-                typestore.register(get_types_from_msg(c.msgdef.data, c.msgtype))
+        typestore = typestore_for(connections)
         samples = []
         for connection, _, raw in reader.messages(connections=connections):
             msg = typestore.deserialize_ros1(raw, connection.msgtype)
