@@ -289,7 +289,7 @@ def no_match_message(traj_ref, traj_est, options: EvaluationOptions, ref_name: s
     offset = float(ref_t[0] - (est_t.min() - options.t_offset_s))
     n = len(matching_time_indices(np.sort(est_t - options.t_offset_s + offset), ref_t,
                                   options.t_max_diff_s)[0])
-    lines.append(f"  the two start {offset:.6f} s apart: --t-offset {offset:.6f} lines up their starts "
+    lines.append(f"  their starts are {offset:.6f} s apart: --t-offset {offset:.6f} lines up their starts "
                  f"({n} pairs would match within --t-max-diff {options.t_max_diff_s:g}).")
     return "\n".join(lines)
 
