@@ -130,3 +130,15 @@ def test_interval_rules():
     iv = [LossInterval(3.0, 6.0, "null")]
     assert points_in_loss([3.0, 4.0, 6.0], iv).tolist() == [False, True, False]
     assert spans_in_loss([2.0, 3.0, 6.0], [3.0, 6.0, 7.0], iv).tolist() == [False, True, False]
+
+
+def test_cli_reads_segments_from_the_estimate_bag(run_bag, tmp_path, capsys):
+    from snake_autonomy.cli import main as cli_main
+
+    out_json = tmp_path / "stats.json"
+    rc = cli_main(["evaluate", run_bag, run_bag, "--ref-topic", "/optitrack/head", "--est-topic",
+                   "/rtabmap/odom", "--segment-by", "leg", "--json", str(out_json)])
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert re.search(r"waypoint 1\s+59\s+0\.3000\s+0\.3000", out)
+    assert "gait" not in json.loads(out_json.read_text())["segments"]  # only the asked key
