@@ -5,7 +5,7 @@
 //
 //   bench_bus_cycle --port /tmp/snake_bus [--ids 11] [--cycles 2000] [--baud 1000000]
 //
-// bench/bus_cycle.py starts the mock, runs this, runs ROBOTIS's Python SDK on the same mock, and
+// bench/bus_cycle starts the mock, runs this, runs ROBOTIS's Python SDK on the same mock, and
 // compares. Leaves torque on at the goals it wrote (the mock does not care; on a robot, mind it).
 #include <time.h>
 

@@ -277,14 +277,22 @@ TEST(CheckStatus, WrongIdInstructionErrorsAlert) {
 
 // ---------------------------------------------------------------------------------------------
 TEST(ManualVectors, All21Packets) {
-  // ../shared beside the clone; SNAKE_SHARED_DIR overrides (a git worktree has no ../shared).
-  const char* env = std::getenv("SNAKE_SHARED_DIR");
-  const std::filesystem::path shared =
-      env ? std::filesystem::path(env) : std::filesystem::canonical(SNAKE_SOURCE_DIR).parent_path() / "shared";
+  // ../shared beside the clone, or ../../shared from a worktree in <clone's parent>/wt/NAME;
+  // SNAKE_AUTONOMY_SHARED overrides both (as test/python/conftest.py does).
+  const std::filesystem::path root = std::filesystem::canonical(SNAKE_SOURCE_DIR);
+  std::vector<std::filesystem::path> candidates = {root.parent_path() / "shared", root.parent_path().parent_path() / "shared"};
+  if (const char* env = std::getenv("SNAKE_AUTONOMY_SHARED")) candidates.insert(candidates.begin(), env);
+  std::filesystem::path shared = candidates[candidates.size() - 2];
+  for (const auto& c : candidates) {
+    if (std::filesystem::is_directory(c)) {
+      shared = c;
+      break;
+    }
+  }
   const std::filesystem::path path = shared / "data/dynamixel/protocol2_emanual_vectors.json";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is absent: the manual's vectors live in ../shared";
-  const YAML::Node root = YAML::LoadFile(path.string());  // JSON is YAML
-  const YAML::Node vectors = root["vectors"];
+  const YAML::Node json = YAML::LoadFile(path.string());  // JSON is YAML
+  const YAML::Node vectors = json["vectors"];
   ASSERT_EQ(vectors.size(), 21u);
   for (const auto& v : vectors) {
     const std::string name = v["name"].as<std::string>();
