@@ -75,7 +75,8 @@ class TrackerParams:
             if getattr(self, name) >= math.pi:
                 out.append(f"{name}: must be below pi rad (180 deg), got {getattr(self, name)!r}")
         if self.psi_wp > self.psi_turn:
-            out.append(f"psi_wp: must not exceed psi_turn ({self.psi_turn!r} rad), got {self.psi_wp!r} rad")
+            out.append(f"psi_wp: must not exceed psi_turn ({math.degrees(self.psi_turn):.6g} deg), "
+                       f"got {math.degrees(self.psi_wp):.6g} deg")
         if not isinstance(self.turn_exit_any_branch, bool):
             out.append(f"turn_exit_any_branch: must be true or false, got {self.turn_exit_any_branch!r}")
         return out
