@@ -15,6 +15,7 @@ Params      ~mission (file or provided name: loaded at start-up), ~auto_start (f
 import math
 import os
 import re
+import signal
 import threading
 import time
 from pathlib import Path
@@ -113,8 +114,10 @@ class MissionNode:
                 ok, message = self.start()
                 if not ok:
                     rospy.logerr(message)
-        # pre-shutdown: runs before rospy closes the publishers, so the hold still goes out
-        rospy.core.add_preshutdown_hook(lambda reason: self.on_shutdown())
+        # Other shutdown paths (rosnode kill, master gone): rospy has closed the publishers by now, so
+        # the hold may not go out, but the run is still ended and its results written. SIGINT and
+        # SIGTERM are handled in main() before rospy shuts down, so their hold does go out.
+        rospy.core.add_preshutdown_hook(lambda reason: self.on_shutdown(f"shutdown: {reason}"))
         self.timer = rospy.Timer(rospy.Duration(1.0 / self.rate_hz), self.on_tick)
 
     # -- helpers -----------------------------------------------------------------------------------
@@ -258,7 +261,10 @@ class MissionNode:
 
     def finish(self, decision):
         """The mission ended: hold, report per waypoint, close the log."""
-        self.publish(decision)
+        try:
+            self.publish(decision)
+        except rospy.ROSException as exc:   # shutting down: topics already closed
+            rospy.logerr(f"could not send the final hold: {exc}")
         outcome = self.runner.outcome or decision.outcome
         self.set_state(f"{self.runner.state}: {self.mission.name}: {outcome}")
         rospy.loginfo(f"mission {self.mission.name!r} ended: {outcome}")
@@ -301,11 +307,11 @@ class MissionNode:
             msg.poses.append(p)
         self.pub_wps.publish(msg)
 
-    def on_shutdown(self):
+    def on_shutdown(self, reason="node shutdown"):
         """SIGINT/SIGTERM/rosnode kill: hold and write what is known."""
         with self.lock:
             if self.runner is not None and self.runner.running:
-                self.runner.abort("node shutdown")
+                self.runner.abort(reason)
                 try:
                     self.finish(self.runner.final_decision(rospy.get_time()))
                 except Exception as exc:  # noqa: BLE001
@@ -315,11 +321,21 @@ class MissionNode:
 
 
 def main():
-    rospy.init_node("mission")
+    # Our own SIGINT/SIGTERM handlers: rospy closes every publisher before any shutdown hook runs, so
+    # the final hold must go out (and the results be written) before rospy starts shutting down.
+    rospy.init_node("mission", disable_signals=True)
     try:
-        MissionNode()
+        node = MissionNode()
     except (ValueError, MissionError) as exc:
         rospy.logfatal(str(exc))
         return 1
+
+    def on_signal(signum, _frame):
+        name = signal.Signals(signum).name
+        node.on_shutdown(f"node stopped by {name}")
+        rospy.signal_shutdown(name)
+
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
     rospy.spin()
     return 0
