@@ -95,6 +95,8 @@ class MissionNodeTest(unittest.TestCase):
     def test_2_mission_runs_to_the_end_and_writes_results(self):
         r = self.load(rospy.get_param("~mission_file"))
         self.assertTrue(r.success, r.message)
+        results = rospy.get_param("~results_dir")
+        before = set(glob.glob(os.path.join(results, "*_straight")))
         n0 = len(self.statuses)
         self.assertTrue(self.start().success)
         wait_for(lambda: any(s.done for s in self.statuses[n0:]), 30, "the mission to finish")
@@ -107,9 +109,11 @@ class MissionNodeTest(unittest.TestCase):
         steering = [c for c in self.driver.commands if c.gait == "sidewind"]
         self.assertTrue(steering and all(c.steer for c in steering))
         self.assertAlmostEqual(steering[0].delta, math.radians(14.0), places=3)
-        results = rospy.get_param("~results_dir")
-        wait_for(lambda: glob.glob(os.path.join(results, "*_straight", "yaw_errors.png")), 30, "the results folder")
-        run_dir = sorted(glob.glob(os.path.join(results, "*_straight")))[-1]
+        new = lambda: sorted(set(glob.glob(os.path.join(results, "*_straight"))) - before)  # noqa: E731
+        wait_for(lambda: len(new()) == 1, 10, "this run's results folder")
+        run_dir = new()[0]
+        # the figure written last: the results folder is complete
+        wait_for(lambda: os.path.isfile(os.path.join(run_dir, "yaw_error_vs_distance.png")), 30, "the figures")
         metrics = json.load(open(os.path.join(run_dir, "metrics.json")))
         self.assertTrue(metrics["outcome"].startswith("done"))
         self.assertEqual([w["reached"] for w in metrics["waypoints"]], [True, True])
