@@ -73,8 +73,8 @@ def test_frames_match_eq_3_3_and_3_4(robot, plant):
 
 
 def test_axis_convention(robot, plant):
-    """Base z up: joint 1 pitches (the tail rises for q_1 < 0 ... either way it leaves the
-    ground plane), joint 2 yaws (the tail stays in the plane); the body extends along -x."""
+    """Base z up: the body extends along -x, joint 1 pitches (the tail leaves the ground plane),
+    joint 2 yaws (the tail stays in it)."""
     plant.set_configuration(np.zeros(robot.num_joints), base=np.eye(4))
     tail = plant.frame_positions()[-1]
     assert tail[0] < -1.4 and abs(tail[1]) < 1e-9 and abs(tail[2]) < 1e-9

@@ -42,6 +42,7 @@ class PhysicsConfig:
     cone: str = "pyramidal"             # friction cone: pyramidal (30 % faster) | elliptic
     floor_friction: Range = Range(0.6, 0.8)  # Coulomb sliding coefficient, link capsule on floor
     torsional_friction: float = 0.0     # > 0 switches contacts to condim 4 (slower)
+    rolling_friction_m: float = 0.01    # > 0: condim 6, rolling torque = this x normal force
     contact_timeconst_s: float = 0.01   # MuJoCo solref[0]: contact stiffness (>= 2 timesteps)
     contact_dampratio: float = 1.0      # MuJoCo solref[1]
     solver_iterations: int = 30
@@ -152,6 +153,7 @@ class SimConfig:
             errs.append(f"physics.cone: expected elliptic or pyramidal, got {p.cone!r}")
         positive("physics.floor_friction", p.floor_friction)
         non_negative("physics.torsional_friction", p.torsional_friction)
+        non_negative("physics.rolling_friction_m", p.rolling_friction_m)
         if p.contact_timeconst_s < 2 * p.timestep_s:
             errs.append(f"physics.contact_timeconst_s: must be >= 2 timesteps "
                         f"({2 * p.timestep_s}), got {p.contact_timeconst_s}")

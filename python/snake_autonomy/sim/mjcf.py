@@ -60,11 +60,12 @@ def build_mjcf(robot, params: SimParams) -> str:
     masses = list(robot.masses_kg)
     lower, upper = list(robot.joint_lower_rad), list(robot.joint_upper_rad)
     mu = params.floor_friction
-    condim = 4 if phys.torsional_friction > 0 else 3
+    condim = 6 if phys.rolling_friction_m > 0 else (4 if phys.torsional_friction > 0 else 3)
+    friction = f"{_f(mu)} {_f(phys.torsional_friction)} {_f(phys.rolling_friction_m)}"
     # Links collide with the floor only (contype 1 vs conaffinity 2), unless self_collision.
     link_affinity = 3 if phys.self_collision else 2
     geom_defaults = (f'contype="1" conaffinity="{link_affinity}" condim="{condim}" '
-                     f'friction="{_f(mu)} {_f(phys.torsional_friction)} 0.0001" '
+                     f'friction="{friction}" '
                      f'solref="{_f(phys.contact_timeconst_s)} {_f(phys.contact_dampratio)}"')
 
     lines = [
@@ -82,7 +83,7 @@ def build_mjcf(robot, params: SimParams) -> str:
         '  </default>',
         '  <worldbody>',
         f'    <geom name="floor" type="plane" size="0 0 1" contype="2" conaffinity="1" '
-        f'condim="{condim}" friction="{_f(mu)} {_f(phys.torsional_friction)} 0.0001"/>',
+        f'condim="{condim}" friction="{friction}"/>',
         '    <light pos="0 0 4" dir="0 0 -1" directional="true"/>',
         f'    <body name="base_link" pos="0 0 {_f(r + phys.start_height_m)}">',
         '      <freejoint name="base"/>',
