@@ -44,7 +44,8 @@ def test_same_seed_same_trajectory_different_seed_differs(robot, config):
 def test_seed_draws_within_ranges(config):
     for seed in range(5):
         p = config.draw(seed)
-        assert config.physics.floor_friction.lo <= p.floor_friction <= config.physics.floor_friction.hi
+        friction = config.physics.floor_friction
+        assert friction.lo <= p.floor_friction <= friction.hi
         kp = config.servo.kp_nm_per_rad
         assert np.all((kp.lo <= p.kp_nm_per_rad) & (p.kp_nm_per_rad <= kp.hi))
         assert len(set(p.kp_nm_per_rad)) > 1   # per joint
@@ -149,4 +150,5 @@ def test_start_pose(robot, config):
     plant = Plant(robot, config.draw(seed=0), start=(1.0, -2.0, np.radians(30)))
     p, _ = plant.frame_pose("base_link")
     assert p[:2] == pytest.approx([1.0, -2.0])
+    assert plant.base_tilt_deg() == pytest.approx(0.0, abs=1e-6)
     assert np.degrees(body_heading_rad(plant.frame_positions())) == pytest.approx(30.0)

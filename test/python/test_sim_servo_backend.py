@@ -20,7 +20,8 @@ def robot(cobra_yaml):
     """COBRA with mixed servo directions, zero offsets and IDs, to exercise the mapping."""
     text = open(cobra_yaml).read()
     text = text.replace("ids: [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]", f"ids: {IDS}")
-    text = text.replace("directions: [1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1]", f"directions: {DIRECTIONS}")
+    text = text.replace("directions: [1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1]",
+                        f"directions: {DIRECTIONS}")
     text = text.replace("zero_offsets_ticks: [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]",
                         f"zero_offsets_ticks: {OFFSETS}")
     model = _core.RobotModel.from_yaml_string(text)
@@ -50,7 +51,8 @@ def test_tick_mapping(backend, j):
     """ticks = 2048 + offset + direction * q / (2 pi / 4096), both ways."""
     for q in (-1.2, 0.0, 0.7):
         shaft = backend.shaft_from_joint(j, q)
-        assert ticks(shaft) == pytest.approx(2048 + OFFSETS[j] + DIRECTIONS[j] * q / (2 * math.pi / 4096))
+        expected = 2048 + OFFSETS[j] + DIRECTIONS[j] * q / (2 * math.pi / 4096)
+        assert ticks(shaft) == pytest.approx(expected)
         assert backend.joint_from_shaft(j, shaft) == pytest.approx(q)
 
 

@@ -240,7 +240,7 @@ class SimParams:
     vio_loss_rate_per_min: float = 0.0
 
     def rng(self, stream: str) -> np.random.Generator:
-        """A generator for one named consumer: the same (seed, name) always gives the same numbers."""
+        """A generator for one named consumer: the same (seed, name) gives the same numbers."""
         return np.random.default_rng([self.seed, zlib.crc32(stream.encode())])
 
     def summary(self) -> dict:

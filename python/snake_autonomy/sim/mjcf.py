@@ -99,7 +99,8 @@ def build_mjcf(robot, params: SimParams) -> str:
             f'{indent}<body name="{name}" pos="{parent_pos}" quat="{parent_quat}">',
             f'{indent}  <joint name="{robot.joint_names[i]}" type="hinge" axis="0 0 -1" '
             f'range="{_f(lower[i])} {_f(upper[i])}"/>',
-            f'{indent}  <geom name="{name}" fromto="0 0 0 {_f(-L)} 0 0" mass="{_f(masses[i + 2])}"/>',
+            f'{indent}  <geom name="{name}" fromto="0 0 0 {_f(-L)} 0 0" '
+            f'mass="{_f(masses[i + 2])}"/>',
             f'{indent}  <site name="{name}" pos="{_f(-L)} 0 0" quat="{_quat_rx(twists[i])}"/>',
         ]
         indent += "  "
@@ -111,7 +112,8 @@ def build_mjcf(robot, params: SimParams) -> str:
     for i in range(n):
         kp, kv = params.kp_nm_per_rad[i], params.kv_nm_s_per_rad[i]
         lines.append(
-            f'    <general name="servo_{i + 1}" joint="{robot.joint_names[i]}" dyntype="integrator" '
+            f'    <general name="servo_{i + 1}" joint="{robot.joint_names[i]}" '
+            f'dyntype="integrator" '
             f'gaintype="fixed" gainprm="{_f(kp)}" biastype="affine" '
             f'biasprm="0 {_f(-kp)} {_f(-kv)}" '
             f'ctrlrange="{_f(-servo.speed_limit_rad_s)} {_f(servo.speed_limit_rad_s)}" '

@@ -109,7 +109,8 @@ class Plant:
         """Goal angles of every joint (rad); values beyond the joint limits are clamped to them."""
         q = np.asarray(q_rad, float)
         if q.shape != (self.num_joints,) or not np.all(np.isfinite(q)):
-            raise ValueError(f"joint targets: expected {self.num_joints} finite values, got {q_rad}")
+            raise ValueError(f"joint targets: expected {self.num_joints} finite values, "
+                             f"got {q_rad}")
         self._goal[:] = self.clamp(q)
         self._reaim = True
 
@@ -183,6 +184,11 @@ class Plant:
 
     def center_of_mass(self) -> np.ndarray:
         return self.data.subtree_com[self._body_ids["base_link"]].copy()
+
+    def base_tilt_deg(self) -> float:
+        """Angle between base_link's z axis and the world's up (0 flat, > 90 upside down)."""
+        z = self.data.site_xmat[self._site_ids["base_link"]].reshape(3, 3)[:, 2]
+        return float(np.degrees(np.arccos(np.clip(z[2], -1.0, 1.0))))
 
     def base_velocity(self) -> np.ndarray:
         """Linear velocity (world frame, m/s) of base_link."""
