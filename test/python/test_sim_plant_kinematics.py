@@ -1,7 +1,7 @@
 """The plant's link frames are the thesis's kinematic frames (eq. 3.3-3.4), at random angles.
 
-The reference is a direct numpy transcription of eq. 3.3-3.4 written here, independent of the
-MJCF generator. When _core.Kinematics lands, the same comparison runs against it as well.
+Two references: a direct numpy transcription of eq. 3.3-3.4 written here, independent of the
+MJCF generator, and the core's KDL kinematics (_core.Kinematics).
 """
 import numpy as np
 import pytest
@@ -90,15 +90,18 @@ def test_axis_convention(robot, plant):
 
 
 def test_core_kinematics_agrees(robot, plant):
-    """Against _core.Kinematics once it is on main (skips until then)."""
-    if not hasattr(_core, "Kinematics"):
-        pytest.skip("_core.Kinematics is not built yet")
-    if not hasattr(_core.Kinematics, "forward"):
-        pytest.skip("_core.Kinematics has no forward(base, q): adapt this test to its API")
+    """The plant's frames are the core's (KDL) frames too, at random angles and base poses."""
     kin = _core.Kinematics(robot)
     rng = np.random.default_rng(7)
-    q = rng.uniform(robot.joint_lower_rad, robot.joint_upper_rad)
-    plant.set_configuration(q, base=np.eye(4))
-    frames = kin.forward(np.eye(4), q)
-    for name, t_core in zip(robot.frame_names, frames):
-        np.testing.assert_allclose(plant.frame_transform(name), np.asarray(t_core), atol=1e-9)
+    for _ in range(10):
+        q = rng.uniform(robot.joint_lower_rad, robot.joint_upper_rad)
+        base = _random_base(rng)
+        plant.set_configuration(q, base=base)
+        p, quat = plant.frame_pose("base_link")
+        state = kin.compute(p, quat, q)
+        for i, name in enumerate(robot.frame_names):
+            t = plant.frame_transform(name)
+            np.testing.assert_allclose(t[:3, 3], state.link_positions[i], atol=1e-9, err_msg=name)
+            np.testing.assert_allclose(t[:3, :3], state.link_rotations[i], atol=1e-9,
+                                       err_msg=name)
+        np.testing.assert_allclose(plant.frame_positions(), state.link_positions, atol=1e-9)
