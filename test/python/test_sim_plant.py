@@ -83,9 +83,9 @@ def test_steering_turns_both_ways(robot, config, library):
     params = config.draw(seed=4)
     delta = np.radians(8.0)
     left = run_open_loop(Plant(robot, params), CpgGait(robot, library, "sidewind", delta),
-                         cycles=2)
+                         cycles=2, settle_cycles=2)
     right = run_open_loop(Plant(robot, params), CpgGait(robot, library, "sidewind", -delta),
-                          cycles=2)
+                          cycles=2, settle_cycles=2)
     per_degree = (left.turn_rate_deg_s - right.turn_rate_deg_s) / 16.0
     assert 1.0 < per_degree < 4.0
 
