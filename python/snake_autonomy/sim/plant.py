@@ -25,7 +25,7 @@ import numpy as np
 from .config import SimParams
 from .disturbances import Disturbance, DisturbanceSchedule
 from .mjcf import build_mjcf
-from .transforms import quat_xyzw_from_matrix, rot_z, transform
+from .transforms import quat_xyzw_from_matrix, transform
 
 
 class Plant:
@@ -51,8 +51,7 @@ class Plant:
         self._kp = np.asarray(params.kp_nm_per_rad, float).copy()
         self._kv = np.asarray(params.kv_nm_s_per_rad, float).copy()
 
-        names = [mujoco.mjtObj.mjOBJ_JOINT, mujoco.mjtObj.mjOBJ_SITE, mujoco.mjtObj.mjOBJ_BODY]
-        jnt, site, body = names
+        jnt, site = mujoco.mjtObj.mjOBJ_JOINT, mujoco.mjtObj.mjOBJ_SITE
         joint_ids = [mujoco.mj_name2id(self.model, jnt, j) for j in robot.joint_names]
         self._qadr = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
         self._dadr = np.array([self.model.jnt_dofadr[j] for j in joint_ids])
@@ -237,7 +236,3 @@ class Plant:
             raise ValueError(f"disturbance link {name!r}: no such body (expected one of "
                              f"{', '.join(self._body_ids)})") from None
 
-
-def start_transform(x_m: float, y_m: float, heading_rad: float, z_m: float = 0.0) -> np.ndarray:
-    """World pose of base_link lying flat at (x, y) with its x axis at `heading_rad`."""
-    return transform(rot_z(heading_rad), (x_m, y_m, z_m))
