@@ -1,7 +1,9 @@
 """A simulated RTAB-Map: visual-inertial odometry of the head camera (thesis 3.3, 4.1).
 
 Each sample (30 Hz) is the camera's pose, T_world^camera = T_world^head . T_head^camera (the
-calibration of config/camera.yaml), as the odometry would report it:
+calibration of config/camera.yaml, camera_in_head, loaded by the pose remapper's
+snake_autonomy.estimation.pose_remap.load_camera_calibration: one reader for the one file), as
+the odometry would report it:
 
 - white noise on position (per axis) and orientation (a small rotation in the camera frame);
 - slow drift: the odometry frame wanders from the world frame by a random walk in x, y and yaw
