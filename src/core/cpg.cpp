@@ -100,11 +100,16 @@ bool Cpg::apply(const GaitParameters& p) noexcept {
     const double d = wanted - lag_(i);
     lag_target_(i) = lag_(i) + std::atan2(std::sin(d), std::cos(d));
   }
-  // At rest (no amplitude, none building up) q does not depend on θ: the lags may jump, so a gait
-  // starts with its travelling wave instead of gliding in from the previous lags.
+  // At rest (no amplitude, none building up) q does not depend on θ: the lags may jump, and so may
+  // the phases (θ_{i+1} = θ_i + lag_i), so a gait starts with its travelling wave instead of gliding
+  // in. Only jumping the lags is not enough: the phase coupling takes seconds to spread phases that
+  // start equal (slowest mode 1 / (μ λ_min), about 1.2 s for 11 joints and μ = 10), and meanwhile the
+  // joints swing nearly in phase with pitch and yaw 90° apart, which is a rolling gait: started that
+  // way from a straight body, sidewinding rolled the simulated COBRA onto its back in every seed.
   if (r_.cwiseAbs().maxCoeff() < kRestAmplitude && r_dot_.cwiseAbs().maxCoeff() < kRestAmplitude) {
     lag_ = lag_target_;
     lag_dot_.setZero();
+    for (int i = 0; i + 1 < n_; ++i) theta_(i + 1) = theta_(i) + lag_(i);
   }
   return true;
 }

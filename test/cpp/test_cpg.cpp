@@ -201,6 +201,23 @@ TEST(Cpg, SidewindingGaitHasNinetyDegreesBetweenWaves) {
   EXPECT_NEAR(cpg.amplitudes()(1), 45.0 * M_PI / 180.0, 1e-6);
 }
 
+TEST(Cpg, PhasesStartOnTheTravellingWaveFromRest) {
+  // From rest the phases take the gait's pattern at once: the first cycle is already the travelling
+  // wave (equal phases with pitch and yaw 90 deg apart would be a rolling gait).
+  const RobotModel model = cobra();
+  Cpg cpg(model);
+  GaitParameters p = GaitParameters::zeros(model.num_joints);
+  p.amplitude.setConstant(0.5);
+  p.omega.setConstant(2.0 * M_PI * 0.7);
+  p.phase = Eigen::VectorXd::LinSpaced(model.num_joints, 0.0, 3.0);  // lags 0.3
+  cpg.set_parameters(p);
+  for (int i = 0; i + 1 < model.num_joints; ++i)
+    EXPECT_NEAR(cpg.phases()(i + 1) - cpg.phases()(i), 0.3, 1e-12) << "joint " << i;
+  cpg.step(0.01);
+  for (int i = 0; i + 1 < model.num_joints; ++i)
+    EXPECT_NEAR(wrap(cpg.phases()(i + 1) - cpg.phases()(i) - 0.3), 0.0, 1e-9) << "joint " << i;
+}
+
 TEST(Cpg, LagsGlideWhileMovingAndJumpAtRest) {
   const RobotModel model = cobra();
   Cpg cpg(model);
