@@ -95,6 +95,7 @@ def test_vio_rate_noise_drift(config, calib):
 
 def test_vio_tracking_loss(config, calib):
     config.vio.loss_episodes = [[1.0, 0.5]]
+    config.vio.loss_rate_per_min = Range(0.0, 0.0)      # the scheduled episode only
     params = config.draw(seed=4)
     vio = SimulatedVio(params, calib)
     head = transform(rot_z(0.0), (0.0, 0.0, 0.1))

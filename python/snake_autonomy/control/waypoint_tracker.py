@@ -23,6 +23,16 @@ a FAR turn (mode 2) is left only in the FAR branch and a NEAR turn (mode 3) only
 Printed as is, a robot that crosses d_th while turning keeps turning until it crosses back.
 With ``turn_exit_any_branch=True`` either turn mode returns to mode 1 as soon as |psi_e| <= psi_wp,
 in either branch.
+
+Approach against the waypoint's heading (``far_blend_max_gap``, default pi: off, Algorithm 1 as
+printed). The combined error of line 8 is a weighted sum of two wrapped angles. When the waypoint's
+heading points away from the robot (heading_k and the bearing to the waypoint about 180 deg apart),
+its zero is the bisector of the two through heading_k, which on either side of the waypoint's axis
+points back towards that axis: a robot approaching from behind the waypoint zig-zags along the axis
+at the distance where w is about 0.5 and never reaches d_th (measured on the simulated COBRA: every
+start behind the waypoint, whatever the gait speed). With a gap limit, a FAR-branch step whose
+|wrap(heading_k - bearing)| exceeds it steers on the relative error alone (w = 0): go to the
+waypoint, align in place there (the NEAR branch, unchanged).
 """
 import math
 from dataclasses import dataclass
@@ -56,17 +66,18 @@ class TrackerParams:
     kp: float = 1.0                      # steering gain (rad/rad)
     delta_turn: float = math.radians(20.0)  # rad, the "delta > +-20 deg" of lines 22 and 25
     turn_exit_any_branch: bool = False   # see the module docstring
+    far_blend_max_gap: float = math.pi   # rad; see the module docstring (pi: off)
 
     def problems(self) -> List[str]:
         """Every invalid parameter, each naming the key and its value (empty when valid)."""
         out = []
-        for name in ("d_th", "psi_wp", "psi_turn", "delta0", "delta_lim", "kp", "delta_turn"):
+        for name in ("d_th", "psi_wp", "psi_turn", "delta0", "delta_lim", "kp", "delta_turn", "far_blend_max_gap"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                 out.append(f"{name}: must be a finite number, got {value!r}")
         if out:
             return out
-        for name in ("d_th", "psi_wp", "psi_turn", "kp", "delta_turn"):
+        for name in ("d_th", "psi_wp", "psi_turn", "kp", "delta_turn", "far_blend_max_gap"):
             if getattr(self, name) <= 0:
                 out.append(f"{name}: must be positive, got {getattr(self, name)!r}")
         if self.delta_lim < 0:
@@ -77,6 +88,8 @@ class TrackerParams:
         if self.psi_wp > self.psi_turn:
             out.append(f"psi_wp: must not exceed psi_turn ({math.degrees(self.psi_turn):.6g} deg), "
                        f"got {math.degrees(self.psi_wp):.6g} deg")
+        if self.far_blend_max_gap > math.pi:
+            out.append(f"far_blend_max_gap: must not exceed pi rad (180 deg: off), got {self.far_blend_max_gap!r}")
         if not isinstance(self.turn_exit_any_branch, bool):
             out.append(f"turn_exit_any_branch: must be true or false, got {self.turn_exit_any_branch!r}")
         return out
@@ -170,13 +183,17 @@ class WaypointTracker:
         return self._gait
 
     def errors(self, x: float, y: float, yaw_rad: float, index: int):
-        """(distance, yaw_error_abs, yaw_error_rel, w, yaw_error) to waypoint ``index``: lines 5-8."""
+        """(distance, yaw_error_abs, yaw_error_rel, w, yaw_error) to waypoint ``index``: lines 5-8
+        (w = 0 in the FAR branch when heading and bearing differ by more than far_blend_max_gap)."""
         px, py, heading = self.waypoints[index]
         dx, dy = px - x, py - y
         distance = math.hypot(dx, dy)
-        rel = wrap(math.atan2(dy, dx) - yaw_rad)
+        bearing = math.atan2(dy, dx)
+        rel = wrap(bearing - yaw_rad)
         abs_ = wrap(heading - yaw_rad)
         w = blend_weight(distance)
+        if distance > self.params.d_th and abs(wrap(heading - bearing)) > self.params.far_blend_max_gap:
+            w = 0.0
         return distance, abs_, rel, w, combined_yaw_error(abs_, rel, w)
 
     def update(self, x: float, y: float, yaw_rad: float) -> TrackerCommand:

@@ -33,6 +33,8 @@ def plot_all(out: Path, waypoints, traj, dec, t0: float, d_th: float, psi_wp: fl
 
     # XY trajectory with the waypoints (thesis fig. 4.10)
     fig, ax = plt.subplots(figsize=(6.5, 6))
+    if "x_true" in traj and len(traj["x_true"]):
+        ax.plot(traj["x_true"], traj["y_true"], "--", color="tab:grey", lw=1.0, label="ground truth")
     if len(traj["x"]):
         ax.plot(traj["x"], traj["y"], "-", color="tab:blue", lw=1.2, label="centre of mass")
         ax.plot(traj["x"][0], traj["y"][0], "o", color="tab:green", label="start")

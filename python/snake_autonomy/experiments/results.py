@@ -7,11 +7,18 @@ by the simulator's batch runs. Inputs:
 - ``decisions``: mapping of equal-length arrays, one entry per 1 Hz tracker step. Required keys:
   ``t`` (s), ``waypoint_index`` (after the step), ``distance`` (m), ``yaw_error_abs``,
   ``yaw_error_rel``, ``yaw_error`` (rad). Optional: ``target_index`` (the waypoint the errors refer
-  to), ``reached`` (bool), ``mode``, ``delta``, ``w``, ``gait`` (str), ``pose_stale`` (bool). When
+  to), ``reached`` (bool), ``mode``, ``delta``, ``w``, ``gait`` (str), ``pose_stale`` (bool),
+  ``true_distance`` and ``true_yaw_error_abs`` (the same errors from ground truth, simulator). When
   ``target_index``/``reached`` are absent they are inferred from increments of ``waypoint_index``.
   Steps with a stale pose carry NaN errors.
 - ``trajectory``: mapping with ``t``, ``x``, ``y`` (and optionally ``yaw``) of the centre of mass,
-  any rate.
+  any rate; optionally ``x_true``, ``y_true`` (ground truth, drawn dashed on the trajectory figure).
+
+Per waypoint the metrics give ``reached``, ``time_s`` (the time this waypoint took: from the previous
+waypoint's reach, or the start, to its own; null when not reached), ``time_to_reach_s`` (from the start),
+``final_distance_m``, ``final_yaw_error_deg`` (combined, Algorithm 1 line 8), ``final_yaw_error_abs_deg``
+(against the waypoint heading) and, when the decisions carry ground truth, ``true_final_distance_m`` /
+``true_final_yaw_error_abs_deg``.
 
 Outputs (``write_results``): metrics.json, decisions.csv, trajectory.csv, trajectory.png (fig. 4.10
 style: XY path with waypoints), distance_error.png, yaw_errors.png (abs, rel, combined; waypoint
@@ -118,12 +125,14 @@ def compute_metrics(waypoints: Sequence[Sequence[float]], decisions: Mapping[str
             j = int(hit[0])
             entry["time_to_reach_s"] = float(t[j] - t0)
             entry["segment_duration_s"] = float(t[j] - prev_reach_t)
+            entry["time_s"] = entry["segment_duration_s"]
             prev_reach_t = float(t[j])
         else:
             finite = np.flatnonzero(mask & np.isfinite(d["distance"]))
             j = int(finite[-1]) if len(finite) else None
             entry["time_to_reach_s"] = None
             entry["segment_duration_s"] = None
+            entry["time_s"] = None
         if j is not None:
             entry["final_distance_m"] = _finite_or_none(d["distance"][j])
             entry["final_yaw_error_abs_deg"] = _finite_or_none(d["yaw_error_abs"][j] * DEG)
@@ -132,6 +141,9 @@ def compute_metrics(waypoints: Sequence[Sequence[float]], decisions: Mapping[str
             seg = d["distance"][mask]
             seg = seg[np.isfinite(seg)]
             entry["min_distance_m"] = float(seg.min()) if len(seg) else None
+            if "true_distance" in d and "true_yaw_error_abs" in d:
+                entry["true_final_distance_m"] = _finite_or_none(d["true_distance"][j])
+                entry["true_final_yaw_error_abs_deg"] = _finite_or_none(d["true_yaw_error_abs"][j] * DEG)
         else:
             for k in ("final_distance_m", "final_yaw_error_abs_deg", "final_yaw_error_rel_deg",
                       "final_yaw_error_deg", "min_distance_m"):

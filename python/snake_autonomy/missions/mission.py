@@ -8,7 +8,8 @@ A mission is a YAML file. Minimal form::
 Optional keys: ``name``, ``description``, ``frame`` (world frame id, informational), ``time_limit_s``
 (> 0; the mission stops when it runs out), ``tracker`` (overrides of config/tracker.yaml's
 ``tracker:`` keys, e.g. ``psi_wp_deg: 25``) and ``gaits`` (tracker gait -> gait library name, e.g.
-``sidewind: sidewind_slow``).
+``sidewind: sidewind_slow``) and ``disturbances`` (pushes and twists for the simulator, a list of
+mappings checked by snake_autonomy.sim.disturbances; ignored on the robot).
 
 A bad mission is refused whole, before anything moves, with every problem listed (MissionError);
 each problem names the key and the value.
@@ -41,8 +42,9 @@ TRACKER_KEYS = {
     "kp": ("kp", 1.0),
     "delta_turn_deg": ("delta_turn", math.pi / 180.0),
     "turn_exit_any_branch": ("turn_exit_any_branch", None),
+    "far_blend_max_gap_deg": ("far_blend_max_gap", math.pi / 180.0),
 }
-MISSION_KEYS = ("name", "description", "frame", "waypoints", "time_limit_s", "tracker", "gaits")
+MISSION_KEYS = ("name", "description", "frame", "waypoints", "time_limit_s", "tracker", "gaits", "disturbances")
 # Position and heading closer than this count as the same waypoint.
 DUPLICATE_TOL_M = 1e-3
 DUPLICATE_TOL_DEG = 1e-2
@@ -120,29 +122,75 @@ def gait_library_names(path=None) -> Tuple[str, ...]:
     return tuple(names) or DEFAULT_GAIT_LIBRARY
 
 
-def load_defaults(path=None) -> Dict[str, Any]:
-    """config/tracker.yaml (tracker parameters, rates, gait mapping)."""
+#: Keys of config/tracker.yaml besides `tracker:` and `gaits:` (how the tracker is run).
+RUN_KEYS = ("rate_hz", "pose_timeout_s", "yaw_filter_window", "heading_offset_deg")
+
+
+def load_defaults(path=None, overrides: Optional[Dict[str, Any]] = None,
+                  overrides_source: str = "overrides") -> Dict[str, Any]:
+    """config/tracker.yaml (tracker parameters, rates, gait mapping, heading offset).
+
+    ``overrides``: a flat mapping merged over the file, e.g. the ``tracker:`` section of
+    config/sim.yaml (:func:`read_overrides`): tracker parameter keys (``delta0_deg``, ...), run keys
+    (``rate_hz``, ``heading_offset_deg``, ...) and ``gaits`` (tracker gait -> library gait)."""
     path = Path(path) if path else CONFIG_DIR / "tracker.yaml"
     data = load_yaml(path)
-    problems = []
     if not isinstance(data, dict):
         raise MissionError(str(path), [f"expected a mapping, got {data!r}"])
+    data = dict(data)
+    data.setdefault("heading_offset_deg", 0.0)
+    source = str(path)
+    if overrides:
+        problems = []
+        if not isinstance(overrides, dict):
+            raise MissionError(overrides_source, [f"expected a mapping of tracker keys, got {overrides!r}"])
+        section = dict(data.get("tracker") or {})
+        for key, value in overrides.items():
+            if key in TRACKER_KEYS:
+                section[key] = value
+            elif key in RUN_KEYS:
+                data[key] = value
+            elif key == "gaits" and isinstance(value, dict):
+                data["gaits"] = {**(data.get("gaits") or {}), **value}
+            else:
+                problems.append(f"{key}: unknown key (value {value!r}); known: "
+                                f"{', '.join(list(TRACKER_KEYS) + list(RUN_KEYS) + ['gaits'])}")
+        if problems:
+            raise MissionError(overrides_source, problems)
+        data["tracker"] = section
+        source = f"{path} + {overrides_source}"
+    problems = []
     tracker, problems_t = _tracker_params(data.get("tracker", {}) or {}, TrackerParams().__dict__, "tracker")
     problems += problems_t
     for key, kind in (("rate_hz", float), ("pose_timeout_s", float), ("yaw_filter_window", int)):
         v = data.get(key)
         if not _is_number(v) or not math.isfinite(v) or v <= 0 or (kind is int and int(v) != v):
             problems.append(f"{key}: must be a positive {'integer' if kind is int else 'number'}, got {v!r}")
+    v = data.get("heading_offset_deg")
+    if not _is_number(v) or not math.isfinite(v) or abs(v) > 180.0:
+        problems.append(f"heading_offset_deg: must be a number in [-180, 180], got {v!r}")
     gaits = data.get("gaits") or {}
     if not isinstance(gaits, dict):
         problems.append(f"gaits: expected a mapping of tracker gait -> library gait, got {gaits!r}")
         gaits = {}
     if problems:
-        raise MissionError(str(path), problems)
+        raise MissionError(source, problems)
     out = dict(data)
     out["tracker"] = tracker
     out["gaits"] = {g: str(gaits.get(g, "hold" if g == "stop" else g)) for g in TRACKER_GAITS}
+    out["source"] = source
     return out
+
+
+def read_overrides(path, section: str = "tracker") -> Dict[str, Any]:
+    """The ``section`` mapping of a YAML file (e.g. config/sim.yaml's ``tracker:``), {} when absent."""
+    data = load_yaml(path) or {}
+    if not isinstance(data, dict):
+        raise MissionError(str(path), [f"expected a mapping, got {data!r}"])
+    value = data.get(section) or {}
+    if not isinstance(value, dict):
+        raise MissionError(str(path), [f"{section}: expected a mapping of tracker keys, got {value!r}"])
+    return dict(value)
 
 
 def _tracker_params(section, base: Dict[str, Any], where: str):
@@ -229,6 +277,10 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
     for key in ("description", "frame"):
         if key in data and not isinstance(data[key], str):
             problems.append(f"{key}: expected a string, got {data[key]!r}")
+
+    dist = data.get("disturbances")
+    if dist is not None and (not isinstance(dist, list) or not all(isinstance(d, dict) for d in dist)):
+        problems.append(f"disturbances: expected a list of mappings (simulator pushes and twists), got {dist!r}")
 
     time_limit = data.get("time_limit_s")
     if time_limit is not None and (not _is_number(time_limit) or not math.isfinite(time_limit) or time_limit <= 0):

@@ -7,6 +7,12 @@ The mission node wires it to topics; the simulator can drive it directly. Safety
   robot (the tracker is not stepped, ERRATA #7) and say so; tracking resumes when fresh poses have
   refilled the yaw filter;
 - the mission ends (hold) when the last waypoint is reached, on abort and on its time limit.
+
+Heading. The tracker's yaw is the direction the robot travels when it sidewinds. ``com_pose`` carries
+the virtual chassis (x axis along the body, eq. 3.11-3.14); ``heading_offset_rad`` (config/tracker.yaml
+``heading_offset_deg``) is added to its yaw: 0 where the virtual chassis yaw is the heading, as the
+thesis states for COBRA; +90 deg on the simulated COBRA, which sidewinds towards the chassis's +y
+(config/sim.yaml, measured there).
 """
 import math
 from dataclasses import dataclass, field
@@ -35,7 +41,7 @@ class Decision:
 
 class MissionRunner:
     def __init__(self, mission: Mission, pose_timeout_s: float = 0.5, yaw_window: int = 10,
-                 min_fresh_samples: Optional[int] = None):
+                 min_fresh_samples: Optional[int] = None, heading_offset_rad: float = 0.0):
         if not (isinstance(pose_timeout_s, (int, float)) and math.isfinite(pose_timeout_s) and pose_timeout_s > 0):
             raise ValueError(f"pose_timeout_s: must be a positive number, got {pose_timeout_s!r}")
         self.mission = mission
@@ -43,6 +49,9 @@ class MissionRunner:
         self.filter = YawMovingAverage(yaw_window)
         self.pose_timeout_s = float(pose_timeout_s)
         self.min_fresh_samples = yaw_window if min_fresh_samples is None else int(min_fresh_samples)
+        if not (isinstance(heading_offset_rad, (int, float)) and math.isfinite(heading_offset_rad)):
+            raise ValueError(f"heading_offset_rad: must be a finite number, got {heading_offset_rad!r}")
+        self.heading_offset_rad = float(heading_offset_rad)
         self.state = IDLE
         self.outcome = ""
         self.t_start: Optional[float] = None
@@ -74,7 +83,8 @@ class MissionRunner:
 
     # -- inputs ------------------------------------------------------------------------------------
     def on_pose(self, t_s: float, x: float, y: float, yaw_rad: float) -> bool:
-        """A centre-of-mass pose (any rate). Non-finite poses are dropped and count as lost."""
+        """A centre-of-mass pose (any rate): position and virtual-chassis yaw (the heading offset is
+        added here). Non-finite poses are dropped and count as lost."""
         if not all(math.isfinite(v) for v in (x, y, yaw_rad)):
             self._stale_reason = f"non-finite CoM pose ({x}, {y}, {yaw_rad})"
             self._invalidate()
@@ -83,7 +93,7 @@ class MissionRunner:
             self.filter.reset()   # after a gap the old yaw samples are not evidence any more
         self._xy = (x, y)
         self._pose_t = t_s
-        self.filter.add(yaw_rad)
+        self.filter.add(yaw_rad + self.heading_offset_rad)
         return True
 
     def set_source_status(self, ok: bool, detail: str = "") -> None:

@@ -8,9 +8,11 @@ Publishes   gait_command (snake_autonomy/GaitCommand), tracking_status (snake_au
             mission/waypoints (geometry_msgs/PoseArray, latched), mission/state (std_msgs/String, latched).
 Services    mission/load (snake_autonomy/LoadMission), mission/start, mission/abort (std_srvs/Trigger).
 Params      ~mission (file or provided name: loaded at start-up), ~auto_start (false), ~tracker_config
-            (config/tracker.yaml), ~gaits_config (config/gaits.yaml), ~rate_hz, ~pose_timeout_s,
-            ~yaw_filter_window (defaults from tracker_config), ~results_dir, ~record (true),
-            ~world_frame (odom).
+            (config/tracker.yaml), ~tracker_overrides (a YAML file whose `tracker:` section is merged
+            over tracker_config, e.g. config/sim.yaml for the simulated robot; empty: none),
+            ~gaits_config (config/gaits.yaml), ~rate_hz, ~pose_timeout_s, ~yaw_filter_window,
+            ~heading_offset_deg (defaults from tracker_config + overrides), ~results_dir, ~record
+            (true), ~world_frame (odom).
 """
 import math
 import os
@@ -28,7 +30,7 @@ from std_msgs.msg import String
 from std_srvs.srv import Trigger, TriggerResponse
 
 from snake_autonomy.estimation.transforms import yaw_of_quat
-from snake_autonomy.missions import MissionError, gait_library_names, load_defaults, load_mission
+from snake_autonomy.missions import MissionError, gait_library_names, load_defaults, load_mission, read_overrides
 from snake_autonomy.missions.runner import MissionRunner
 from snake_autonomy.msg import GaitCommand, TrackingStatus
 from snake_autonomy.srv import LoadMission, LoadMissionResponse
@@ -67,11 +69,15 @@ class MissionNode:
     def __init__(self):
         self.lock = threading.RLock()
         defaults_path = rospy.get_param("~tracker_config", "") or None
-        self.defaults = load_defaults(defaults_path)
+        overrides_path = rospy.get_param("~tracker_overrides", "") or None
+        overrides = read_overrides(overrides_path) if overrides_path else None
+        self.defaults = load_defaults(defaults_path, overrides, overrides_source=f"{overrides_path} (tracker:)")
         self.gait_library = gait_library_names(rospy.get_param("~gaits_config", "") or None)
         self.rate_hz = float(rospy.get_param("~rate_hz", self.defaults["rate_hz"]))
         self.pose_timeout_s = float(rospy.get_param("~pose_timeout_s", self.defaults["pose_timeout_s"]))
         self.yaw_window = int(rospy.get_param("~yaw_filter_window", self.defaults["yaw_filter_window"]))
+        self.heading_offset_rad = math.radians(float(rospy.get_param("~heading_offset_deg",
+                                                                     self.defaults["heading_offset_deg"])))
         self.results_dir = Path(rospy.get_param("~results_dir", default_results_dir()))
         self.record = bool(rospy.get_param("~record", True))
         self.world_frame = rospy.get_param("~world_frame", "odom")
@@ -121,6 +127,10 @@ class MissionNode:
         self.timer = rospy.Timer(rospy.Duration(1.0 / self.rate_hz), self.on_tick)
 
     # -- helpers -----------------------------------------------------------------------------------
+    def make_runner(self, mission):
+        return MissionRunner(mission, self.pose_timeout_s, self.yaw_window,
+                             heading_offset_rad=self.heading_offset_rad)
+
     def set_state(self, text):
         self.pub_state.publish(String(data=text))
 
@@ -172,7 +182,7 @@ class MissionNode:
                 return False, f"mission {self.mission.name!r} is running: abort it first"
             try:
                 mission = load_mission(path, defaults=self.defaults, gait_library=self.gait_library)
-                runner = MissionRunner(mission, self.pose_timeout_s, self.yaw_window)
+                runner = self.make_runner(mission)
             except MissionError as exc:
                 return False, str(exc)
             except ValueError as exc:
@@ -195,7 +205,7 @@ class MissionNode:
                 return False, "no mission loaded (mission/load or ~mission)"
             if self.runner.state != "idle":
                 # a finished mission reruns from its first waypoint
-                self.runner = MissionRunner(self.mission, self.pose_timeout_s, self.yaw_window)
+                self.runner = self.make_runner(self.mission)
                 self.runner.set_source_status(self.source_ok, self.source_detail)
             t = rospy.get_time()
             if self.record:
@@ -294,6 +304,8 @@ class MissionNode:
         self.log = RunLog(self.run_dir, self.mission.name, self.mission.waypoints, t, mission_yaml=text,
                           tracker=self.mission.tracker_params,
                           extra={"rate_hz": self.rate_hz, "pose_timeout_s": self.pose_timeout_s,
+                                 "heading_offset_deg": math.degrees(self.heading_offset_rad),
+                                 "tracker_config": self.defaults.get("source", ""),
                                  "gaits": self.mission.gaits, "node": rospy.get_name()})
 
     def publish_waypoints(self):

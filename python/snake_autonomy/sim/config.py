@@ -84,6 +84,11 @@ class VioConfig:
 
 
 @dataclass
+class MonitorConfig:
+    rollover_tilt_deg: float = 90.0     # base_link's z axis this far from the vertical: rolled over
+
+
+@dataclass
 class DisturbanceConfig:
     time_s: float
     link: str                                    # a body: base_link (head segment), link_1 ...
@@ -93,7 +98,7 @@ class DisturbanceConfig:
 
 
 _SECTIONS = {"physics": PhysicsConfig, "servo": ServoConfig, "mocap": MocapConfig,
-             "vio": VioConfig}
+             "vio": VioConfig, "monitor": MonitorConfig}
 
 
 @dataclass
@@ -102,7 +107,10 @@ class SimConfig:
     servo: ServoConfig = field(default_factory=ServoConfig)
     mocap: MocapConfig = field(default_factory=MocapConfig)
     vio: VioConfig = field(default_factory=VioConfig)
+    monitor: MonitorConfig = field(default_factory=MonitorConfig)
     disturbances: List[DisturbanceConfig] = field(default_factory=list)
+    # config/tracker.yaml keys overridden for the simulated robot (snake_autonomy.missions.load_defaults)
+    tracker: dict = field(default_factory=dict)
     base_dir: Path = Path(".")      # where relative file names (vio.calibration) are resolved
 
     @classmethod
@@ -123,9 +131,11 @@ class SimConfig:
                 setattr(out, key, _parse_section(key, _SECTIONS[key], value, errors))
             elif key == "disturbances":
                 out.disturbances = _parse_disturbances(value, errors)
+            elif key == "tracker":
+                out.tracker = _parse_tracker(value, errors)
             else:
                 errors.append(f"{key}: unknown key (expected one of "
-                              f"{', '.join(list(_SECTIONS) + ['disturbances'])})")
+                              f"{', '.join(list(_SECTIONS) + ['disturbances', 'tracker'])})")
         errors += out.problems()
         if errors:
             raise ValueError("sim config:\n  " + "\n  ".join(errors))
@@ -169,6 +179,8 @@ class SimConfig:
         if s.setpoint_period_s < p.timestep_s:
             errs.append(f"servo.setpoint_period_s: must be >= physics.timestep_s "
                         f"({p.timestep_s}), got {s.setpoint_period_s}")
+        if not 0 < self.monitor.rollover_tilt_deg <= 180:
+            errs.append(f"monitor.rollover_tilt_deg: must be in (0, 180], got {self.monitor.rollover_tilt_deg}")
         positive("mocap.rate_hz", m.rate_hz)
         non_negative("mocap.position_noise_m", m.position_noise_m)
         non_negative("mocap.rotation_noise_rad", m.rotation_noise_rad)
@@ -304,6 +316,19 @@ def _parse_section(name, cls, raw, errors):
         if parsed is not None:
             setattr(out, key, parsed)
     return out
+
+
+def _parse_tracker(raw, errors):
+    """The tracker: section: overrides of config/tracker.yaml, checked by the mission loader."""
+    if raw is None:
+        return {}
+    from ..missions.mission import MissionError, load_defaults
+    try:
+        load_defaults(overrides=raw, overrides_source="tracker")
+    except MissionError as exc:
+        errors.extend(f"tracker.{p}" if not p.startswith("tracker") else p for p in exc.problems)
+        return {}
+    return dict(raw)
 
 
 def _parse_disturbances(raw, errors):

@@ -58,3 +58,92 @@ class DisturbanceSchedule:
         """The first window start or end strictly after t_s (inf when none is left)."""
         events = [x for d in self.items for x in (d.time_s, d.end_s) if x > t_s]
         return min(events, default=float("inf"))
+
+
+@dataclass(frozen=True)
+class DisturbanceTrigger:
+    """A push or twist of a mission file, fired at a time or when the robot is mid-leg.
+
+    ``time_s``: seconds after the mission start; or ``waypoint`` + ``distance_m``: when that
+    waypoint is the target and the robot's true centre of mass is within distance_m of it (so the
+    push lands mid-leg whatever the robot's speed)."""
+    link: str
+    force_n: Optional[Sequence[float]] = None
+    torque_nm: Optional[Sequence[float]] = None
+    duration_s: float = 0.1
+    time_s: Optional[float] = None
+    waypoint: Optional[int] = None
+    distance_m: Optional[float] = None
+
+    def due(self, t_mission_s: float, target_index: int, distance_m: float) -> bool:
+        if self.time_s is not None:
+            return t_mission_s >= self.time_s
+        return target_index == self.waypoint and distance_m <= self.distance_m
+
+    def at(self, time_s: float) -> Disturbance:
+        return Disturbance(time_s=time_s, link=self.link, force_n=self.force_n,
+                           torque_nm=self.torque_nm, duration_s=self.duration_s)
+
+    def describe(self) -> str:
+        what = (f"push {list(self.force_n)} N" if self.force_n is not None
+                else f"twist {list(self.torque_nm)} N m")
+        when = (f"at {self.time_s:g} s" if self.time_s is not None
+                else f"{self.distance_m:g} m before waypoint {self.waypoint}")
+        return f"{what} on {self.link} for {self.duration_s:g} s, {when}"
+
+
+TRIGGER_KEYS = ("link", "force_n", "torque_nm", "duration_s", "time_s", "waypoint", "distance_m")
+
+
+def parse_triggers(raw, num_waypoints: int, where: str = "disturbances") -> List[DisturbanceTrigger]:
+    """A mission's ``disturbances:`` list; ValueError listing every problem."""
+    if raw is None:
+        return []
+    problems, out = [], []
+    if not isinstance(raw, list):
+        raise ValueError(f"{where}: expected a list, got {raw!r}")
+
+    def vec(i, key, value):
+        if value is None:
+            return None
+        if (not isinstance(value, (list, tuple)) or len(value) != 3
+                or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in value)):
+            problems.append(f"{where}[{i}].{key}: expected 3 numbers, got {value!r}")
+            return None
+        return tuple(float(x) for x in value)
+
+    for i, item in enumerate(raw):
+        if not isinstance(item, dict):
+            problems.append(f"{where}[{i}]: expected a mapping, got {item!r}")
+            continue
+        unknown = sorted(set(item) - set(TRIGGER_KEYS))
+        if unknown:
+            problems.append(f"{where}[{i}]: unknown key(s) {unknown}; known: {', '.join(TRIGGER_KEYS)}")
+        link = item.get("link")
+        if not isinstance(link, str) or not link:
+            problems.append(f"{where}[{i}].link: expected a body name (base_link, link_1 ...), got {link!r}")
+        force, torque = vec(i, "force_n", item.get("force_n")), vec(i, "torque_nm", item.get("torque_nm"))
+        if (item.get("force_n") is None) == (item.get("torque_nm") is None):
+            problems.append(f"{where}[{i}]: give exactly one of force_n, torque_nm")
+        duration = item.get("duration_s", 0.1)
+        if not isinstance(duration, (int, float)) or isinstance(duration, bool) or not duration > 0:
+            problems.append(f"{where}[{i}].duration_s: must be > 0, got {duration!r}")
+        time_s, wp, dist = item.get("time_s"), item.get("waypoint"), item.get("distance_m")
+        if time_s is not None:
+            if wp is not None or dist is not None:
+                problems.append(f"{where}[{i}]: give time_s or waypoint + distance_m, not both")
+            elif not isinstance(time_s, (int, float)) or isinstance(time_s, bool) or time_s < 0:
+                problems.append(f"{where}[{i}].time_s: must be >= 0, got {time_s!r}")
+        else:
+            if not (isinstance(wp, int) and not isinstance(wp, bool) and 0 <= wp < num_waypoints):
+                problems.append(f"{where}[{i}].waypoint: expected a waypoint index 0..{num_waypoints - 1}, "
+                                f"got {wp!r}")
+            if not isinstance(dist, (int, float)) or isinstance(dist, bool) or not dist > 0:
+                problems.append(f"{where}[{i}].distance_m: must be > 0, got {dist!r}")
+        if not problems:
+            out.append(DisturbanceTrigger(link=link, force_n=force, torque_nm=torque, duration_s=float(duration),
+                                          time_s=None if time_s is None else float(time_s),
+                                          waypoint=wp, distance_m=None if dist is None else float(dist)))
+    if problems:
+        raise ValueError("; ".join(problems))
+    return out

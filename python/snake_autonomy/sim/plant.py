@@ -28,6 +28,11 @@ from .mjcf import build_mjcf
 from .transforms import quat_xyzw_from_matrix, transform
 
 
+#: A goal further than this beyond a joint limit counts as a limit violation (about one servo tick:
+#: goals that went through the bus are rounded to ticks).
+LIMIT_TOLERANCE_RAD = 0.002
+
+
 class Plant:
     def __init__(self, robot, params: SimParams, start=(0.0, 0.0, 0.0),
                  q0_rad: Optional[Sequence[float]] = None, disturbances=None):
@@ -59,6 +64,7 @@ class Plant:
         self._body_ids = {self.model.body(i).name: i for i in range(1, self.model.nbody)}
 
         self._steps = 0
+        self.limit_violations = 0          # goals received beyond a joint limit (then clamped)
         self._goal = np.zeros(self.num_joints)
         self._torque_on = np.ones(self.num_joints, dtype=bool)
         self._reaim = True
@@ -105,17 +111,23 @@ class Plant:
         return np.clip(np.asarray(q_rad, float), self.lower_rad, self.upper_rad)
 
     def set_joint_targets(self, q_rad: Sequence[float]) -> None:
-        """Goal angles of every joint (rad); values beyond the joint limits are clamped to them."""
+        """Goal angles of every joint (rad); values beyond the joint limits are clamped to them (and
+        counted in limit_violations: the driver must never send one)."""
         q = np.asarray(q_rad, float)
         if q.shape != (self.num_joints,) or not np.all(np.isfinite(q)):
             raise ValueError(f"joint targets: expected {self.num_joints} finite values, "
                              f"got {q_rad}")
+        self.limit_violations += int(np.count_nonzero((q < self.lower_rad - LIMIT_TOLERANCE_RAD)
+                                                      | (q > self.upper_rad + LIMIT_TOLERANCE_RAD)))
         self._goal[:] = self.clamp(q)
         self._reaim = True
 
     def set_joint_target(self, joint_index: int, q_rad: float) -> None:
         if not math.isfinite(q_rad):
             raise ValueError(f"joint {joint_index + 1}: target must be finite, got {q_rad}")
+        if not (self.lower_rad[joint_index] - LIMIT_TOLERANCE_RAD <= q_rad
+                <= self.upper_rad[joint_index] + LIMIT_TOLERANCE_RAD):
+            self.limit_violations += 1
         self._goal[joint_index] = min(max(q_rad, self.lower_rad[joint_index]),
                                       self.upper_rad[joint_index])
         self._reaim = True

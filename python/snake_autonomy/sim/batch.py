@@ -1,0 +1,318 @@
+"""A mission on the simulated robot in lock-step, without ROS, faster than real time.
+
+    run = BatchRun(RunSpec(mission="star", seed=3, feedback="vio"))
+    result = run.run(progress=True)
+    metrics = result.write("results/sim/star_s3")        # metrics.json, CSVs, the thesis's figures
+
+Every 10 ms of simulated time (the driver's 100 Hz):
+
+    plant.step_to(t) -> pose source (mocap 100 Hz | simulated RTAB-Map 30 Hz -> gate -> eq. 3.1)
+    -> SimDriver.update (CPG, steering, slew limit, joint limits, kinematics: the driver's cycle)
+    -> plant.set_joint_targets -> com_pose (fresh base pose only) -> MissionRunner.on_pose
+
+and at the tracker's rate (config/tracker.yaml rate_hz, 1 Hz) MissionRunner.step -> gait command.
+The classes are the ROS path's: the mission node wraps MissionRunner, pose_remap_node the gate and
+remapper, driver_node the C++ twin of SimDriver; the plant and sensors are the sim node's.
+
+Configuration of the simulated robot: config/sim.yaml (physics, sensors, and its `tracker:`
+section merged over config/tracker.yaml). The start pose is the tracker's view: the centre of mass
+of a straight body at (x, y), heading (direction of travel) in degrees.
+
+Also watched: roll-over (base_link tilted beyond monitor.rollover_tilt_deg ends the run), joint
+goals beyond the joint limits (Plant.limit_violations, must stay 0), pushes and twists of the
+mission file (sim.disturbances.DisturbanceTrigger) and whether the robot recovered from each.
+"""
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from snake_autonomy import _core
+
+from ..control.angles import wrap
+from ..missions import load_defaults, load_mission
+from ..missions.runner import MissionRunner
+from .config import SimConfig
+from .disturbances import parse_triggers
+from .feedback import make_feedback
+from .plant import Plant
+from .sim_driver import SimDriver
+
+ROOT = Path(__file__).resolve().parents[3]
+CONFIG = ROOT / "config"
+DRIVER_RATE_HZ = 100.0
+TRAJECTORY_RATE_HZ = 10.0
+DEG = 180.0 / math.pi
+
+
+@dataclass
+class RunSpec:
+    mission: str = "single_waypoint"          # a file or a provided mission's name
+    seed: int = 0
+    feedback: str = "mocap"                   # mocap | vio
+    start: Tuple[float, float, float] = (0.0, 0.0, 0.0)   # CoM x_m, y_m, heading_deg
+    time_limit_s: Optional[float] = None      # None: the mission's
+    sim_config: str = str(CONFIG / "sim.yaml")
+    robot: str = str(CONFIG / "robots" / "cobra.yaml")
+    gaits: str = str(CONFIG / "gaits.yaml")
+    tracker_config: str = str(CONFIG / "tracker.yaml")
+    randomize: bool = True                    # per-seed physics (False: the ranges' midpoints)
+    settle_s: float = 0.5                     # pose source running before the mission starts
+    label: str = ""                           # free text for tables
+
+
+@dataclass
+class RunResult:
+    spec: RunSpec
+    waypoints: List[Tuple[float, float, float]]
+    trajectory: Dict[str, np.ndarray]
+    decisions: Dict[str, list]
+    outcome: str
+    meta: Dict[str, Any]
+    extra: Dict[str, Any]
+    tracker: Dict[str, float]
+    vio_samples: list = field(default_factory=list)
+
+    def write(self, out_dir, plots: bool = True, evaluate_vio: bool = True) -> Dict[str, Any]:
+        """The results folder (experiments.write_results) plus, after a VIO run, the evaluation of the
+        simulated RTAB-Map against the plant's camera pose in out_dir/evaluation. Returns the metrics."""
+        import json
+
+        from ..experiments import write_results
+        from ..experiments.results import write_json_atomic
+        out = Path(out_dir)
+        p = self.tracker
+        write_results(out, self.waypoints, self.trajectory, self.decisions, self.outcome, self.meta,
+                      plots=plots, d_th=p["d_th"], psi_wp=p["psi_wp"], psi_turn=p["psi_turn"],
+                      title=f"{self.meta['mission']} seed {self.spec.seed} {self.spec.feedback}")
+        metrics = json.loads((out / "metrics.json").read_text())
+        metrics.update(self.extra)
+        if evaluate_vio and self.vio_samples:
+            try:
+                metrics["vio_evaluation"] = evaluate_vio_samples(self.vio_samples, out / "evaluation", plots=plots)
+            except Exception as exc:  # noqa: BLE001 - the run's own results must not be lost
+                metrics["vio_evaluation"] = {"error": f"{type(exc).__name__}: {exc}"}
+        write_json_atomic(out / "metrics.json", metrics)
+        return metrics
+
+
+def evaluate_vio_samples(samples, out_dir, plots: bool = True) -> Dict[str, Any]:
+    """The simulated RTAB-Map (camera odometry, losses as null poses) against the plant's camera
+    pose, yaw-only alignment (snake_autonomy.evaluation); figures and stats.json into out_dir."""
+    from ..evaluation import EvaluationOptions, evaluate, trajectory_from_arrays, write_outputs
+    t = np.array([s[0] for s in samples])
+    est = trajectory_from_arrays(t, np.array([s[1] for s in samples]), np.array([s[2] for s in samples]),
+                                 name="simulated RTAB-Map", lost=np.array([s[3] for s in samples]))
+    ref = trajectory_from_arrays(t, np.array([s[4] for s in samples]), np.array([s[5] for s in samples]),
+                                 name="ground truth (plant)")
+    result = evaluate(ref, est, EvaluationOptions(align="yaw", t_max_diff_s=0.005))
+    write_outputs(result, out_dir, plots=plots, report=plots)
+    stats = {k: float(v) for k, v in result.stats.items()}
+    return {"ape_translation_m": stats, "loss_intervals": len(result.loss_intervals),
+            "folder": str(Path(out_dir))}
+
+
+def start_base_pose(robot, kinematics, start_xy_heading: Sequence[float], heading_offset_rad: float):
+    """base_link (x, y, yaw) that puts a straight body's centre of mass at (x, y) with the tracker's
+    heading `heading_deg` (virtual chassis yaw = heading - offset)."""
+    x, y, heading_deg = (float(v) for v in start_xy_heading)
+    yaw = math.radians(heading_deg) - heading_offset_rad
+    q = np.array([0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)])
+    state = kinematics.compute(np.zeros(3), q, np.zeros(robot.num_joints))
+    com = np.asarray(state.com)
+    return x - com[0], y - com[1], yaw
+
+
+class BatchRun:
+    def __init__(self, spec: RunSpec, robot=None, library=None):
+        self.spec = spec
+        self.robot = robot or _core.RobotModel.from_yaml(spec.robot)
+        self.library = library or _core.GaitLibrary.from_yaml(spec.gaits)
+        self.sim_config = SimConfig.from_yaml(spec.sim_config)
+        self.defaults = load_defaults(spec.tracker_config, self.sim_config.tracker,
+                                      overrides_source=f"{spec.sim_config} (tracker:)")
+        self.mission = load_mission(spec.mission, defaults=self.defaults, gait_library=self.library.names)
+        self.triggers = parse_triggers(self.mission.raw.get("disturbances"), len(self.mission.waypoints))
+        self.params = self.sim_config.draw(spec.seed, randomize=spec.randomize, num_joints=self.robot.num_joints)
+        self.heading_offset_rad = math.radians(self.defaults["heading_offset_deg"])
+        self.kinematics = _core.Kinematics(self.robot)
+        bx, by, byaw = start_base_pose(self.robot, self.kinematics, spec.start, self.heading_offset_rad)
+        self.plant = Plant(self.robot, self.params, start=(bx, by, byaw))
+        self.driver = SimDriver(self.robot, self.library, pose_timeout_s=self.defaults["pose_timeout_s"])
+        self.feedback = make_feedback(spec.feedback, self.params, self.robot)
+        self.runner = MissionRunner(self.mission, self.defaults["pose_timeout_s"], self.defaults["yaw_filter_window"],
+                                    heading_offset_rad=self.heading_offset_rad)
+        self.time_limit_s = spec.time_limit_s if spec.time_limit_s is not None else self.mission.time_limit_s
+        if self.time_limit_s is not None:
+            self.runner.mission.time_limit_s = float(self.time_limit_s)
+
+    # ---- ground truth ----------------------------------------------------------------------------
+    def true_com_pose(self) -> Tuple[float, float, float]:
+        """The centre of mass and heading the driver would compute from a perfect base pose."""
+        p, q = self.plant.frame_pose("base_link")
+        s = self.kinematics.compute(p, q, self.plant.joint_positions_rad())
+        R = np.asarray(s.vc_rotation)
+        return float(s.com[0]), float(s.com[1]), wrap(math.atan2(R[1, 0], R[0, 0]) + self.heading_offset_rad)
+
+    # ---- the run ---------------------------------------------------------------------------------
+    def run(self, progress: bool = False) -> RunResult:
+        spec, plant, driver, runner, fb = self.spec, self.plant, self.driver, self.runner, self.feedback
+        dt = 1.0 / DRIVER_RATE_HZ
+        tick_every = max(1, int(round(DRIVER_RATE_HZ / self.defaults["rate_hz"])))
+        traj_every = max(1, int(round(DRIVER_RATE_HZ / TRAJECTORY_RATE_HZ)))
+        rollover_deg = self.sim_config.monitor.rollover_tilt_deg
+        k_start = int(round(spec.settle_s * DRIVER_RATE_HZ))
+        t_start = k_start * dt
+        limit = self.time_limit_s if self.time_limit_s is not None else 3600.0
+        k_last = k_start + int(math.ceil((limit + 1.5) * DRIVER_RATE_HZ))
+        traj = {k: [] for k in ("t", "x", "y", "yaw", "x_true", "y_true", "yaw_true", "tilt_deg")}
+        dec: Dict[str, list] = {k: [] for k in (
+            "t", "waypoint_index", "target_index", "reached", "distance", "yaw_error_abs", "yaw_error_rel",
+            "yaw_error", "mode", "delta", "w", "gait", "pose_stale", "true_distance", "true_yaw_error_abs")}
+        pending = list(self.triggers)
+        fired: List[Dict[str, Any]] = []
+        source_ok = None
+        rolled, max_tilt = False, 0.0
+        wall0 = time.perf_counter()
+        bar = _progress_bar(progress, limit, f"{self.mission.name} seed {spec.seed} {spec.feedback}")
+        last_com = None
+        target = 0
+        outcome = ""
+        for k in range(1, k_last + 1):
+            t = k * dt
+            plant.step_to(t)
+            pose = fb.poll(plant)
+            if pose is not None:
+                driver.set_base_pose(t, pose[1], pose[2])
+            ok, detail = fb.status(t)
+            if ok != source_ok:
+                runner.set_source_status(ok, detail)
+                source_ok = ok
+            plant.set_joint_targets(driver.update(t, dt, plant.joint_positions_rad()))
+            com = driver.com_pose()
+            if com is not None:
+                runner.on_pose(t, *com)
+                last_com = com
+            tilt = plant.base_tilt_deg()
+            max_tilt = max(max_tilt, tilt)
+            if k % traj_every == 0:
+                xt, yt, ht = self.true_com_pose()
+                x, y, h = last_com if last_com is not None else (math.nan,) * 3
+                for key, v in zip(traj, (t, x, y, wrap(h + self.heading_offset_rad) if last_com else math.nan,
+                                         xt, yt, ht, tilt)):
+                    traj[key].append(v)
+            if k == k_start:
+                runner.start(t)
+            if k >= k_start and pending and k % 10 == 0:
+                xt, yt, _ = self.true_com_pose()
+                wp = self.mission.waypoints[min(target, len(self.mission.waypoints) - 1)]
+                d_true = math.hypot(wp[0] - xt, wp[1] - yt)
+                for trig in list(pending):
+                    if trig.due(t - t_start, target, d_true):
+                        pending.remove(trig)
+                        plant.add_disturbance(trig.at(t + dt))
+                        fired.append({"description": trig.describe(), "t": t - t_start, "target_index": target,
+                                      "com_before": (xt, yt, self.true_com_pose()[2]), "_k": k})
+            if tilt > rollover_deg and not rolled:
+                rolled = True
+                runner.abort(f"rolled over: base_link tilted {tilt:.0f} deg (limit {rollover_deg:g} deg)")
+                self._record(dec, runner.final_decision(t))
+                outcome = runner.outcome
+                break
+            for f in fired:
+                if "com_after" not in f and k == f["_k"] + int(2.0 * DRIVER_RATE_HZ):
+                    f["com_after"] = self.true_com_pose()
+            if k >= k_start and (k - k_start) % tick_every == 0:
+                decision = runner.step(t)
+                if decision is None:
+                    break
+                why = driver.command_gait(decision.gait, decision.steer, decision.delta_rad)
+                if why:
+                    raise RuntimeError(f"the driver refused the mission's command: {why}")
+                self._record(dec, decision)
+                target = runner.tracker.waypoint_index
+                if bar is not None:
+                    bar.update(tick_every * dt)
+                    bar.set_postfix_str(f"wp {min(target + 1, len(self.mission.waypoints))}/"
+                                        f"{len(self.mission.waypoints)}", refresh=False)
+                if decision.finished:
+                    outcome = runner.outcome
+                    break
+        else:
+            runner.abort("simulation ended")
+            outcome = runner.outcome
+        if bar is not None:
+            bar.close()
+        wall = time.perf_counter() - wall0
+        return self._result(traj, dec, outcome or runner.outcome, fired, rolled, max_tilt, t_start, wall)
+
+    def _record(self, dec, decision) -> None:
+        s = decision.status
+        cmd = decision.command
+        target = cmd.target_index if cmd is not None else min(s["waypoint_index"], len(self.mission.waypoints) - 1)
+        xt, yt, ht = self.true_com_pose()
+        wx, wy, wh = self.mission.waypoints[target]
+        for key, v in (("t", decision.t_s), ("waypoint_index", s["waypoint_index"]), ("target_index", target),
+                       ("reached", bool(s["waypoint_reached"])), ("distance", s["distance"]),
+                       ("yaw_error_abs", s["yaw_error_abs"]), ("yaw_error_rel", s["yaw_error_rel"]),
+                       ("yaw_error", s["yaw_error"]), ("mode", s["mode"]), ("delta", s["delta"]), ("w", s["w"]),
+                       ("gait", s["gait"]), ("pose_stale", bool(s["pose_stale"])),
+                       ("true_distance", math.hypot(wx - xt, wy - yt)), ("true_yaw_error_abs", wrap(wh - ht))):
+            dec[key].append(v)
+
+    def _result(self, traj, dec, outcome, fired, rolled, max_tilt, t_start, wall) -> RunResult:
+        spec = self.spec
+        reached_t = {}
+        for t, idx, r in zip(dec["t"], dec["target_index"], dec["reached"]):
+            if r and idx not in reached_t:
+                reached_t[idx] = t
+        disturbances = []
+        for f in fired:
+            before, after = f["com_before"], f.get("com_after")
+            k_wp = f["target_index"]
+            t_reach = reached_t.get(k_wp)
+            entry = {"description": f["description"], "t_s": f["t"], "target_index": k_wp,
+                     "recovered": t_reach is not None and not rolled,
+                     "time_to_recover_s": (t_reach - t_start - f["t"]) if t_reach is not None else None}
+            if after is not None:
+                entry["com_displacement_2s_m"] = math.hypot(after[0] - before[0], after[1] - before[1])
+                entry["heading_change_2s_deg"] = wrap(after[2] - before[2]) * DEG
+            disturbances.append(entry)
+        sim_time = self.plant.time_s
+        extra = {
+            "rolled_over": bool(rolled), "max_tilt_deg": float(max_tilt),
+            "limit_violations": int(self.plant.limit_violations), "cpg_outputs_clamped": int(self.driver.cpg_clamped),
+            "sim_time_s": sim_time, "mission_time_s": sim_time - t_start, "wall_time_s": wall,
+            "real_time_factor": sim_time / wall if wall > 0 else None,
+            "disturbances": disturbances,
+            "recovered_all": all(d["recovered"] for d in disturbances),
+            "seed": spec.seed, "feedback": spec.feedback, "start": list(spec.start),
+        }
+        if spec.feedback == "vio":
+            samples = self.feedback.samples
+            extra["vio"] = {"samples": len(samples), "lost_samples": int(sum(s[3] for s in samples)),
+                            "gate_rejected": int(self.feedback.gate.rejected)}
+        tracker = self.mission.tracker_params
+        meta = {"mission": self.mission.name, "mission_source": self.mission.source, "t_start": t_start,
+                "seed": spec.seed, "feedback": spec.feedback, "start": list(spec.start),
+                "time_limit_s": self.time_limit_s, "label": spec.label,
+                "tracker": {k: (v * DEG if k in ("psi_wp", "psi_turn", "delta0", "delta_lim", "delta_turn", "far_blend_max_gap") else v)
+                            for k, v in tracker.items()},
+                "tracker_config": self.defaults.get("source", ""), "rate_hz": self.defaults["rate_hz"],
+                "heading_offset_deg": self.defaults["heading_offset_deg"], "gaits": self.mission.gaits,
+                "sim_params": self.params.summary(), "sim_config": spec.sim_config,
+                "disturbance_triggers": [t.describe() for t in self.triggers]}
+        return RunResult(spec, list(self.mission.waypoints), {k: np.asarray(v) for k, v in traj.items()}, dec,
+                         outcome, meta, extra, tracker,
+                         vio_samples=list(self.feedback.samples) if spec.feedback == "vio" else [])
+
+
+def _progress_bar(enabled: bool, total_s: float, desc: str):
+    if not enabled:
+        return None
+    from tqdm import tqdm
+    return tqdm(total=round(total_s), desc=desc, unit="sim s", leave=False, dynamic_ncols=True,
+                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}, {rate_fmt}{postfix}]")

@@ -1,0 +1,113 @@
+"""`snake_autonomy sim`: missions on the simulated robot, without ROS (batch, faster than real time).
+
+    snake_autonomy sim run --mission star --seed 3 --feedback vio --out results/sim/star_s3
+    snake_autonomy sim run --mission single_waypoint --start 2.5,1.0,135 --time-limit 120 --out DIR
+    snake_autonomy sim experiment star --seeds 0-4 --feedback both --out results/sim/star [--jobs 2]
+
+`run` writes DIR/metrics.json (per waypoint: reached, time_s, final_distance_m, final_yaw_error_deg;
+rolled_over, limit_violations, sim_time_s, ...), the CSVs and figures of experiments.write_results,
+and with --feedback vio the evaluation of the simulated RTAB-Map in DIR/evaluation. Exit 0 when every
+waypoint was reached without roll-over or limit violation, 1 otherwise, 2 on a usage error.
+`experiment` runs one of the thesis's experiments (single, star, bidirectional, disturbance) over
+seeds and writes a summary table and figure per feedback; exit 0 when it meets the acceptance.
+"""
+import sys
+from pathlib import Path
+
+EXPERIMENT_NAMES = ("single", "star", "bidirectional", "disturbance")
+
+
+def _start(text):
+    try:
+        x, y, h = (float(v) for v in text.split(","))
+    except ValueError:
+        raise ValueError(f"--start: expected x,y,heading_deg (e.g. 2.5,1.0,135), got {text!r}") from None
+    return x, y, h
+
+
+def add_arguments(parser):
+    sub = parser.add_subparsers(dest="sim_command", metavar="SIM_COMMAND")
+    run = sub.add_parser("run", help="one mission on the simulated robot")
+    run.add_argument("--mission", required=True, help="mission file or provided mission name (config/missions)")
+    run.add_argument("--seed", type=int, default=0, help="randomised physics and sensor noise (default 0)")
+    run.add_argument("--feedback", choices=("mocap", "vio"), default="mocap",
+                     help="base pose from motion capture or the simulated RTAB-Map (default mocap)")
+    run.add_argument("--out", required=True, metavar="DIR", help="results folder")
+    run.add_argument("--start", default="0,0,0", metavar="X,Y,HEADING_DEG",
+                     help="centre of mass of a straight body and its heading (direction of travel)")
+    run.add_argument("--time-limit", type=float, metavar="S", help="override the mission's time limit")
+    _common(run)
+    exp = sub.add_parser("experiment", help="one of the thesis's experiments over seeds (chapter 4.2)")
+    exp.add_argument("name", choices=EXPERIMENT_NAMES)
+    exp.add_argument("--seeds", default="0-4", help="e.g. 0-4 or 0,3 (default 0-4)")
+    exp.add_argument("--feedback", choices=("mocap", "vio", "both"), default="both")
+    exp.add_argument("--out", required=True, metavar="DIR")
+    exp.add_argument("--jobs", type=int, default=1, help="parallel runs (default 1; the machine is shared)")
+    exp.add_argument("--time-limit", type=float, metavar="S", help="override the mission's time limit")
+    _common(exp)
+
+
+def _common(p):
+    root = Path(__file__).resolve().parents[3] / "config"
+    p.add_argument("--sim-config", default=str(root / "sim.yaml"), help="simulated robot (default config/sim.yaml)")
+    p.add_argument("--gaits", default=str(root / "gaits.yaml"), help="gait library (default config/gaits.yaml)")
+    p.add_argument("--no-plots", action="store_true", help="metrics and CSVs only")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def main(args) -> int:
+    from ..missions import MissionError
+    if args.sim_command is None:
+        print("snake_autonomy sim: give a command: run or experiment (--help)", file=sys.stderr)
+        return 2
+    try:
+        if args.sim_command == "run":
+            return _run(args)
+        return _experiment(args)
+    except (ValueError, MissionError, FileNotFoundError) as exc:
+        print(f"snake_autonomy sim {args.sim_command}: {exc}", file=sys.stderr)
+        return 2
+
+
+def _run(args) -> int:
+    from .batch import BatchRun, RunSpec
+    from .experiments import run_success
+    spec = RunSpec(mission=args.mission, seed=args.seed, feedback=args.feedback, start=_start(args.start),
+                   time_limit_s=args.time_limit, sim_config=args.sim_config, gaits=args.gaits)
+    run = BatchRun(spec)
+    result = run.run(progress=not args.no_progress and sys.stderr.isatty())
+    m = result.write(args.out, plots=not args.no_plots)
+    print(f"{run.mission.name}, seed {spec.seed}, {spec.feedback}: {m['outcome']}; "
+          f"{m['waypoints_reached']}/{m['num_waypoints']} waypoints in {m['mission_time_s']:.1f} s simulated "
+          f"({m['real_time_factor']:.0f}x real time); rolled over: {m['rolled_over']}; "
+          f"limit violations: {m['limit_violations']}")
+    for w in m["waypoints"]:
+        t = "-" if w["time_s"] is None else f"{w['time_s']:.0f} s"
+        fd = "-" if w["final_distance_m"] is None else f"{w['final_distance_m']:.2f} m"
+        fy = "-" if w["final_yaw_error_deg"] is None else f"{w['final_yaw_error_deg']:+.1f} deg"
+        print(f"  WP{w['index']}: reached {w['reached']}, {t}, final distance {fd}, yaw error {fy}")
+    for d in m["disturbances"]:
+        print(f"  {d['description']} at {d['t_s']:.1f} s: recovered {d['recovered']}")
+    print(f"results in {args.out}")
+    return 0 if run_success(m) else 1
+
+
+def _experiment(args) -> int:
+    from .experiments import TABLE_HEADER, TABLE_RULE, parse_seeds, run_experiment, table_row
+    seeds = parse_seeds(args.seeds)
+    feedbacks = ("mocap", "vio") if args.feedback == "both" else (args.feedback,)
+    summaries = []
+    for fb in feedbacks:
+        summaries.append(run_experiment(args.name, seeds, fb, args.out, jobs=max(1, args.jobs),
+                                        plots=not args.no_plots, progress=not args.no_progress,
+                                        time_limit_s=args.time_limit, sim_config=args.sim_config,
+                                        gaits=args.gaits))
+    print(TABLE_HEADER)
+    print(TABLE_RULE)
+    for s in summaries:
+        print(table_row(s))
+    for s in summaries:
+        print(f"{s['experiment']} {s['feedback']}: {'accepted' if s['accepted'] else 'NOT accepted'}; "
+              f"{s['simulated_s']:.0f} s simulated in {s['wall_s']:.0f} s; summary in "
+              f"{Path(args.out) / s['feedback']}")
+    return 0 if all(s["accepted"] for s in summaries) else 1
