@@ -1,78 +1,15 @@
 #include "snake_autonomy/core/robot_model.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <sstream>
+
+#include "snake_autonomy/core/config_reader.hpp"
 
 namespace snake_autonomy::core {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
-
-// Reads YAML into plain values, recording a problem (key and value) instead of throwing, so that
-// one pass reports everything that is wrong with a file.
-class Reader {
- public:
-  explicit Reader(std::vector<std::string>* errors) : errors_(errors) {}
-
-  YAML::Node child(const YAML::Node& parent, const std::string& key, const std::string& path,
-                   bool required = true) {
-    if (!parent || !parent.IsMap()) return YAML::Node();
-    YAML::Node n = parent[key];
-    if (!n && required) errors_->push_back(path + ": missing");
-    return n;
-  }
-
-  template <typename T>
-  bool scalar(const YAML::Node& n, const std::string& path, T* out) {
-    if (!n) return false;
-    try {
-      *out = n.as<T>();
-      return true;
-    } catch (const YAML::Exception&) {
-      errors_->push_back(path + ": expected a " + type_name<T>() + ", got '" + dump(n) + "'");
-      return false;
-    }
-  }
-
-  template <typename T>
-  bool list(const YAML::Node& n, const std::string& path, std::vector<T>* out) {
-    if (!n) return false;
-    if (!n.IsSequence()) {
-      errors_->push_back(path + ": expected a list, got '" + dump(n) + "'");
-      return false;
-    }
-    out->clear();
-    bool ok = true;
-    for (std::size_t i = 0; i < n.size(); ++i) {
-      T v{};
-      if (scalar(n[i], path + "[" + std::to_string(i) + "]", &v)) {
-        out->push_back(v);
-      } else {
-        ok = false;
-      }
-    }
-    return ok;
-  }
-
-  static std::string dump(const YAML::Node& n) {
-    YAML::Emitter e;
-    e << YAML::Flow << n;
-    return e.c_str();
-  }
-
- private:
-  template <typename T>
-  static const char* type_name() {
-    if constexpr (std::is_same_v<T, int>) return "integer";
-    if constexpr (std::is_same_v<T, double>) return "number";
-    return "string";
-  }
-  std::vector<std::string>* errors_;
-};
 
 std::string fmt(double v) {
   std::ostringstream s;
@@ -204,7 +141,7 @@ RobotModel RobotModel::from_yaml_string(const std::string& text, const std::stri
   if (!root.IsMap()) throw ConfigError(source + ": expected a mapping at the top level");
 
   std::vector<std::string> errors;
-  Reader r(&errors);
+  ConfigReader r(&errors);
   RobotModel m;
   r.scalar(r.child(root, "name", "name"), "name", &m.name);
   r.scalar(r.child(root, "num_joints", "num_joints"), "num_joints", &m.num_joints);
@@ -291,20 +228,12 @@ RobotModel RobotModel::from_yaml_string(const std::string& text, const std::stri
   if (m.num_joints >= 2 || errors.empty())
     for (auto& e : m.validate())
       if (std::find(errors.begin(), errors.end(), e) == errors.end()) errors.push_back(e);
-  if (!errors.empty()) {
-    std::string msg = source + ": invalid robot description (" + std::to_string(errors.size()) + " problems):";
-    for (const auto& e : errors) msg += "\n  " + e;
-    throw ConfigError(msg);
-  }
+  throw_if_errors(errors, source, "robot description");
   return m;
 }
 
 RobotModel RobotModel::from_yaml_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot open robot description");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return from_yaml_string(buffer.str(), path);
+  return from_yaml_string(read_config_file(path, "robot description"), path);
 }
 
 }  // namespace snake_autonomy::core
