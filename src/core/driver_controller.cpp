@@ -740,7 +740,25 @@ void DriverController::run_request(const PendingRequest& r) noexcept {
 
 bool DriverController::enable_torque(Message& why) noexcept {
   why[0] = '\0';
-  if (!read_feedback()) {
+  bool ok = read_feedback();
+  bool io = false;
+  for (int j = 0; j < n_; ++j) io = io || replies_[j].status == dxl::Status::kIoError;
+  if (!ok && io && reconnect_) {
+    std::string reason;
+    bool reopened = false;
+    try {
+      reopened = reconnect_(&reason);
+    } catch (const std::exception& e) {
+      reason = e.what();
+    }
+    if (!reopened) {
+      std::snprintf(why.data(), why.size(), "cannot enable torque: the bus has an I/O error and reopening failed: %s",
+                    reason.c_str());
+      return false;
+    }
+    ok = read_feedback();
+  }
+  if (!ok) {
     copy_message(why, "cannot enable torque, no feedback from:");
     for (int j = 0; j < n_; ++j) {
       if (diag_[j].stale) append(why, " servo %d (joint_%d) %s;", ids_[j], j + 1, dxl::to_string(replies_[j].status));

@@ -452,6 +452,19 @@ TEST(DriverController, BusDownAndGarbageRepliesStopLocomotion) {
     rig.step(4);
     ASSERT_EQ(rig.ctl->state(), DriverState::kFault);
     EXPECT_NE(std::string(rig.ctl->fault_reason()).find("I/O error"), std::string::npos) << rig.ctl->fault_reason();
+    // Recovery reopens the port through the hook.
+    RequestResult r = rig.request(DriverRequest::kEnableTorque);
+    EXPECT_FALSE(r.success);
+    EXPECT_NE(r.message.find("I/O error"), std::string::npos) << r.message;
+    int reopened = 0;
+    rig.ctl->set_reconnect([&](std::string*) {
+      ++reopened;
+      rig.bus->set_bus_down(false);
+      return true;
+    });
+    r = rig.request(DriverRequest::kEnableTorque);
+    EXPECT_TRUE(r.success) << r.message;
+    EXPECT_EQ(reopened, 1);
   }
   {
     Rig rig(cfg);

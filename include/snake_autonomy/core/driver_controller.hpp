@@ -35,6 +35,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -127,6 +128,10 @@ class DriverController {
   // Leaves the servos as config.shutdown_action says (hold: goals = present positions; torque_off).
   // Returns false when the bus did not take the write.
   bool shutdown() noexcept;
+  // Called by a kEnableTorque request when the bus reports an I/O error (the port went away: an
+  // unplugged adapter, the mock restarted): reopen the port, return false with a reason if it cannot.
+  // Runs on the loop thread, only then (a recovery path: it may allocate and take milliseconds).
+  void set_reconnect(std::function<bool(std::string* why)> reconnect) { reconnect_ = std::move(reconnect); }
   // Copies the loop's outputs; `out` must come from make_snapshot() (no allocation then).
   void fill_snapshot(DriverSnapshot& out) const noexcept;
   DriverSnapshot make_snapshot() const;
@@ -229,6 +234,7 @@ class DriverController {
   std::uint64_t cycle_ = 0, failed_cycles_ = 0, commands_applied_ = 0;
   std::uint32_t consecutive_failed_ = 0;
   bool started_ = false;
+  std::function<bool(std::string*)> reconnect_;
   double t_s_ = 0.0;
 
   // Gait.
