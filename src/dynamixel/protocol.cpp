@@ -224,16 +224,15 @@ ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t*
     r.consumed = s + kHeaderBytes;
     return r;
   }
-  // Another header inside the announced span: this packet was cut short.
-  const std::size_t span_end = (s + total < size) ? s + total : size;
-  for (std::size_t k = s + kHeaderBytes; k + kHeaderBytes <= span_end; ++k) {
-    if (is_header(in + k)) {
-      r.status = ParseStatus::kMalformed;
-      r.consumed = k;
-      return r;
-    }
-  }
   if (s + total > size) {
+    // Not all here yet, unless a full header already shows inside the span: cut short.
+    for (std::size_t k = s + kHeaderBytes; k + kHeaderBytes <= size; ++k) {
+      if (is_header(in + k)) {
+        r.status = ParseStatus::kMalformed;
+        r.consumed = k;
+        return r;
+      }
+    }
     r.status = ParseStatus::kIncomplete;
     r.consumed = s;
     return r;
@@ -241,6 +240,18 @@ ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t*
   const std::uint8_t* p = in + s;
   const std::uint16_t received = static_cast<std::uint16_t>(p[total - 2] | (p[total - 1] << 8));
   if (crc16(p, total - 2) != received) {
+    // A header starting inside the span means this packet was truncated and the next one began
+    // early: report it as malformed and keep the next packet. Stuffing guarantees FF FF FD 00
+    // never occurs inside a packet; at the very end of the input FF FF FD must do.
+    static constexpr std::uint8_t kHeader[4] = {0xFF, 0xFF, 0xFD, 0x00};
+    for (std::size_t k = s + kHeaderBytes; k < s + total; ++k) {
+      const std::size_t avail = size - k < kHeaderBytes ? size - k : kHeaderBytes;
+      if (avail >= 3 && std::memcmp(in + k, kHeader, avail) == 0) {
+        r.status = ParseStatus::kMalformed;
+        r.consumed = k;
+        return r;
+      }
+    }
     r.status = ParseStatus::kBadCrc;
     r.consumed = s + total;
     return r;

@@ -1,10 +1,15 @@
 """Shared pytest fixtures: paths of the package and of ../shared (optional test data)."""
+import os
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = ROOT.parent / "shared"
+# ../shared beside the clone; a git worktree in <clone's parent>/wt/NAME finds it one level higher;
+# SNAKE_AUTONOMY_SHARED overrides both.
+_SHARED_CANDIDATES = [Path(p) for p in (os.environ.get("SNAKE_AUTONOMY_SHARED"),) if p] + [
+    ROOT.parent / "shared", ROOT.parent.parent / "shared"]
+SHARED = next((p for p in _SHARED_CANDIDATES if p.is_dir()), ROOT.parent / "shared")
 
 
 @pytest.fixture(scope="session")

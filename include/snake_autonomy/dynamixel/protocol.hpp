@@ -125,7 +125,8 @@ struct ParseResult {
 // Finds the first packet in `in`: skips garbage before the header (FF FF FD FD, the stuffed
 // pattern, is never taken for a header), checks LEN, the CRC, and un-stuffs INST + PARAMs into
 // `scratch` (needs LEN - 2 bytes). Stuffing guarantees FF FF FD 00 never occurs inside a packet,
-// so a header inside the span LEN announces means the first packet was truncated.
+// so a header inside the span LEN announces (seen before the span is complete, or when its CRC
+// fails) means the first packet was truncated: kMalformed, consumed up to the next header.
 ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t* scratch,
                          std::size_t scratch_capacity, Packet* out) noexcept;
 

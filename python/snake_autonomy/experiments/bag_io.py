@@ -1,0 +1,115 @@
+"""Reading a run's bag back into the plain arrays of :mod:`.results` (needs rosbag, not a master).
+
+A recorder killed half-way leaves a bag without its index: :func:`open_bag` reindexes a temporary
+copy (the original is never modified) and reads every complete chunk from it.
+"""
+import json
+import math
+import shutil
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, Dict
+
+import numpy as np
+
+RUN_TOPIC = "/snake_autonomy/run"   # std_msgs/String, JSON events: start (mission, waypoints), end (outcome)
+
+
+def _basename(topic: str) -> str:
+    return topic.rstrip("/").rsplit("/", 1)[-1]
+
+
+@contextmanager
+def open_bag(path):
+    """Yields (rosbag.Bag opened for reading, reindexed: bool)."""
+    import rosbag
+    path = Path(path)
+    try:
+        bag = rosbag.Bag(str(path), "r")
+    except rosbag.ROSBagUnindexedException:
+        bag = None
+    if bag is not None:
+        try:
+            yield bag, False
+        finally:
+            bag.close()
+        return
+    with tempfile.TemporaryDirectory(prefix="snake_reindex_") as tmp:
+        copy = Path(tmp) / path.name
+        shutil.copyfile(path, copy)
+        fix = rosbag.Bag(str(copy), "a", allow_unindexed=True)
+        try:
+            for _ in fix.reindex():
+                pass
+        finally:
+            fix.close()
+        bag = rosbag.Bag(str(copy), "r")
+        try:
+            yield bag, True
+        finally:
+            bag.close()
+
+
+def _yaw(q) -> float:
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def read_run(path, com_topic: str = "com_pose", status_topic: str = "tracking_status") -> Dict[str, Any]:
+    """{waypoints, trajectory, decisions, meta, reindexed} of a run bag. Topics are matched by their
+    last name component, so a namespaced run (/cobra/com_pose) reads the same."""
+    traj = {"t": [], "x": [], "y": [], "yaw": []}
+    keys = ("t", "waypoint_index", "target_index", "reached", "distance", "yaw_error_abs", "yaw_error_rel",
+            "yaw_error", "w", "mode", "delta", "gait", "pose_stale", "done")
+    dec = {k: [] for k in keys}
+    meta: Dict[str, Any] = {}
+    waypoints = []
+    with open_bag(path) as (bag, reindexed):
+        for topic, msg, t in bag.read_messages():
+            name = _basename(topic)
+            if topic == RUN_TOPIC:
+                event = json.loads(msg.data)
+                if event.get("event") == "start":
+                    meta.update({k: v for k, v in event.items() if k != "event"})
+                    waypoints = [tuple(w) for w in event.get("waypoints", [])]
+                elif event.get("event") == "end":
+                    meta["outcome"] = event.get("outcome")
+                    meta["t_end"] = event.get("t")
+            elif name == com_topic:
+                stamp = msg.header.stamp.to_sec() or t.to_sec()
+                traj["t"].append(stamp)
+                traj["x"].append(msg.pose.position.x)
+                traj["y"].append(msg.pose.position.y)
+                traj["yaw"].append(_yaw(msg.pose.orientation))
+            elif name == status_topic:
+                dec["t"].append(msg.header.stamp.to_sec() or t.to_sec())
+                dec["waypoint_index"].append(msg.waypoint_index)
+                reached = bool(getattr(msg, "waypoint_reached", False))
+                dec["reached"].append(reached)
+                dec["target_index"].append(msg.waypoint_index - int(reached))
+                for k in ("distance", "yaw_error_abs", "yaw_error_rel", "yaw_error", "w", "delta"):
+                    dec[k].append(getattr(msg, k))
+                dec["mode"].append(msg.mode)
+                dec["gait"].append(msg.gait)
+                dec["pose_stale"].append(msg.pose_stale)
+                dec["done"].append(msg.done)
+    order = np.argsort(np.asarray(traj["t"]), kind="stable")
+    trajectory = {k: np.asarray(v, dtype=float)[order] for k, v in traj.items()}
+    decisions = {k: np.asarray(v) for k, v in dec.items()}
+    if "outcome" not in meta:
+        meta["outcome"] = "killed" if reindexed else "unknown"
+    return {"waypoints": waypoints, "trajectory": trajectory, "decisions": decisions, "meta": meta,
+            "reindexed": reindexed}
+
+
+def report_from_bag(bag_path, out_dir, plots: bool = True):
+    """Rebuilds the results folder of a run from its bag; returns write_results' paths."""
+    from .results import write_results
+    run = read_run(bag_path)
+    meta = dict(run["meta"])
+    meta["bag"] = str(bag_path)
+    meta["bag_reindexed"] = run["reindexed"]
+    tracker = meta.get("tracker", {})
+    kwargs = {k: tracker[k] for k in ("d_th", "psi_wp", "psi_turn") if k in tracker}
+    return write_results(out_dir, run["waypoints"], run["trajectory"], run["decisions"],
+                         outcome=meta.get("outcome", "unknown"), meta=meta, plots=plots, **kwargs)

@@ -1,0 +1,120 @@
+"""The log of one run: a rosbag of the topics that matter plus a metrics file kept up to date.
+
+ROS-free apart from rosbag (no master needed), so the killed-run behaviour is testable in a plain
+process. Crash safety:
+
+- the bag is flushed (its open chunk closed and written) after every tracker decision, so a run
+  killed with SIGKILL leaves a bag that reindexes to everything up to the last decision;
+- metrics.json is rewritten atomically after every decision (outcome "running" until the end);
+- ``close(outcome)`` (end, abort, time-out, SIGINT/SIGTERM) writes the bag's index and the full
+  results folder from the closed bag: the same code path as ``snake_autonomy report BAG``.
+"""
+import json
+import math
+import threading
+import time
+from pathlib import Path
+from typing import Any, Dict, List, Optional, Sequence
+
+from .bag_io import RUN_TOPIC
+from .results import compute_metrics, write_json_atomic
+
+BAG_NAME = "run.bag"
+
+
+def _to_time(t_s: float):
+    import genpy
+    return genpy.Time.from_sec(t_s)
+
+
+class RunLog:
+    def __init__(self, run_dir, mission_name: str, waypoints: Sequence[Sequence[float]], t_start_s: float,
+                 mission_yaml: str = "", tracker: Optional[Dict[str, Any]] = None,
+                 extra: Optional[Dict[str, Any]] = None):
+        import rosbag
+        from std_msgs.msg import String
+        self._String = String
+        self.run_dir = Path(run_dir)
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        self.bag_path = self.run_dir / BAG_NAME
+        self.metrics_path = self.run_dir / "metrics.json"
+        self.waypoints = [tuple(float(v) for v in w) for w in waypoints]
+        self.t_start_s = float(t_start_s)
+        self.tracker = dict(tracker or {})
+        self._lock = threading.Lock()
+        self._bag = rosbag.Bag(str(self.bag_path), "w")
+        self._decisions: Dict[str, List[Any]] = {k: [] for k in (
+            "t", "waypoint_index", "target_index", "reached", "distance", "yaw_error_abs", "yaw_error_rel",
+            "yaw_error", "pose_stale")}
+        self._path_m = 0.0
+        self._last_xy = None
+        self._last_t = self.t_start_s
+        self.closed = False
+        self.meta = {"mission": mission_name, "t_start": self.t_start_s, "waypoints": self.waypoints,
+                     "tracker": self.tracker, "mission_yaml": mission_yaml,
+                     "wall_time_start": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+        self.meta.update(extra or {})
+        self._event({"event": "start", **self.meta}, self.t_start_s)
+        (self.run_dir / "mission.yaml").write_text(mission_yaml or "")
+        self._write_metrics("running")
+
+    def _event(self, event: Dict[str, Any], t_s: float) -> None:
+        with self._lock:
+            if self._bag is not None:
+                self._bag.write(RUN_TOPIC, self._String(data=json.dumps(event)), _to_time(t_s))
+
+    def write(self, topic: str, msg, t_s: float) -> None:
+        """Records one message (thread-safe; ignored after close)."""
+        with self._lock:
+            if self._bag is None:
+                return
+            self._bag.write(topic, msg, _to_time(t_s))
+            self._last_t = max(self._last_t, t_s)
+
+    def add_pose(self, t_s: float, x: float, y: float) -> None:
+        """The centre of mass, for the running path length of the metrics."""
+        if not (math.isfinite(x) and math.isfinite(y)):
+            return
+        if self._last_xy is not None:
+            self._path_m += math.hypot(x - self._last_xy[0], y - self._last_xy[1])
+        self._last_xy = (x, y)
+
+    def add_decision(self, t_s: float, waypoint_index: int, target_index: int, reached: bool, distance: float,
+                     yaw_error_abs: float, yaw_error_rel: float, yaw_error: float, pose_stale: bool = False):
+        """One tracker step: updates metrics.json and flushes the bag to disk."""
+        for k, v in (("t", t_s), ("waypoint_index", waypoint_index), ("target_index", target_index),
+                     ("reached", reached), ("distance", distance), ("yaw_error_abs", yaw_error_abs),
+                     ("yaw_error_rel", yaw_error_rel), ("yaw_error", yaw_error), ("pose_stale", pose_stale)):
+            self._decisions[k].append(v)
+        self._last_t = max(self._last_t, t_s)
+        self._write_metrics("running")
+        self.flush()
+
+    def flush(self) -> None:
+        with self._lock:
+            if self._bag is not None:
+                self._bag.flush()
+                self._bag._file.flush()   # rosbag keeps a buffered file object: push it to the OS
+
+    def metrics(self, outcome: str) -> Dict[str, Any]:
+        return compute_metrics(self.waypoints, self._decisions, None, outcome, self.t_start_s,
+                               extra={"path_length_m": self._path_m, "duration_s": self._last_t - self.t_start_s,
+                                      "meta": {k: v for k, v in self.meta.items() if k != "mission_yaml"}})
+
+    def _write_metrics(self, outcome: str) -> None:
+        write_json_atomic(self.metrics_path, self.metrics(outcome))
+
+    def close(self, outcome: str, t_s: Optional[float] = None, plots: bool = True) -> Dict[str, Path]:
+        """Ends the run: closes the bag (writes its index) and writes the results folder.
+        Safe to call twice (the second call does nothing)."""
+        if self.closed:
+            return {}
+        self.closed = True
+        t_end = t_s if t_s is not None else self._last_t
+        self._event({"event": "end", "outcome": outcome, "t": t_end}, max(t_end, self._last_t))
+        with self._lock:
+            bag, self._bag = self._bag, None
+            bag.close()
+        self._write_metrics(outcome)          # never lost, whatever happens below
+        from .bag_io import report_from_bag
+        return report_from_bag(self.bag_path, self.run_dir, plots=plots)

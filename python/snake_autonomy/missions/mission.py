@@ -1,0 +1,283 @@
+"""Mission files: loading and validation, ROS-free.
+
+A mission is a YAML file. Minimal form::
+
+    waypoints:
+      - [x_m, y_m, heading_deg]     # world frame (the odometry frame), REP 103, heading CCW from +x
+
+Optional keys: ``name``, ``description``, ``frame`` (world frame id, informational), ``time_limit_s``
+(> 0; the mission stops when it runs out), ``tracker`` (overrides of config/tracker.yaml's
+``tracker:`` keys, e.g. ``psi_wp_deg: 25``) and ``gaits`` (tracker gait -> gait library name, e.g.
+``sidewind: sidewind_slow``).
+
+A bad mission is refused whole, before anything moves, with every problem listed (MissionError);
+each problem names the key and the value.
+"""
+import copy
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Dict, List, Optional, Sequence, Tuple
+
+import yaml
+
+from ..control.waypoint_tracker import TRACKER_GAITS, TrackerParams
+
+PACKAGE_ROOT = Path(__file__).resolve().parents[3]
+CONFIG_DIR = PACKAGE_ROOT / "config"
+MISSIONS_DIR = CONFIG_DIR / "missions"
+
+#: Gait library names known without config/gaits.yaml (the driver's library).
+DEFAULT_GAIT_LIBRARY = ("sidewind", "turn_left", "turn_right", "near_turn_left", "near_turn_right", "hold")
+
+#: tracker: keys in files (units in the name) -> (TrackerParams field, factor to SI/radians)
+TRACKER_KEYS = {
+    "d_th_m": ("d_th", 1.0),
+    "psi_wp_deg": ("psi_wp", math.pi / 180.0),
+    "psi_turn_deg": ("psi_turn", math.pi / 180.0),
+    "delta0_deg": ("delta0", math.pi / 180.0),
+    "delta_lim_deg": ("delta_lim", math.pi / 180.0),
+    "kp": ("kp", 1.0),
+    "delta_turn_deg": ("delta_turn", math.pi / 180.0),
+    "turn_exit_any_branch": ("turn_exit_any_branch", None),
+}
+MISSION_KEYS = ("name", "description", "frame", "waypoints", "time_limit_s", "tracker", "gaits")
+# Position and heading closer than this count as the same waypoint.
+DUPLICATE_TOL_M = 1e-3
+DUPLICATE_TOL_DEG = 1e-2
+
+
+class MissionError(ValueError):
+    """A mission file that cannot run; ``problems`` lists every reason."""
+
+    def __init__(self, source: str, problems: Sequence[str]):
+        self.source = source
+        self.problems = list(problems)
+        super().__init__(f"{source}: {len(self.problems)} problem(s):\n  " + "\n  ".join(self.problems))
+
+
+@dataclass
+class Mission:
+    name: str
+    waypoints_deg: List[Tuple[float, float, float]]    # (x_m, y_m, heading_deg) as written
+    tracker_params: Dict[str, Any]                     # TrackerParams fields, radians/metres
+    gaits: Dict[str, str]                              # tracker gait -> gait library name
+    time_limit_s: Optional[float] = None
+    description: str = ""
+    frame: str = ""
+    source: str = ""
+    raw: Dict[str, Any] = field(default_factory=dict)  # the file's content, for the run log
+
+    @property
+    def waypoints(self) -> List[Tuple[float, float, float]]:
+        """(x_m, y_m, heading_rad): what WaypointTracker takes."""
+        return [(x, y, math.radians(h)) for x, y, h in self.waypoints_deg]
+
+    def tracker_kwargs(self) -> Dict[str, Any]:
+        return dict(self.tracker_params)
+
+    def summary(self) -> str:
+        p = self.tracker_params
+        lines = [f"mission {self.name!r}: {len(self.waypoints_deg)} waypoint(s)"
+                 + (f", time limit {self.time_limit_s:g} s" if self.time_limit_s else ", no time limit")]
+        for i, (x, y, h) in enumerate(self.waypoints_deg):
+            lines.append(f"  {i}: x {x:+.3f} m  y {y:+.3f} m  heading {h:+.1f} deg")
+        lines.append("  tracker: d_th {:.3f} m, psi_wp {:.1f} deg, psi_turn {:.1f} deg, delta0 {:.1f} deg, "
+                     "delta_lim {:.1f} deg, kp {:g}".format(
+                         p["d_th"], math.degrees(p["psi_wp"]), math.degrees(p["psi_turn"]),
+                         math.degrees(p["delta0"]), math.degrees(p["delta_lim"]), p["kp"]))
+        lines.append("  gaits: " + ", ".join(f"{k} -> {v}" for k, v in self.gaits.items()))
+        return "\n".join(lines)
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def load_yaml(path) -> Any:
+    with open(path, "r", encoding="utf-8") as f:
+        return yaml.safe_load(f)
+
+
+def gait_library_names(path=None) -> Tuple[str, ...]:
+    """Gait names of the gait library (config/gaits.yaml), or the default set when it is absent.
+
+    Accepts ``gaits: {name: {...}}``, ``gaits: [{name: ...}]`` or top-level ``name: {...}``.
+    """
+    path = Path(path) if path else CONFIG_DIR / "gaits.yaml"
+    if not path.is_file():
+        return DEFAULT_GAIT_LIBRARY
+    data = load_yaml(path)
+    if isinstance(data, dict) and "gaits" in data:
+        data = data["gaits"]
+    if isinstance(data, dict):
+        names = [str(k) for k, v in data.items() if isinstance(v, dict)]
+    elif isinstance(data, list):
+        names = [str(g["name"]) for g in data if isinstance(g, dict) and "name" in g]
+    else:
+        names = []
+    return tuple(names) or DEFAULT_GAIT_LIBRARY
+
+
+def load_defaults(path=None) -> Dict[str, Any]:
+    """config/tracker.yaml (tracker parameters, rates, gait mapping)."""
+    path = Path(path) if path else CONFIG_DIR / "tracker.yaml"
+    data = load_yaml(path)
+    problems = []
+    if not isinstance(data, dict):
+        raise MissionError(str(path), [f"expected a mapping, got {data!r}"])
+    tracker, problems_t = _tracker_params(data.get("tracker", {}) or {}, TrackerParams().__dict__, "tracker")
+    problems += problems_t
+    for key, kind in (("rate_hz", float), ("pose_timeout_s", float), ("yaw_filter_window", int)):
+        v = data.get(key)
+        if not _is_number(v) or not math.isfinite(v) or v <= 0 or (kind is int and int(v) != v):
+            problems.append(f"{key}: must be a positive {'integer' if kind is int else 'number'}, got {v!r}")
+    gaits = data.get("gaits") or {}
+    if not isinstance(gaits, dict):
+        problems.append(f"gaits: expected a mapping of tracker gait -> library gait, got {gaits!r}")
+        gaits = {}
+    if problems:
+        raise MissionError(str(path), problems)
+    out = dict(data)
+    out["tracker"] = tracker
+    out["gaits"] = {g: str(gaits.get(g, "hold" if g == "stop" else g)) for g in TRACKER_GAITS}
+    return out
+
+
+def _tracker_params(section, base: Dict[str, Any], where: str):
+    params = dict(base)
+    problems = []
+    unknown = []
+    if not isinstance(section, dict):
+        return params, [f"{where}: expected a mapping, got {section!r}"]
+    for key, value in section.items():
+        if key not in TRACKER_KEYS:
+            unknown.append(f"{where}.{key}: unknown key (value {value!r}); known: {', '.join(TRACKER_KEYS)}")
+            continue
+        name, factor = TRACKER_KEYS[key]
+        if factor is None:
+            if not isinstance(value, bool):
+                problems.append(f"{where}.{key}: must be true or false, got {value!r}")
+                continue
+            params[name] = value
+        elif not _is_number(value) or not math.isfinite(value):
+            problems.append(f"{where}.{key}: must be a finite number, got {value!r}")
+        else:
+            params[name] = float(value) * factor
+    if not problems:
+        for p in TrackerParams(**params).problems():
+            # name the file's key (with its unit) rather than the internal field
+            field_name = p.split(":", 1)[0]
+            key = next((k for k, (n, _) in TRACKER_KEYS.items() if n == field_name), field_name)
+            factor = TRACKER_KEYS.get(key, (None, None))[1]
+            value = params.get(field_name)
+            shown = value / factor if factor not in (None, 1.0) and _is_number(value) else value
+            problems.append(f"{where}.{key}: {p.split(':', 1)[1].strip()} (value {shown:.6g})"
+                            if _is_number(shown) else f"{where}.{key}: {p.split(':', 1)[1].strip()}")
+    return params, unknown + problems
+
+
+def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Dict[str, Any]] = None,
+                     gait_library: Optional[Sequence[str]] = None) -> Mission:
+    """Checks a parsed mission; returns a Mission or raises MissionError listing every problem."""
+    defaults = defaults if defaults is not None else load_defaults()
+    library = tuple(gait_library) if gait_library is not None else gait_library_names()
+    problems: List[str] = []
+    if not isinstance(data, dict):
+        raise MissionError(source, [f"expected a mapping with a 'waypoints' list, got {data!r}"])
+
+    for key in data:
+        if key not in MISSION_KEYS:
+            problems.append(f"{key}: unknown key (value {data[key]!r}); known: {', '.join(MISSION_KEYS)}")
+
+    waypoints: List[Tuple[float, float, float]] = []
+    raw_wps = data.get("waypoints")
+    if "waypoints" not in data:
+        problems.append("waypoints: missing (a list of [x_m, y_m, heading_deg])")
+    elif not isinstance(raw_wps, list):
+        problems.append(f"waypoints: expected a list of [x_m, y_m, heading_deg], got {raw_wps!r}")
+    elif not raw_wps:
+        problems.append("waypoints: the list is empty; at least one waypoint is needed")
+    else:
+        for i, wp in enumerate(raw_wps):
+            if not isinstance(wp, (list, tuple)) or len(wp) != 3:
+                problems.append(f"waypoints[{i}]: expected [x_m, y_m, heading_deg], got {wp!r}")
+                waypoints.append(None)
+                continue
+            ok = True
+            for j, (label, v) in enumerate(zip(("x_m", "y_m", "heading_deg"), wp)):
+                if not _is_number(v):
+                    problems.append(f"waypoints[{i}][{j}] ({label}): expected a number, got {v!r}")
+                    ok = False
+                elif not math.isfinite(v):
+                    problems.append(f"waypoints[{i}][{j}] ({label}): must be finite, got {v!r}")
+                    ok = False
+            waypoints.append(tuple(float(v) for v in wp) if ok else None)
+        for i in range(1, len(waypoints)):
+            a, b = waypoints[i - 1], waypoints[i]
+            if a is None or b is None:
+                continue
+            dh = abs((b[2] - a[2] + 180.0) % 360.0 - 180.0)
+            if math.hypot(b[0] - a[0], b[1] - a[1]) < DUPLICATE_TOL_M and dh < DUPLICATE_TOL_DEG:
+                problems.append(f"waypoints[{i}]: duplicate of waypoints[{i - 1}] {list(a)} "
+                                f"(consecutive waypoints must differ in position or heading)")
+
+    name = data.get("name", Path(source).stem if source else "mission")
+    if not isinstance(name, str) or not name.strip():
+        problems.append(f"name: expected a non-empty string, got {name!r}")
+    for key in ("description", "frame"):
+        if key in data and not isinstance(data[key], str):
+            problems.append(f"{key}: expected a string, got {data[key]!r}")
+
+    time_limit = data.get("time_limit_s")
+    if time_limit is not None and (not _is_number(time_limit) or not math.isfinite(time_limit) or time_limit <= 0):
+        problems.append(f"time_limit_s: must be a positive number of seconds, got {time_limit!r}")
+
+    tracker, tracker_problems = _tracker_params(data.get("tracker") or {}, defaults["tracker"], "tracker")
+    problems += tracker_problems
+
+    gaits = dict(defaults["gaits"])
+    raw_gaits = data.get("gaits") or {}
+    if not isinstance(raw_gaits, dict):
+        problems.append(f"gaits: expected a mapping of tracker gait -> library gait, got {raw_gaits!r}")
+        raw_gaits = {}
+    for role, gait in raw_gaits.items():
+        if role not in TRACKER_GAITS:
+            problems.append(f"gaits.{role}: unknown tracker gait (value {gait!r}); known: {', '.join(TRACKER_GAITS)}")
+        else:
+            gaits[role] = gait
+    for role, gait in gaits.items():
+        if not isinstance(gait, str) or gait not in library:
+            where = f"gaits.{role}" if role in raw_gaits else f"gaits.{role} (default)"
+            problems.append(f"{where}: unknown gait {gait!r}; the gait library has: {', '.join(library)}")
+
+    if problems:
+        raise MissionError(source, problems)
+    return Mission(name=name, waypoints_deg=list(waypoints), tracker_params=tracker, gaits=gaits,
+                   time_limit_s=float(time_limit) if time_limit is not None else None,
+                   description=data.get("description", ""), frame=data.get("frame", ""),
+                   source=source, raw=copy.deepcopy(data))
+
+
+def resolve_mission_path(name_or_path: str) -> Path:
+    """A path, or the name of a provided mission (config/missions/NAME.yaml)."""
+    p = Path(os.path.expanduser(name_or_path))
+    if p.is_file():
+        return p
+    candidate = MISSIONS_DIR / f"{name_or_path}.yaml"
+    if candidate.is_file():
+        return candidate
+    return p
+
+
+def load_mission(path, defaults=None, gait_library=None) -> Mission:
+    """Reads and validates a mission file (a path or a provided mission's name)."""
+    p = resolve_mission_path(str(path))
+    try:
+        data = load_yaml(p)
+    except FileNotFoundError:
+        raise MissionError(str(p), [f"file not found: {p}"]) from None
+    except yaml.YAMLError as exc:
+        raise MissionError(str(p), [f"not valid YAML: {exc}"]) from None
+    return validate_mission(data, str(p), defaults, gait_library)

@@ -1,0 +1,154 @@
+"""A mission in progress, ROS-free: poses in (30-100 Hz), one decision per control tick (1 Hz) out.
+
+The mission node wires it to topics; the simulator can drive it directly. Safety rules:
+
+- locomotion runs only while the mission is running and the pose is fresh: a pose older than
+  ``pose_timeout_s``, a pose source reporting lost tracking, or a non-finite pose all hold the
+  robot (the tracker is not stepped, ERRATA #7) and say so; tracking resumes when fresh poses have
+  refilled the yaw filter;
+- the mission ends (hold) when the last waypoint is reached, on abort and on its time limit.
+"""
+import math
+from dataclasses import dataclass, field
+from typing import Any, Dict, Optional
+
+from ..control import TrackerCommand, WaypointTracker, YawMovingAverage
+from .mission import Mission
+
+IDLE, RUNNING, DONE, ABORTED, TIMEOUT = "idle", "running", "done", "aborted", "timeout"
+NAN = float("nan")
+
+
+@dataclass
+class Decision:
+    """What to send to the driver and what to report, for one control tick."""
+    t_s: float
+    gait: str                      # gait library name to command
+    steer: bool
+    delta_rad: float
+    status: Dict[str, Any]         # TrackingStatus fields (minus header)
+    hold: bool                     # locomotion held (stale pose or mission over)
+    finished: bool = False         # the mission ended at this tick
+    outcome: str = ""
+    command: Optional[TrackerCommand] = field(default=None, repr=False)
+
+
+class MissionRunner:
+    def __init__(self, mission: Mission, pose_timeout_s: float = 0.5, yaw_window: int = 10,
+                 min_fresh_samples: Optional[int] = None):
+        if not (isinstance(pose_timeout_s, (int, float)) and math.isfinite(pose_timeout_s) and pose_timeout_s > 0):
+            raise ValueError(f"pose_timeout_s: must be a positive number, got {pose_timeout_s!r}")
+        self.mission = mission
+        self.tracker = WaypointTracker(mission.waypoints, **mission.tracker_kwargs())
+        self.filter = YawMovingAverage(yaw_window)
+        self.pose_timeout_s = float(pose_timeout_s)
+        self.min_fresh_samples = yaw_window if min_fresh_samples is None else int(min_fresh_samples)
+        self.state = IDLE
+        self.outcome = ""
+        self.t_start: Optional[float] = None
+        self._xy = None
+        self._pose_t: Optional[float] = None
+        self._source_ok = True
+        self._source_detail = ""
+        self._stale_reason = "no pose yet"
+        self._was_stale = True
+
+    @property
+    def hold_gait(self) -> str:
+        return self.mission.gaits["stop"]
+
+    @property
+    def running(self) -> bool:
+        return self.state == RUNNING
+
+    def start(self, t_s: float) -> None:
+        if self.state != IDLE:
+            raise RuntimeError(f"mission {self.mission.name!r} is {self.state}; load it again to rerun")
+        self.state = RUNNING
+        self.t_start = t_s
+
+    def abort(self, reason: str = "aborted") -> None:
+        if self.state == RUNNING:
+            self.state = ABORTED
+            self.outcome = f"aborted: {reason}"
+
+    # -- inputs ------------------------------------------------------------------------------------
+    def on_pose(self, t_s: float, x: float, y: float, yaw_rad: float) -> bool:
+        """A centre-of-mass pose (any rate). Non-finite poses are dropped and count as lost."""
+        if not all(math.isfinite(v) for v in (x, y, yaw_rad)):
+            self._stale_reason = f"non-finite CoM pose ({x}, {y}, {yaw_rad})"
+            self._invalidate()
+            return False
+        if self._pose_t is not None and t_s - self._pose_t > self.pose_timeout_s:
+            self.filter.reset()   # after a gap the old yaw samples are not evidence any more
+        self._xy = (x, y)
+        self._pose_t = t_s
+        self.filter.add(yaw_rad)
+        return True
+
+    def set_source_status(self, ok: bool, detail: str = "") -> None:
+        """The pose source's own verdict (the pose remapper's lost-tracking detection)."""
+        if self._source_ok and not ok:
+            self._invalidate()
+        self._source_ok = bool(ok)
+        self._source_detail = detail
+
+    def _invalidate(self) -> None:
+        self.filter.reset()
+        self._pose_t = None
+
+    def pose_problem(self, t_s: float) -> str:
+        """Why the pose cannot be used at t_s, or '' when it is fresh."""
+        if not self._source_ok:
+            return f"pose source: {self._source_detail or 'tracking lost'}"
+        if self._pose_t is None:
+            return self._stale_reason
+        age = t_s - self._pose_t
+        if age > self.pose_timeout_s:
+            return f"CoM pose is {age:.2f} s old (timeout {self.pose_timeout_s:g} s)"
+        if self.filter.count < self.min_fresh_samples:
+            return f"waiting for fresh poses ({self.filter.count}/{self.min_fresh_samples} yaw samples)"
+        return ""
+
+    # -- the control tick ----------------------------------------------------------------------------
+    def step(self, t_s: float) -> Optional[Decision]:
+        """One control tick; None when the mission is not running."""
+        if self.state != RUNNING:
+            return None
+        n = len(self.mission.waypoints)
+        limit = self.mission.time_limit_s
+        if limit is not None and t_s - self.t_start > limit:
+            self.state, self.outcome = TIMEOUT, f"timeout: time limit {limit:g} s reached"
+            return self._hold(t_s, self.outcome, stale=False, finished=True)
+        problem = self.pose_problem(t_s)
+        if problem:
+            if not self._was_stale:
+                self.filter.reset()
+            self._was_stale = True
+            return self._hold(t_s, f"holding: {problem}", stale=True)
+        self._was_stale = False
+        x, y = self._xy
+        cmd = self.tracker.update(x, y, self.filter.value)
+        gait = self.mission.gaits[cmd.gait]
+        status = dict(waypoint_index=cmd.waypoint_index, num_waypoints=n, waypoint_reached=cmd.reached,
+                      distance=cmd.distance, yaw_error_abs=cmd.yaw_error_abs, yaw_error_rel=cmd.yaw_error_rel,
+                      yaw_error=cmd.yaw_error, w=cmd.w, mode=cmd.mode, delta=cmd.delta_rad, gait=gait,
+                      done=cmd.done, pose_stale=False, note=cmd.action)
+        finished = cmd.done
+        if finished:
+            self.state, self.outcome = DONE, "done: every waypoint reached"
+        return Decision(t_s, gait, cmd.steer, cmd.delta_rad if cmd.steer else 0.0, status, hold=cmd.done,
+                        finished=finished, outcome=self.outcome, command=cmd)
+
+    def _hold(self, t_s: float, note: str, stale: bool, finished: bool = False) -> Decision:
+        tr = self.tracker
+        status = dict(waypoint_index=tr.waypoint_index, num_waypoints=len(self.mission.waypoints),
+                      waypoint_reached=False, distance=NAN, yaw_error_abs=NAN, yaw_error_rel=NAN, yaw_error=NAN,
+                      w=NAN, mode=tr.mode, delta=tr.delta_rad, gait=self.hold_gait, done=tr.done,
+                      pose_stale=stale, note=note)
+        return Decision(t_s, self.hold_gait, False, 0.0, status, hold=True, finished=finished,
+                        outcome=self.outcome if finished else "")
+
+    def final_decision(self, t_s: float) -> Decision:
+        """The hold to send when the mission ends outside a tick (abort, shutdown)."""
+        return self._hold(t_s, self.outcome or "stopped", stale=False, finished=True)

@@ -1,0 +1,341 @@
+"""mission_node: runs missions with the 1 Hz waypoint tracker and logs every run. Wiring only: the
+logic is missions.runner.MissionRunner, the log experiments.RunLog.
+
+Subscribes  com_pose (geometry_msgs/PoseStamped, the driver's CoM + virtual-chassis orientation),
+            base_pose_status (diagnostic_msgs/DiagnosticStatus, the pose remapper; optional),
+            and for the bag: base_pose, odom, bound_state, joint_states.
+Publishes   gait_command (snake_autonomy/GaitCommand), tracking_status (snake_autonomy/TrackingStatus),
+            mission/waypoints (geometry_msgs/PoseArray, latched), mission/state (std_msgs/String, latched).
+Services    mission/load (snake_autonomy/LoadMission), mission/start, mission/abort (std_srvs/Trigger).
+Params      ~mission (file or provided name: loaded at start-up), ~auto_start (false), ~tracker_config
+            (config/tracker.yaml), ~gaits_config (config/gaits.yaml), ~rate_hz, ~pose_timeout_s,
+            ~yaw_filter_window (defaults from tracker_config), ~results_dir, ~record (true),
+            ~world_frame (odom).
+"""
+import math
+import os
+import re
+import signal
+import threading
+import time
+from pathlib import Path
+
+import rospy
+import yaml
+from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import Pose, PoseArray, PoseStamped
+from std_msgs.msg import String
+from std_srvs.srv import Trigger, TriggerResponse
+
+from snake_autonomy.estimation.transforms import yaw_of_quat
+from snake_autonomy.missions import MissionError, gait_library_names, load_defaults, load_mission
+from snake_autonomy.missions.runner import MissionRunner
+from snake_autonomy.msg import GaitCommand, TrackingStatus
+from snake_autonomy.srv import LoadMission, LoadMissionResponse
+
+RECORDED = {  # topic -> type, recorded into the run's bag besides com_pose and our own outputs
+    "base_pose": PoseStamped,
+    "base_pose_status": DiagnosticStatus,
+}
+
+
+def _optional_types():
+    out = {}
+    try:
+        from nav_msgs.msg import Odometry
+        out["odom"] = Odometry
+    except ImportError:
+        pass
+    try:
+        from sensor_msgs.msg import JointState
+        out["joint_states"] = JointState
+    except ImportError:
+        pass
+    from snake_autonomy.msg import BoundState
+    out["bound_state"] = BoundState
+    return out
+
+
+def default_results_dir() -> str:
+    root = os.environ.get("SNAKE_AUTONOMY_ROOT")
+    if root:
+        return os.path.join(root, "results")
+    return os.path.join(os.environ.get("ROS_HOME", os.path.expanduser("~/.ros")), "snake_autonomy_results")
+
+
+class MissionNode:
+    def __init__(self):
+        self.lock = threading.RLock()
+        defaults_path = rospy.get_param("~tracker_config", "") or None
+        self.defaults = load_defaults(defaults_path)
+        self.gait_library = gait_library_names(rospy.get_param("~gaits_config", "") or None)
+        self.rate_hz = float(rospy.get_param("~rate_hz", self.defaults["rate_hz"]))
+        self.pose_timeout_s = float(rospy.get_param("~pose_timeout_s", self.defaults["pose_timeout_s"]))
+        self.yaw_window = int(rospy.get_param("~yaw_filter_window", self.defaults["yaw_filter_window"]))
+        self.results_dir = Path(rospy.get_param("~results_dir", default_results_dir()))
+        self.record = bool(rospy.get_param("~record", True))
+        self.world_frame = rospy.get_param("~world_frame", "odom")
+        if not (self.rate_hz > 0 and self.pose_timeout_s > 0 and self.yaw_window > 0):
+            raise ValueError(f"~rate_hz ({self.rate_hz}), ~pose_timeout_s ({self.pose_timeout_s}) and "
+                             f"~yaw_filter_window ({self.yaw_window}) must be positive")
+
+        self.mission = None
+        self.runner = None
+        self.log = None
+        self.run_dir = None
+        self.source_ok, self.source_detail = True, ""
+
+        self.pub_cmd = rospy.Publisher("gait_command", GaitCommand, queue_size=10)
+        self.pub_status = rospy.Publisher("tracking_status", TrackingStatus, queue_size=10)
+        self.pub_wps = rospy.Publisher("mission/waypoints", PoseArray, queue_size=1, latch=True)
+        self.pub_state = rospy.Publisher("mission/state", String, queue_size=1, latch=True)
+        rospy.Subscriber("com_pose", PoseStamped, self.on_com_pose, queue_size=50)
+        rospy.Subscriber("base_pose_status", DiagnosticStatus, self.on_source_status, queue_size=10)
+        self._rec_subs = []
+        if self.record:
+            types = dict(RECORDED)
+            types.update(_optional_types())
+            for topic, msg_type in types.items():
+                if topic == "base_pose_status":
+                    continue   # recorded in on_source_status
+                self._rec_subs.append(rospy.Subscriber(topic, msg_type, self._recorder(topic), queue_size=100))
+        rospy.Service("mission/load", LoadMission, self.srv_load)
+        rospy.Service("mission/start", Trigger, self.srv_start)
+        rospy.Service("mission/abort", Trigger, self.srv_abort)
+        self.set_state("idle")
+
+        mission_param = rospy.get_param("~mission", "")
+        if mission_param:
+            ok, message = self.load(mission_param)
+            if not ok:
+                rospy.logfatal(message)
+                raise SystemExit(message)
+            if rospy.get_param("~auto_start", False):
+                ok, message = self.start()
+                if not ok:
+                    rospy.logerr(message)
+        # Other shutdown paths (rosnode kill, master gone): rospy has closed the publishers by now, so
+        # the hold may not go out, but the run is still ended and its results written. SIGINT and
+        # SIGTERM are handled in main() before rospy shuts down, so their hold does go out.
+        rospy.core.add_preshutdown_hook(lambda reason: self.on_shutdown(f"shutdown: {reason}"))
+        self.timer = rospy.Timer(rospy.Duration(1.0 / self.rate_hz), self.on_tick)
+
+    # -- helpers -----------------------------------------------------------------------------------
+    def set_state(self, text):
+        self.pub_state.publish(String(data=text))
+
+    def resolved(self, name):
+        return rospy.resolve_name(name)
+
+    def _recorder(self, topic):
+        resolved = self.resolved(topic)
+
+        def cb(msg):
+            log = self.log
+            if log is not None:
+                log.write(resolved, msg, rospy.get_time())
+        return cb
+
+    # -- subscriptions -------------------------------------------------------------------------------
+    def on_com_pose(self, msg):
+        t = rospy.get_time()
+        q = msg.pose.orientation
+        x, y = msg.pose.position.x, msg.pose.position.y
+        try:
+            yaw = yaw_of_quat(q.x, q.y, q.z, q.w)
+        except (ValueError, ZeroDivisionError):
+            yaw = float("nan")
+        if abs(q.x) + abs(q.y) + abs(q.z) + abs(q.w) == 0:
+            yaw = float("nan")   # zero quaternion: no orientation
+        with self.lock:
+            if self.runner is not None:
+                self.runner.on_pose(t, x, y, yaw)
+            if self.log is not None:
+                self.log.write(self.resolved("com_pose"), msg, t)
+                self.log.add_pose(t, x, y)
+
+    def on_source_status(self, msg):
+        ok = msg.level == DiagnosticStatus.OK
+        with self.lock:
+            if ok != self.source_ok:
+                (rospy.loginfo if ok else rospy.logwarn)(f"pose source: {msg.message}")
+            self.source_ok, self.source_detail = ok, msg.message
+            if self.runner is not None:
+                self.runner.set_source_status(ok, msg.message)
+            if self.log is not None:
+                self.log.write(self.resolved("base_pose_status"), msg, rospy.get_time())
+
+    # -- services ------------------------------------------------------------------------------------
+    def load(self, path):
+        with self.lock:
+            if self.runner is not None and self.runner.running:
+                return False, f"mission {self.mission.name!r} is running: abort it first"
+            try:
+                mission = load_mission(path, defaults=self.defaults, gait_library=self.gait_library)
+                runner = MissionRunner(mission, self.pose_timeout_s, self.yaw_window)
+            except MissionError as exc:
+                return False, str(exc)
+            except ValueError as exc:
+                return False, f"{path}: {exc}"
+            self.mission, self.runner = mission, runner
+            runner.set_source_status(self.source_ok, self.source_detail)
+            self.publish_waypoints()
+            self.set_state(f"loaded: {mission.name}")
+            rospy.loginfo(mission.summary())
+            return True, f"loaded {mission.name!r}: {len(mission.waypoints)} waypoint(s) from {mission.source}"
+
+    def srv_load(self, req):
+        ok, message = self.load(req.path)
+        (rospy.loginfo if ok else rospy.logerr)(message)
+        return LoadMissionResponse(success=ok, message=message)
+
+    def start(self):
+        with self.lock:
+            if self.mission is None:
+                return False, "no mission loaded (mission/load or ~mission)"
+            if self.runner.state != "idle":
+                # a finished mission reruns from its first waypoint
+                self.runner = MissionRunner(self.mission, self.pose_timeout_s, self.yaw_window)
+                self.runner.set_source_status(self.source_ok, self.source_detail)
+            t = rospy.get_time()
+            if self.record:
+                self.open_log(t)
+            self.runner.start(t)
+            self.set_state(f"running: {self.mission.name}")
+            msg = f"mission {self.mission.name!r} started" + (f", logging to {self.run_dir}" if self.log else "")
+            rospy.loginfo(msg)
+        self.on_tick(None)   # first decision now, not one period later
+        return True, msg
+
+    def srv_start(self, _req):
+        ok, message = self.start()
+        return TriggerResponse(success=ok, message=message)
+
+    def srv_abort(self, _req):
+        with self.lock:
+            if self.runner is None or not self.runner.running:
+                self.send_hold("abort requested")
+                return TriggerResponse(success=False, message="no mission running (hold sent anyway)")
+            self.runner.abort("operator request")
+            self.finish(self.runner.final_decision(rospy.get_time()))
+            return TriggerResponse(success=True, message=self.runner.outcome)
+
+    # -- the control tick --------------------------------------------------------------------------------
+    def on_tick(self, _event):
+        with self.lock:
+            if self.runner is None:
+                return
+            decision = self.runner.step(rospy.get_time())
+            if decision is None:
+                return
+            if decision.status["pose_stale"]:
+                rospy.logwarn_throttle(5.0, f"{self.mission.name}: {decision.status['note']}")
+            if decision.finished:
+                self.finish(decision)
+            else:
+                self.publish(decision)
+
+    def publish(self, decision):
+        now = rospy.Time.from_sec(decision.t_s) if decision.t_s > 0 else rospy.Time.now()
+        cmd = GaitCommand(gait=decision.gait, steer=decision.steer, delta=decision.delta_rad)
+        cmd.header.stamp = now
+        status = TrackingStatus(**decision.status)
+        status.header.stamp = now
+        status.header.frame_id = self.world_frame
+        self.pub_cmd.publish(cmd)
+        self.pub_status.publish(status)
+        if self.log is not None:
+            self.log.write(self.resolved("gait_command"), cmd, decision.t_s)
+            self.log.write(self.resolved("tracking_status"), status, decision.t_s)
+            s = decision.status
+            self.log.add_decision(decision.t_s, s["waypoint_index"], s["waypoint_index"] - int(s["waypoint_reached"]),
+                                  s["waypoint_reached"], s["distance"], s["yaw_error_abs"], s["yaw_error_rel"],
+                                  s["yaw_error"], s["pose_stale"])
+
+    def send_hold(self, why):
+        hold = self.runner.hold_gait if self.runner is not None else self.defaults["gaits"]["stop"]
+        cmd = GaitCommand(gait=hold, steer=False, delta=0.0)
+        cmd.header.stamp = rospy.Time.now()
+        self.pub_cmd.publish(cmd)
+        rospy.loginfo(f"hold sent ({why})")
+
+    def finish(self, decision):
+        """The mission ended: hold, report per waypoint, close the log."""
+        try:
+            self.publish(decision)
+        except rospy.ROSException as exc:   # shutting down: topics already closed
+            rospy.logerr(f"could not send the final hold: {exc}")
+        outcome = self.runner.outcome or decision.outcome
+        self.set_state(f"{self.runner.state}: {self.mission.name}: {outcome}")
+        rospy.loginfo(f"mission {self.mission.name!r} ended: {outcome}")
+        if self.log is not None:
+            log, self.log = self.log, None
+            try:
+                log.close(outcome, decision.t_s)
+            except Exception as exc:  # noqa: BLE001 - the bag and metrics.json are already safe
+                rospy.logerr(f"writing the results of {self.run_dir} failed: {exc}")
+            else:
+                rospy.loginfo(f"results in {self.run_dir}")
+        m = self.runner
+        reached = m.tracker.waypoint_index
+        rospy.loginfo(f"{reached}/{len(self.mission.waypoints)} waypoint(s) reached")
+
+    def open_log(self, t):
+        from snake_autonomy.experiments import RunLog
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", self.mission.name)
+        self.run_dir = self.results_dir / f"{stamp}_{safe}"
+        n = 1
+        while self.run_dir.exists():
+            n += 1
+            self.run_dir = self.results_dir / f"{stamp}_{safe}_{n}"
+        source = Path(self.mission.source)
+        text = source.read_text() if source.is_file() else yaml.safe_dump(self.mission.raw)
+        self.log = RunLog(self.run_dir, self.mission.name, self.mission.waypoints, t, mission_yaml=text,
+                          tracker=self.mission.tracker_params,
+                          extra={"rate_hz": self.rate_hz, "pose_timeout_s": self.pose_timeout_s,
+                                 "gaits": self.mission.gaits, "node": rospy.get_name()})
+
+    def publish_waypoints(self):
+        msg = PoseArray()
+        msg.header.frame_id = self.world_frame
+        msg.header.stamp = rospy.Time.now()
+        for x, y, h in self.mission.waypoints:
+            p = Pose()
+            p.position.x, p.position.y = x, y
+            p.orientation.z, p.orientation.w = math.sin(h / 2), math.cos(h / 2)
+            msg.poses.append(p)
+        self.pub_wps.publish(msg)
+
+    def on_shutdown(self, reason="node shutdown"):
+        """SIGINT/SIGTERM/rosnode kill: hold and write what is known."""
+        with self.lock:
+            if self.runner is not None and self.runner.running:
+                self.runner.abort(reason)
+                try:
+                    self.finish(self.runner.final_decision(rospy.get_time()))
+                except Exception as exc:  # noqa: BLE001
+                    rospy.logerr(f"shutdown: {exc}")
+            elif self.log is not None:
+                self.log.close("shutdown")
+
+
+def main():
+    # Our own SIGINT/SIGTERM handlers: rospy closes every publisher before any shutdown hook runs, so
+    # the final hold must go out (and the results be written) before rospy starts shutting down.
+    rospy.init_node("mission", disable_signals=True)
+    try:
+        node = MissionNode()
+    except (ValueError, MissionError) as exc:
+        rospy.logfatal(str(exc))
+        return 1
+
+    def on_signal(signum, _frame):
+        name = signal.Signals(signum).name
+        node.on_shutdown(f"node stopped by {name}")
+        rospy.signal_shutdown(name)
+
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
+    rospy.spin()
+    return 0

@@ -1,0 +1,123 @@
+"""The MuJoCo model (MJCF text) of a snake robot, generated from its robot YAML.
+
+Geometry, axes, masses and limits come from `_core.RobotModel` only; physics and servo values from
+`SimParams`. The body tree follows thesis eq. 3.3-3.4 exactly:
+
+    head_link = base_link . Trans(-H, 0, 0) . Rx(+90 deg)
+    link_i    = link_{i-1} . Rz(-q_i) . Trans(-L, 0, 0) . Rx(twist_i)
+
+twist_i is -90 deg after a pitch joint and +90 deg after a yaw joint (COBRA: -90, +90, -90, ...;
+after the last joint the alternation continues). Joint i turns about the z axis of the frame
+before it; its MuJoCo hinge axis is (0, 0, -1), so MuJoCo's qpos is the thesis's q_i.
+
+Bodies and sites:
+- body `base_link` (free joint) carries the head segment: a capsule from the base origin back to
+  the head frame (joint 1), with the base and head masses together. Sites `base_link` and
+  `head_link` are those kinematic frames.
+- body `link_i` has its origin at joint i, oriented as Rz(-q_i) of the previous frame, and carries
+  a capsule of length L along its -x axis with link i's mass. Site `link_i` (at the capsule's far
+  end, twisted by twist_i) is the kinematic frame link_i of eq. 3.4.
+- actuator `servo_i`: the position servo of joint i. Its internal state (act) is the setpoint,
+  integrated from a velocity command bounded by the joint speed limit and clamped to the joint's
+  limits; force = kp (setpoint - q) - kv q', saturated at the torque limit.
+"""
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from .config import SimParams
+
+
+def twists_rad(axes) -> list:
+    """The Rx twist after each joint (eq. 3.4): -90 deg going pitch->yaw, +90 deg yaw->pitch."""
+    out = []
+    for i, axis in enumerate(axes):
+        nxt = axes[i + 1] if i + 1 < len(axes) else ("yaw" if axis == "pitch" else "pitch")
+        if axis == nxt:
+            raise ValueError(f"joints {i + 1} and {i + 2} share axis {axis!r}: eq. 3.4 needs "
+                             "alternating pitch/yaw joints")
+        out.append(-np.pi / 2 if axis == "pitch" else np.pi / 2)
+    return out
+
+
+def _quat_rx(angle_rad: float) -> str:
+    """MuJoCo quaternion (w x y z) of Rx(angle)."""
+    return f"{np.cos(angle_rad / 2):.17g} {np.sin(angle_rad / 2):.17g} 0 0"
+
+
+def _f(x: float) -> str:
+    return f"{float(x):.17g}"
+
+
+def build_mjcf(robot, params: SimParams) -> str:
+    """MJCF text of `robot` (a _core.RobotModel) with the physics of `params`."""
+    cfg = params.config
+    phys, servo = cfg.physics, cfg.servo
+    n = robot.num_joints
+    axes = list(robot.axes)
+    twists = twists_rad(axes)
+    H, L, r = robot.head_length_m, robot.link_length_m, robot.link_radius_m
+    masses = list(robot.masses_kg)
+    lower, upper = list(robot.joint_lower_rad), list(robot.joint_upper_rad)
+    mu = params.floor_friction
+    condim = 6 if phys.rolling_friction_m > 0 else (4 if phys.torsional_friction > 0 else 3)
+    friction = f"{_f(mu)} {_f(phys.torsional_friction)} {_f(phys.rolling_friction_m)}"
+    # Links collide with the floor only (contype 1 vs conaffinity 2), unless self_collision.
+    link_affinity = 3 if phys.self_collision else 2
+    geom_defaults = (f'contype="1" conaffinity="{link_affinity}" condim="{condim}" '
+                     f'friction="{friction}" '
+                     f'solref="{_f(phys.contact_timeconst_s)} {_f(phys.contact_dampratio)}"')
+
+    lines = [
+        f'<mujoco model={quoteattr(robot.name)}>',
+        '  <compiler angle="radian" autolimits="true"/>',
+        f'  <option timestep="{_f(phys.timestep_s)}" integrator="{phys.integrator}" '
+        f'cone="{phys.cone}" iterations="{int(phys.solver_iterations)}" gravity="0 0 -9.81"/>',
+        '  <size memory="4M"/>',
+        '  <default>',
+        f'    <joint armature="{_f(servo.armature_kg_m2)}" '
+        f'damping="{_f(servo.damping_nm_s_per_rad)}" '
+        f'frictionloss="{_f(servo.frictionloss_nm)}" limited="true"/>',
+        f'    <geom type="capsule" size="{_f(r)}" {geom_defaults}/>',
+        '    <site size="0.01"/>',
+        '  </default>',
+        '  <worldbody>',
+        f'    <geom name="floor" type="plane" size="0 0 1" contype="2" conaffinity="1" '
+        f'condim="{condim}" friction="{friction}"/>',
+        '    <light pos="0 0 4" dir="0 0 -1" directional="true"/>',
+        f'    <body name="base_link" pos="0 0 {_f(r + phys.start_height_m)}">',
+        '      <freejoint name="base"/>',
+        '      <site name="base_link"/>',
+        f'      <site name="head_link" pos="{_f(-H)} 0 0" quat="{_quat_rx(np.pi / 2)}"/>',
+        f'      <geom name="head" fromto="0 0 0 {_f(-H)} 0 0" mass="{_f(masses[0] + masses[1])}"/>',
+    ]
+    indent = "      "
+    parent_pos, parent_quat = f"{_f(-H)} 0 0", _quat_rx(np.pi / 2)
+    for i in range(n):
+        name = f"link_{i + 1}"
+        lines += [
+            f'{indent}<body name="{name}" pos="{parent_pos}" quat="{parent_quat}">',
+            f'{indent}  <joint name="{robot.joint_names[i]}" type="hinge" axis="0 0 -1" '
+            f'range="{_f(lower[i])} {_f(upper[i])}"/>',
+            f'{indent}  <geom name="{name}" fromto="0 0 0 {_f(-L)} 0 0" '
+            f'mass="{_f(masses[i + 2])}"/>',
+            f'{indent}  <site name="{name}" pos="{_f(-L)} 0 0" quat="{_quat_rx(twists[i])}"/>',
+        ]
+        indent += "  "
+        parent_pos, parent_quat = f"{_f(-L)} 0 0", _quat_rx(twists[i])
+    for i in reversed(range(n)):
+        indent = indent[:-2]
+        lines.append(f"{indent}</body>")
+    lines += ['    </body>', '  </worldbody>', '  <actuator>']
+    for i in range(n):
+        kp, kv = params.kp_nm_per_rad[i], params.kv_nm_s_per_rad[i]
+        lines.append(
+            f'    <general name="servo_{i + 1}" joint="{robot.joint_names[i]}" '
+            f'dyntype="integrator" '
+            f'gaintype="fixed" gainprm="{_f(kp)}" biastype="affine" '
+            f'biasprm="0 {_f(-kp)} {_f(-kv)}" '
+            f'ctrlrange="{_f(-servo.speed_limit_rad_s)} {_f(servo.speed_limit_rad_s)}" '
+            f'actlimited="true" actrange="{_f(lower[i])} {_f(upper[i])}" '
+            f'forcerange="{_f(-servo.torque_limit_nm)} {_f(servo.torque_limit_nm)}"/>')
+    lines += ['  </actuator>', '</mujoco>']
+    return "\n".join(lines) + "\n"

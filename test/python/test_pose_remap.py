@@ -1,0 +1,183 @@
+"""Eq. 3.1 with hand-built transforms whose answer is known, and lost-tracking detection."""
+import math
+
+import numpy as np
+import pytest
+
+from snake_autonomy import _core
+from snake_autonomy.estimation import (GateParams, PoseRemapper, TrackingGate, head_in_base,
+                                       load_camera_calibration, load_gate_params)
+from snake_autonomy.estimation.transforms import (invert, make_transform, matrix_to_pose, matrix_to_quat,
+                                                  pose_to_matrix, quat_to_matrix, rot_x, rot_z, rpy_to_matrix,
+                                                  translation, yaw_of_quat)
+
+H = 0.1565
+DEG = math.pi / 180
+
+
+def test_eq_3_3_head_in_base():
+    T = head_in_base(H)
+    assert T[:3, 3] == pytest.approx([-H, 0, 0])
+    # Rx(+90 deg): the head's y axis is the base's z axis, the head's z axis is the base's -y axis
+    assert T[:3, 1] == pytest.approx([0, 0, 1])
+    assert T[:3, 2] == pytest.approx([0, -1, 0])
+
+
+def test_identity_calibration_identity_odometry():
+    # camera == head; base = head . inverse(Trans(-H) Rx(90)) = Rx(-90) Trans(+H): origin at (H, 0, 0)
+    r = PoseRemapper(np.eye(4), H)
+    T = r.base_in_world(np.eye(4))
+    assert T[:3, 3] == pytest.approx([H, 0, 0])
+    assert T[:3, :3] == pytest.approx(rot_x(-math.pi / 2))
+
+
+def test_level_camera_at_a_known_pose():
+    # The default calibration (a level camera at the head origin, rpy -90 0 0): a camera at
+    # (1, 2, 0.1) with yaw 30 deg puts the base H ahead of it along the heading, level, yaw 30 deg.
+    r = PoseRemapper(make_transform(rpy_to_matrix(-math.pi / 2, 0, 0)), H)
+    cam = make_transform(rot_z(30 * DEG), [1.0, 2.0, 0.1])
+    T = r.base_in_world(cam)
+    assert T[:3, 3] == pytest.approx([1 + H * math.cos(30 * DEG), 2 + H * math.sin(30 * DEG), 0.1])
+    assert T[:3, :3] == pytest.approx(rot_z(30 * DEG), abs=1e-12)
+    _, q = matrix_to_pose(T)
+    assert yaw_of_quat(*q) == pytest.approx(30 * DEG)
+
+
+def test_offset_calibration_is_consistent_with_eq_3_3():
+    calib = make_transform(rpy_to_matrix(-math.pi / 2 + 0.1, 0.05, -0.02), [0.03, -0.01, 0.02])
+    r = PoseRemapper(calib, H)
+    cam = make_transform(rpy_to_matrix(0.2, -0.1, 2.5), [3.0, -1.0, 0.4])
+    base = r.base_in_world(cam)
+    head = base @ head_in_base(H)                       # eq. 3.3 forward
+    assert head @ calib == pytest.approx(cam)           # the camera where the odometry says it is
+    assert r.head_in_world(cam) == pytest.approx(head)
+    # the camera moved 1 m along its own x axis: the base moves 1 m along the same world direction
+    moved = r.base_in_world(cam @ translation(1.0, 0, 0))
+    assert moved[:3, 3] - base[:3, 3] == pytest.approx(cam[:3, 0])
+
+
+def test_head_length_comes_from_the_robot_model(cobra_yaml):
+    assert _core.RobotModel.from_yaml(cobra_yaml).head_length_m == pytest.approx(H)
+
+
+def test_quaternion_round_trip():
+    for rpy in [(0, 0, 0), (0.1, -0.2, 3.0), (math.pi, 0, 0), (0, math.pi / 2, 0), (-2.0, 0.3, -3.1)]:
+        R = rpy_to_matrix(*rpy)
+        q = matrix_to_quat(R)
+        assert quat_to_matrix(*q) == pytest.approx(R, abs=1e-12)
+    T = pose_to_matrix((1, 2, 3), (0, 0, math.sin(0.25), math.cos(0.25)))
+    assert invert(T) @ T == pytest.approx(np.eye(4))
+    assert yaw_of_quat(*matrix_to_pose(T)[1]) == pytest.approx(0.5)
+
+
+def test_bad_calibration_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="camera_in_head: rotation part is not a rotation matrix"):
+        PoseRemapper(np.diag([2.0, 1, 1, 1]), H)
+    with pytest.raises(ValueError, match="head_length_m: must be a positive number, got 0"):
+        PoseRemapper(np.eye(4), 0)
+    f = tmp_path / "cam.yaml"
+    f.write_text("camera_in_head: {translation_m: [0, 0], quaternion_xyzw: [0, 0, 0, 0]}\n")
+    with pytest.raises(ValueError) as err:
+        load_camera_calibration(f)
+    assert "translation_m: expected 3 finite numbers, got [0, 0]" in str(err.value)
+    assert "quaternion_xyzw: quaternion: must be finite and non-zero" in str(err.value)
+
+
+def test_provided_camera_config(root):
+    c = load_camera_calibration(root / "config" / "camera.yaml")
+    assert c.camera_in_head[:3, :3] == pytest.approx(rot_x(-math.pi / 2))
+    assert c.calibrated is False
+    assert load_gate_params(root / "config" / "camera.yaml").lost_covariance == 1000.0
+
+
+# ---- lost tracking ------------------------------------------------------------------------------
+IDQ = (0.0, 0.0, 0.0, 1.0)
+COV = (0.01,) * 6
+
+
+def gate(**kw):
+    return TrackingGate(GateParams(**kw))
+
+
+def test_good_stream_is_forwarded():
+    g = gate()
+    for i in range(10):
+        assert g.check(i / 30, (i * 0.01, 0, 0), IDQ, COV).ok
+    assert g.state == "ok" and g.accepted == 10
+
+
+@pytest.mark.parametrize("position,quat,cov,state", [
+    ((float("nan"), 0, 0), IDQ, COV, "invalid"),
+    ((0, 0, 0), (0, 0, float("nan"), 1), COV, "invalid"),
+    ((0, 0, 0), IDQ, (0.01, 0.01, float("inf"), 0.01, 0.01, 0.01), "invalid"),
+    ((0, 0, 0), (0, 0, 0, 1), (9999.0,) * 6, "lost"),     # RTAB-Map's null pose
+    ((0, 0, 0), (0, 0, 0, 0), COV, "lost"),               # zero quaternion
+])
+def test_bad_poses_are_never_forwarded(position, quat, cov, state):
+    g = gate()
+    assert g.check(0.0, (0, 0, 0), IDQ, COV).ok
+    r = g.check(0.03, position, quat, cov)
+    assert (r.ok, r.state, g.state) == (False, state, state)
+    assert g.check(0.06, (0, 0, 0), IDQ, COV).ok      # resumes when a good pose comes back
+    assert g.state == "ok"
+
+
+def test_jump_is_rejected_until_reset():
+    g = gate(jump_m=0.3, max_speed_mps=1.0)
+    assert g.check(0.0, (0, 0, 0), IDQ, COV).ok
+    r = g.check(0.033, (1.0, 0, 0), IDQ, COV)
+    assert (r.ok, r.state) == (False, "jump") and "jumped 1.000 m" in r.detail
+    for i in range(20):   # the new track continues: still rejected (relock_after = 0)
+        assert not g.check(0.066 + i / 30, (1.0 + i * 0.001, 0, 0), IDQ, COV).ok
+    g.reset()
+    assert g.check(1.0, (1.02, 0, 0), IDQ, COV).ok
+
+
+def test_rotation_jump():
+    g = gate(jump_deg=45.0, max_rate_dps=90.0)
+    assert g.check(0.0, (0, 0, 0), IDQ, COV).ok
+    q = (0, 0, math.sin(math.radians(60)), math.cos(math.radians(60)))   # 120 deg about z
+    r = g.check(0.01, (0, 0, 0), q, COV)
+    assert (r.ok, r.state) == (False, "jump") and "orientation jumped 120.0 deg" in r.detail
+
+
+def test_back_on_the_old_track_after_a_jump_is_accepted():
+    g = gate()
+    assert g.check(0.0, (0, 0, 0), IDQ, COV).ok
+    assert not g.check(0.03, (5, 0, 0), IDQ, COV).ok
+    assert g.check(0.06, (0.01, 0, 0), IDQ, COV).ok
+
+
+def test_relock_after_consistent_poses():
+    g = gate(relock_after=3)
+    assert g.check(0.0, (0, 0, 0), IDQ, COV).ok
+    results = [g.check(0.03 * (i + 1), (2.0 + 0.01 * i, 0, 0), IDQ, COV).ok for i in range(5)]
+    assert results == [False, False, False, True, True]
+
+
+def test_gap_allowance_is_capped_at_the_stale_timeout():
+    g = gate(jump_m=0.3, max_speed_mps=1.0, stale_timeout_s=0.5)
+    assert g.check(0.0, (0, 0, 0), IDQ, COV).ok
+    # 10 s later, 0.7 m away: 0.3 + 1.0 * min(10, 0.5) = 0.8 m allowed
+    assert g.check(10.0, (0.7, 0, 0), IDQ, COV).ok
+    # another 10 s, 0.9 m further: beyond 0.8 m
+    assert not g.check(20.0, (1.6, 0, 0), IDQ, COV).ok
+
+
+def test_stale_stream():
+    g = gate(stale_timeout_s=0.5)
+    assert g.state_at(0.0)[0] == "waiting"
+    g.check(0.0, (0, 0, 0), IDQ, COV)
+    assert g.state_at(0.4)[0] == "ok"
+    state, detail = g.state_at(0.7)
+    assert state == "stale" and "no odometry for 0.70 s" in detail
+    assert g.check(0.8, (0, 0, 0), IDQ, COV).ok and g.state_at(0.8)[0] == "ok"
+
+
+def test_bad_gate_parameters(tmp_path):
+    with pytest.raises(ValueError, match="jump_m: must be a positive number, got -1"):
+        gate(jump_m=-1)
+    f = tmp_path / "c.yaml"
+    f.write_text("lost_tracking: {jump_cm: 3}\n")
+    with pytest.raises(ValueError, match="lost_tracking.jump_cm: unknown key"):
+        load_gate_params(f)

@@ -1,0 +1,115 @@
+"""Run logging: the results folder from plain arrays, and runs that end badly (SIGKILL, SIGTERM)."""
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from snake_autonomy.cli import main as cli_main
+from snake_autonomy.experiments import compute_metrics, read_run, write_results
+
+HERE = Path(__file__).resolve().parent
+WPS = [(1.0, 0.0, 0.0), (1.0, 1.0, math.pi / 2)]
+
+
+def fake_decisions():
+    # waypoint 0 reached at t = 12 (index 0 -> 1), waypoint 1 never; one stale step with NaN errors
+    t = np.arange(10.0, 20.0)
+    idx = np.array([0, 0, 1, 1, 1, 1, 1, 1, 1, 1])
+    dist = np.array([1.0, 0.5, 0.3, 1.2, 1.0, np.nan, 0.8, 0.7, 0.6, 0.55])
+    stale = np.isnan(dist)
+    return {"t": t, "waypoint_index": idx, "distance": dist, "yaw_error_abs": np.full(10, 0.1),
+            "yaw_error_rel": np.full(10, -0.2), "yaw_error": np.where(stale, np.nan, 0.05), "pose_stale": stale}
+
+
+def test_metrics_from_plain_arrays_infer_the_reached_step():
+    m = compute_metrics(WPS, fake_decisions(), {"t": [10, 11], "x": [0, 3], "y": [0, 4]}, "aborted", t0=10.0)
+    w0, w1 = m["waypoints"]
+    assert (w0["reached"], w0["time_to_reach_s"], w0["final_distance_m"]) == (True, 2.0, 0.3)
+    assert w0["final_yaw_error_deg"] == pytest.approx(math.degrees(0.05))
+    assert (w1["reached"], w1["time_to_reach_s"], w1["final_distance_m"], w1["min_distance_m"]) == (False, None, 0.55, 0.55)
+    assert (m["waypoints_reached"], m["all_reached"], m["stale_decisions"], m["path_length_m"]) == (1, False, 1, 5.0)
+    assert m["outcome"] == "aborted"
+
+
+def test_write_results_makes_every_file(tmp_path):
+    traj = {"t": np.linspace(10, 20, 50), "x": np.linspace(0, 1, 50), "y": np.zeros(50)}
+    paths = write_results(tmp_path / "out", WPS, traj, fake_decisions(), outcome="done", meta={"mission": "t"})
+    for name in ("metrics", "decisions_csv", "trajectory_csv", "trajectory_png", "distance_png", "yaw_png",
+                 "yaw_vs_distance_png"):
+        assert paths[name].is_file() and paths[name].stat().st_size > 0, name
+    metrics = json.loads(paths["metrics"].read_text())
+    assert metrics["waypoints"][0]["reached"] is True
+    assert paths["decisions_csv"].read_text().splitlines()[0].startswith("t,waypoint_index")
+
+
+def test_write_results_names_a_missing_key(tmp_path):
+    with pytest.raises(ValueError, match="decisions: missing key\\(s\\) yaw_error_rel"):
+        d = fake_decisions()
+        del d["yaw_error_rel"]
+        write_results(tmp_path, WPS, {"t": [], "x": [], "y": []}, d)
+
+
+def _start_writer(tmp_path, handle_sigterm):
+    run_dir, ready = tmp_path / "run", tmp_path / "ready"
+    proc = subprocess.Popen([sys.executable, str(HERE / "run_log_writer.py"), str(run_dir), str(ready),
+                             "1" if handle_sigterm else "0"])
+    deadline = time.monotonic() + 20.0
+    while not ready.exists():
+        assert proc.poll() is None, "writer exited early"
+        assert time.monotonic() < deadline, "writer never became ready"
+        time.sleep(0.05)
+    return proc, run_dir
+
+
+def test_killed_run_leaves_a_readable_bag_and_the_known_metrics(tmp_path):
+    proc, run_dir = _start_writer(tmp_path, handle_sigterm=False)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=10)
+    metrics = json.loads((run_dir / "metrics.json").read_text())
+    assert metrics["outcome"] == "running"            # the run never ended, what was known is there
+    assert metrics["waypoints"][0]["reached"] is True and metrics["num_decisions"] >= 4
+    # rosbag refuses the unindexed bag; read_run reindexes a copy and leaves the original untouched
+    import rosbag
+    with pytest.raises(rosbag.ROSBagUnindexedException):
+        rosbag.Bag(str(run_dir / "run.bag"))
+    size = (run_dir / "run.bag").stat().st_size
+    run = read_run(run_dir / "run.bag")
+    assert run["reindexed"] is True and run["meta"]["outcome"] == "killed"
+    assert (run_dir / "run.bag").stat().st_size == size
+    assert len(run["decisions"]["t"]) >= metrics["num_decisions"]
+    assert len(run["trajectory"]["t"]) >= 50 * metrics["num_decisions"]
+    assert run["waypoints"] == WPS
+    # and the report CLI rebuilds the results folder from it
+    out = tmp_path / "report"
+    assert cli_main(["report", str(run_dir / "run.bag"), "--out", str(out)]) == 0
+    rebuilt = json.loads((out / "metrics.json").read_text())
+    assert rebuilt["outcome"] == "killed" and rebuilt["waypoints"][0]["reached"] is True
+    assert rebuilt["waypoints"][0]["time_to_reach_s"] == pytest.approx(metrics["waypoints"][0]["time_to_reach_s"])
+    assert (out / "yaw_errors.png").is_file()
+
+
+def test_sigterm_closes_the_bag_and_writes_the_results(tmp_path):
+    proc, run_dir = _start_writer(tmp_path, handle_sigterm=True)
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(timeout=30) == 0
+    import rosbag
+    with rosbag.Bag(str(run_dir / "run.bag")) as bag:      # indexed: opens without reindexing
+        assert bag.get_message_count("/tracking_status") >= 4
+    metrics = json.loads((run_dir / "metrics.json").read_text())
+    assert metrics["outcome"] == "aborted: SIGTERM"
+    assert metrics["waypoints"][0]["reached"] is True and metrics["waypoints"][1]["reached"] is False
+    for f in ("trajectory.png", "distance_error.png", "yaw_errors.png", "yaw_error_vs_distance.png",
+              "decisions.csv", "mission.yaml"):
+        assert (run_dir / f).is_file(), f
+
+
+def test_report_cli_on_a_missing_bag(tmp_path, capsys):
+    assert cli_main(["report", str(tmp_path / "nope.bag")]) == 1
+    assert "no such file" in capsys.readouterr().err

@@ -1,0 +1,42 @@
+"""config/sim.yaml loads; a bad config names every bad key and value at once."""
+import pytest
+
+from snake_autonomy.sim.config import Range, SimConfig
+
+
+def test_shipped_config_loads(root):
+    cfg = SimConfig.from_yaml(root / "config" / "sim.yaml")
+    assert cfg.servo.torque_limit_nm == 9.9
+    assert isinstance(cfg.physics.floor_friction, Range)
+    assert cfg.calibration_path() == root / "config" / "camera.yaml"
+    assert cfg.calibration_path().is_file()
+
+
+def test_every_problem_is_listed():
+    raw = {
+        "physics": {"timestep_s": -1, "bogus": 1, "floor_friction": [2, 1], "cone": "round"},
+        "servo": {"kp_nm_per_rad": "stiff"},
+        "vio": {"loss_episodes": [[1]]},
+        "disturbances": [{"time_s": 1, "link": "link_3"},
+                         {"time_s": 1, "link": "link_3", "force_n": [1, 2]}],
+        "extra": {},
+    }
+    with pytest.raises(ValueError) as err:
+        SimConfig.from_dict(raw)
+    text = str(err.value)
+    for expected in ("physics.bogus: unknown key",
+                     "physics.floor_friction: lo must be <= hi, got [2, 1]",
+                     "physics.timestep_s: must be > 0, got -1.0",
+                     "physics.cone: expected elliptic or pyramidal, got 'round'",
+                     "servo.kp_nm_per_rad: expected a number or [lo, hi], got 'stiff'",
+                     "vio.loss_episodes[0]: expected [start_s, duration_s > 0], got [1]",
+                     "disturbances[0]: give exactly one of force_n, torque_nm",
+                     "disturbances[1].force_n: expected 3 numbers, got [1, 2]",
+                     "extra: unknown key"):
+        assert expected in text
+
+
+def test_random_streams_are_named(root):
+    params = SimConfig.from_yaml(root / "config" / "sim.yaml").draw(seed=5)
+    assert params.rng("a").normal() == params.rng("a").normal()
+    assert params.rng("a").normal() != params.rng("b").normal()
