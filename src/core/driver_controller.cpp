@@ -355,7 +355,8 @@ bool DriverController::update(double t_s, double dt_s) noexcept {
         (now == DriverState::kRunning || now == DriverState::kHolding)) {
       Message m{};
       bool io = false;
-      for (int j = 0; j < n_; ++j) io = io || replies_[j].status == dxl::Status::kIoError;
+      for (int j = 0; j < n_; ++j)
+        io = io || replies_[j].status == dxl::Status::kIoError || replies_[j].status == dxl::Status::kNotOpen;
       if (io || !write_ok) {
         std::snprintf(m.data(), m.size(), "bus failure for %u consecutive cycles: %s%s", consecutive_failed_,
                       io ? "I/O error (port closed or adapter unplugged?)" : "",
@@ -724,8 +725,9 @@ void DriverController::run_request(const PendingRequest& r) noexcept {
         return;
       }
       std::uint8_t error = 0;
+      // The status packet goes out before the servo restarts: it still carries the alert bit.
       const dxl::Status st = bus_.reboot(r.id, &error);
-      if (st != dxl::Status::kOk) {
+      if (!dxl::has_data(st)) {
         finish_request(r.ticket, false, "reboot of servo %d failed: %s", r.id, dxl::to_string(st));
         return;
       }
@@ -742,7 +744,8 @@ bool DriverController::enable_torque(Message& why) noexcept {
   why[0] = '\0';
   bool ok = read_feedback();
   bool io = false;
-  for (int j = 0; j < n_; ++j) io = io || replies_[j].status == dxl::Status::kIoError;
+  for (int j = 0; j < n_; ++j)
+    io = io || replies_[j].status == dxl::Status::kIoError || replies_[j].status == dxl::Status::kNotOpen;
   if (!ok && io && reconnect_) {
     std::string reason;
     bool reopened = false;
@@ -759,6 +762,13 @@ bool DriverController::enable_torque(Message& why) noexcept {
     ok = read_feedback();
   }
   if (!ok) {
+    bool all_same = true;
+    for (int j = 0; j < n_; ++j) all_same = all_same && diag_[j].stale && replies_[j].status == replies_[0].status;
+    if (all_same) {
+      std::snprintf(why.data(), why.size(), "cannot enable torque, no feedback from any servo (%s)",
+                    dxl::to_string(replies_[0].status));
+      return false;
+    }
     copy_message(why, "cannot enable torque, no feedback from:");
     for (int j = 0; j < n_; ++j) {
       if (diag_[j].stale) append(why, " servo %d (joint_%d) %s;", ids_[j], j + 1, dxl::to_string(replies_[j].status));
