@@ -1,0 +1,44 @@
+// Configuration of the driver's control loop (DriverController): a plain struct, validate()
+// collects every problem naming key and value. The ROS node fills it from rosparam
+// (config/driver.yaml documents every key); tests fill it directly.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace snake_autonomy::core {
+
+// What the servos are left doing when locomotion stops for a fault, or when the driver exits.
+enum class SafeAction {
+  kHold,       // torque stays on, goals frozen at the present positions
+  kTorqueOff,  // torque off: the robot goes limp
+};
+const char* to_string(SafeAction action) noexcept;
+// "hold" or "torque_off"; false for anything else.
+bool parse_safe_action(const std::string& text, SafeAction* out) noexcept;
+
+struct DriverConfig {
+  // Bus
+  bool fast_sync_read = false;        // FAST_SYNC_READ (0x8A) instead of SYNC_READ for the feedback
+  int max_failed_cycles = 10;         // consecutive cycles with a missing reply (or a failed write) before
+                                      // locomotion stops; 1 .. 1000
+  int status_every_cycles = 50;       // read voltage and temperature every this many cycles (0: never)
+  // Safety
+  SafeAction fault_action = SafeAction::kHold;     // after N failed cycles or a hardware error
+  SafeAction shutdown_action = SafeAction::kHold;  // when the driver exits
+  bool torque_on_start = true;        // enable torque at start (posture held until a gait command)
+  double max_joint_velocity_rad_s = 4.5;  // goal slew limit per joint (XH540-W270: 4.8 rad/s no load)
+  double max_frequency_hz = 2.0;      // gait commands with |ω| / 2π above it are refused
+  double max_step_s = 0.05;           // longer steps (after a stall) are integrated as this long
+  // Position readings further than this outside the servo's position limits are implausible
+  // (garbage with a valid CRC): treated as a missed reply.
+  int plausible_margin_ticks = 1024;
+  // Base pose (ERRATA #7)
+  double pose_timeout_s = 0.5;        // no pose for this long: stale, locomotion held until fresh poses return
+  bool require_pose = true;           // false: gaits run without a base pose (robot on a stand, bench)
+
+  // Every problem, naming key and value; empty when usable.
+  std::vector<std::string> validate() const;
+};
+
+}  // namespace snake_autonomy::core

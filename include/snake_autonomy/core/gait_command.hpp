@@ -1,0 +1,60 @@
+// Gait commands: what a caller asks for (a gait name and/or explicit vectors, steering δ),
+// resolved against the gait library and the robot into CPG targets, or refused whole.
+//
+// Rules (msg/GaitCommand.msg): a named gait replaces the current gait; explicit vectors replace
+// the named (or current) gait's; every vector is empty (unchanged) or has one value per joint.
+// Refused, with every reason and nothing changed: an unknown gait, a vector of the wrong length,
+// a NaN or infinite value, |ω| beyond the configured frequency limit, steering of a gait that is not
+// steerable, a non-finite δ. Amplitudes beyond the limits are not refused: the steering clamp and
+// the CPG clamp them. The resolver remembers the nominal (unsteered) parameters of the last
+// accepted command: steering applies to one command at a time, it does not accumulate.
+//
+// Not real-time: resolve() allocates. It runs in the caller's thread (a ROS callback), never in the
+// loop; the driver hands the result to the loop without blocking it (DriverController).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "snake_autonomy/core/cpg.hpp"
+#include "snake_autonomy/core/gait_library.hpp"
+#include "snake_autonomy/core/robot_model.hpp"
+#include "snake_autonomy/core/steering.hpp"
+
+namespace snake_autonomy::core {
+
+struct GaitCommandRequest {
+  std::string gait;                // empty: keep the current gait's parameters
+  std::vector<double> amplitude;   // rad, empty or one per joint
+  std::vector<double> omega;       // rad/s
+  std::vector<double> phase;       // rad, absolute per joint
+  std::vector<double> bias;        // rad
+  bool steer = false;              // amplitude-modulation steering with delta_rad
+  double delta_rad = 0.0;
+};
+
+class GaitCommandResolver {
+ public:
+  // max_frequency_hz: |ω| / 2π above it is refused. The current gait starts as `initial_gait`
+  // (which must exist in the library: ConfigError otherwise).
+  GaitCommandResolver(const RobotModel& model, const GaitLibrary& gaits, double max_frequency_hz,
+                      const std::string& initial_gait = "hold");
+
+  // Empty when accepted: `out` holds the CPG targets (steering applied) and the resolver the new
+  // nominal gait. Otherwise every reason, one per line, and nothing is changed (`out` included).
+  std::string resolve(const GaitCommandRequest& command, GaitParameters& out);
+  // The name of the current gait; explicit vectors on top of a gait are "NAME+custom".
+  const std::string& current_gait() const { return name_; }
+  const GaitParameters& nominal() const { return nominal_; }
+
+ private:
+  RobotModel model_;
+  GaitLibrary gaits_;
+  Steering steering_;
+  double max_omega_rad_s_;
+  std::string name_;
+  std::string base_name_;  // the library gait under the custom vectors
+  GaitParameters nominal_;
+};
+
+}  // namespace snake_autonomy::core

@@ -1,0 +1,536 @@
+// driver_node: the 100 Hz driver of the snake. Wiring only: parameters, topics, services, TF,
+// diagnostics and the loop thread around core::DriverController (the ROS-free step function).
+//
+// Threads:
+//  - the loop thread: LoopTimer (absolute deadlines on the steady clock, overruns counted) ->
+//    controller.update() -> snapshot. It never allocates, never logs and never waits on a lock: it
+//    hands the snapshot over with try_lock (a missed handover is simply the next cycle's).
+//  - the publisher thread: takes each new snapshot and publishes joint_states, TF, com_pose,
+//    bound_state and, every diagnostics_period_s, /diagnostics; it also logs state changes and
+//    throttled overrun warnings. Publishing (serialisation, socket writes, their allocations) is kept
+//    off the loop thread: realtime_tools is not packaged for Debian, and a roscpp publish() from the
+//    loop would put its locks and allocations in the 100 Hz path. Messages are preallocated and
+//    reused; the snapshot is copied into storage of the same size (no allocation either).
+//  - two spinner threads for callbacks and services: they hand data to the controller through its
+//    try-lock mailboxes; a service waits (in its own thread) for the loop to run the request.
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <pthread.h>
+#include <ros/ros.h>
+#include <sched.h>
+#include <sensor_msgs/JointState.h>
+#include <snake_autonomy/BoundState.h>
+#include <snake_autonomy/GaitCommand.h>
+#include <snake_autonomy/RebootServo.h>
+#include <std_srvs/SetBool.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "driver_params.hpp"
+#include "snake_autonomy/core/driver_controller.hpp"
+#include "snake_autonomy/core/gait_library.hpp"
+#include "snake_autonomy/core/loop_timer.hpp"
+#include "snake_autonomy/core/robot_model.hpp"
+#include "snake_autonomy/dynamixel/control_table.hpp"
+#include "snake_autonomy/dynamixel/serial_bus.hpp"
+
+namespace core = snake_autonomy::core;
+namespace dxl = snake_autonomy::dynamixel;
+using snake_autonomy::ros_driver::DriverNodeConfig;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+// What the loop hands to the publisher each cycle.
+struct LoopSnapshot {
+  core::DriverSnapshot driver;
+  core::LoopStats loop;
+  Clock::time_point taken{};
+  std::uint64_t seq = 0;
+};
+
+std::string join(const std::vector<std::string>& lines) {
+  std::string out;
+  for (const auto& l : lines) out += "\n  " + l;
+  return out;
+}
+
+diagnostic_msgs::KeyValue kv(const std::string& key, const std::string& value) {
+  diagnostic_msgs::KeyValue k;
+  k.key = key;
+  k.value = value;
+  return k;
+}
+
+template <typename T>
+std::string str(T v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+std::string fixed(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+class DriverNode {
+ public:
+  DriverNode(ros::NodeHandle& nh, const DriverNodeConfig& config, const core::RobotModel& model,
+             dxl::SerialBus& bus, core::DriverController& controller)
+      : nh_(nh), config_(config), model_(model), bus_(bus), controller_(controller), epoch_(Clock::now()) {
+    for (auto* s : {&work_, &shared_, &published_}) s->driver = controller_.make_snapshot();
+    joint_states_.name = model_.joint_names();
+    const auto n = static_cast<std::size_t>(model_.num_joints);
+    joint_states_.position.resize(n);
+    joint_states_.velocity.resize(n);
+    joint_states_.effort.resize(n);
+    transforms_.resize(2);
+    transforms_[0].header.frame_id = transforms_[1].header.frame_id = config_.world_frame;
+    transforms_[0].child_frame_id = config_.base_frame;
+    transforms_[1].child_frame_id = config_.com_frame;
+    com_pose_.header.frame_id = config_.world_frame;
+    bound_state_.header.frame_id = config_.world_frame;
+
+    joint_states_pub_ = nh_.advertise<sensor_msgs::JointState>("joint_states", 10);
+    com_pose_pub_ = nh_.advertise<geometry_msgs::PoseStamped>("com_pose", 10);
+    bound_state_pub_ = nh_.advertise<snake_autonomy::BoundState>("bound_state", 10);
+    diagnostics_pub_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
+    pose_sub_ = nh_.subscribe("base_pose", 10, &DriverNode::on_pose, this, ros::TransportHints().tcpNoDelay());
+    gait_sub_ = nh_.subscribe("gait_command", 10, &DriverNode::on_gait_command, this);
+    enable_srv_ = nh_.advertiseService("driver/enable_torque", &DriverNode::on_enable_torque, this);
+    hold_srv_ = nh_.advertiseService("driver/hold", &DriverNode::on_hold, this);
+    reboot_srv_ = nh_.advertiseService("driver/reboot_servo", &DriverNode::on_reboot, this);
+  }
+
+  void run_threads() {
+    running_ = true;
+    loop_thread_ = std::thread(&DriverNode::loop, this);
+    publisher_thread_ = std::thread(&DriverNode::publish_loop, this);
+  }
+
+  // Stops the loop, then leaves the servos in the configured state.
+  void stop() {
+    running_ = false;
+    if (loop_thread_.joinable()) loop_thread_.join();
+    snapshot_cv_.notify_all();
+    if (publisher_thread_.joinable()) publisher_thread_.join();
+    const bool ok = controller_.shutdown();
+    std::fprintf(stderr, "[driver] shutdown: servos left in '%s'%s\n", core::to_string(config_.controller.shutdown_action),
+                 ok ? "" : " (the bus did not take the write)");
+  }
+
+ private:
+  double now_s() const { return std::chrono::duration<double>(Clock::now() - epoch_).count(); }
+
+  // ---- the loop thread ----
+  void loop() {
+    if (config_.realtime_priority > 0) {
+      sched_param p{};
+      p.sched_priority = config_.realtime_priority;
+      rt_error_ = pthread_setschedparam(pthread_self(), SCHED_FIFO, &p);
+    }
+    core::LoopTimer timer(config_.loop);
+    Clock::time_point prev = Clock::now();
+    timer.start(prev);
+    while (running_.load(std::memory_order_relaxed)) {
+      const Clock::time_point wake = timer.wait();
+      const double t_s = std::chrono::duration<double>(wake - epoch_).count();
+      const double dt_s = std::chrono::duration<double>(wake - prev).count();
+      prev = wake;
+      controller_.update(t_s, dt_s);
+      controller_.fill_snapshot(work_.driver);
+      work_.loop = timer.stats();
+      work_.taken = wake;
+      if (snapshot_mutex_.try_lock()) {
+        shared_.driver = work_.driver;
+        shared_.loop = work_.loop;
+        shared_.taken = work_.taken;
+        shared_.seq = ++seq_;
+        snapshot_mutex_.unlock();
+        snapshot_cv_.notify_one();
+      }
+      if (reset_window_.exchange(false, std::memory_order_relaxed)) timer.stats().reset_window();
+      timer.finish(Clock::now());
+    }
+  }
+
+  // ---- the publisher thread ----
+  void publish_loop() {
+    std::uint64_t last_seq = 0;
+    ros::WallTime next_diag = ros::WallTime::now();
+    if (rt_error_ != 0) ROS_WARN("realtime_priority %d: SCHED_FIFO refused (%s); the loop runs with normal scheduling",
+                                 config_.realtime_priority, std::strerror(rt_error_));
+    while (running_) {
+      {
+        std::unique_lock<std::mutex> lock(snapshot_mutex_);
+        snapshot_cv_.wait_for(lock, std::chrono::milliseconds(20), [&] { return shared_.seq != last_seq || !running_; });
+        if (shared_.seq == last_seq) continue;
+        published_.driver = shared_.driver;
+        published_.loop = shared_.loop;
+        published_.taken = shared_.taken;
+        published_.seq = last_seq = shared_.seq;
+      }
+      // The stamp of the cycle: now, minus the time since the loop took the snapshot.
+      const ros::Time stamp =
+          ros::Time::now() - ros::Duration(std::chrono::duration<double>(Clock::now() - published_.taken).count());
+      publish(stamp);
+      log_changes();
+      if (ros::WallTime::now() >= next_diag) {
+        next_diag += ros::WallDuration(config_.diagnostics_period_s);
+        if (next_diag < ros::WallTime::now()) next_diag = ros::WallTime::now() + ros::WallDuration(config_.diagnostics_period_s);
+        publish_diagnostics(stamp);
+        reset_window_ = true;
+      }
+    }
+  }
+
+  void publish(const ros::Time& stamp) {
+    const core::DriverSnapshot& s = published_.driver;
+    joint_states_.header.stamp = stamp;
+    ++joint_states_.header.seq;
+    for (int j = 0; j < model_.num_joints; ++j) {
+      joint_states_.position[j] = s.position_rad[j];
+      joint_states_.velocity[j] = s.velocity_rad_s[j];
+      joint_states_.effort[j] = s.effort_a[j];
+    }
+    joint_states_pub_.publish(joint_states_);
+
+    auto set_tf = [&stamp](geometry_msgs::TransformStamped& t, const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
+      t.header.stamp = stamp;
+      t.transform.translation.x = p.x();
+      t.transform.translation.y = p.y();
+      t.transform.translation.z = p.z();
+      t.transform.rotation.x = q.x();
+      t.transform.rotation.y = q.y();
+      t.transform.rotation.z = q.z();
+      t.transform.rotation.w = q.w();
+    };
+    // TF always (identity before the first pose: visualisation only).
+    set_tf(transforms_[0], s.base_position, s.base_orientation);
+    set_tf(transforms_[1], s.com, s.com_orientation);
+    tf_.sendTransform(transforms_);
+
+    // The centre of mass feeds the tracker: published only from a fresh base pose (ERRATA #7).
+    if (!s.pose_fresh) return;
+    com_pose_.header.stamp = stamp;
+    com_pose_.pose.position.x = s.com.x();
+    com_pose_.pose.position.y = s.com.y();
+    com_pose_.pose.position.z = s.com.z();
+    com_pose_.pose.orientation = transforms_[1].transform.rotation;
+    com_pose_pub_.publish(com_pose_);
+    bound_state_.header.stamp = stamp;
+    bound_state_.com_pose = com_pose_.pose;
+    bound_state_.span.x = s.bbox_span.x();
+    bound_state_.span.y = s.bbox_span.y();
+    bound_state_.span.z = s.bbox_span.z();
+    bound_state_pub_.publish(bound_state_);
+  }
+
+  void log_changes() {
+    const core::DriverSnapshot& s = published_.driver;
+    if (s.state != logged_state_ || std::strcmp(s.fault_reason.data(), logged_fault_.c_str()) != 0) {
+      if (s.state == core::DriverState::kFault) {
+        ROS_ERROR("driver: locomotion stopped (%s): %s", core::to_string(config_.controller.fault_action),
+                  s.fault_reason.data());
+      } else {
+        ROS_INFO("driver: %s", core::to_string(s.state));
+      }
+      logged_state_ = s.state;
+      logged_fault_ = s.fault_reason.data();
+    }
+    const bool stale = !s.pose_fresh;
+    if (stale != logged_stale_) {
+      if (stale && config_.controller.require_pose) {
+        ROS_WARN("driver: base pose %s: locomotion held until fresh poses return",
+                 s.pose_received ? "stale" : "not received yet");
+      } else if (!stale) {
+        ROS_INFO("driver: base pose fresh");
+      }
+      logged_stale_ = stale;
+    }
+    if (published_.loop.overruns > logged_overruns_) {
+      ROS_WARN_THROTTLE(5.0, "driver: %lu loop overruns so far (worst cycle %.2f ms of %.2f ms)",
+                        static_cast<unsigned long>(published_.loop.overruns), published_.loop.window_work_max_s * 1e3,
+                        1e3 / config_.loop.rate_hz);
+      logged_overruns_ = published_.loop.overruns;
+    }
+  }
+
+  void publish_diagnostics(const ros::Time& stamp) {
+    const core::DriverSnapshot& s = published_.driver;
+    const core::LoopStats& l = published_.loop;
+    using diagnostic_msgs::DiagnosticStatus;
+    diagnostic_msgs::DiagnosticArray array;
+    array.header.stamp = stamp;
+    const std::string hw = "snake driver";
+
+    DiagnosticStatus loop;
+    loop.name = "snake_driver: loop";
+    loop.hardware_id = hw;
+    const double rate = l.window_rate_hz();
+    const bool rate_ok = std::abs(rate - config_.loop.rate_hz) <= 0.1 * config_.loop.rate_hz;
+    loop.level = (l.window_overruns > 0 || !rate_ok) ? DiagnosticStatus::WARN : DiagnosticStatus::OK;
+    loop.message = loop.level == DiagnosticStatus::OK ? "on time"
+                   : (l.window_overruns > 0 ? str(l.window_overruns) + " overruns" : "rate off by more than 10 %");
+    loop.values = {kv("target_rate_hz", fixed(config_.loop.rate_hz, 1)), kv("rate_hz", fixed(rate, 2)),
+                   kv("period_mean_ms", fixed(l.window_period_mean_s() * 1e3, 3)),
+                   kv("period_std_ms", fixed(l.window_period_std_s() * 1e3, 3)),
+                   kv("period_max_ms", fixed(l.window_period_max_s * 1e3, 3)),
+                   kv("wake_late_max_ms", fixed(l.window_late_max_s * 1e3, 3)),
+                   kv("work_mean_ms", fixed(l.window_cycles ? l.window_work_sum_s / l.window_cycles * 1e3 : 0.0, 3)),
+                   kv("work_max_ms", fixed(l.window_work_max_s * 1e3, 3)), kv("overruns", str(l.overruns)),
+                   kv("window_overruns", str(l.window_overruns)), kv("skipped_deadlines", str(l.skipped_deadlines)),
+                   kv("cycles", str(l.cycles))};
+    array.status.push_back(loop);
+
+    DiagnosticStatus loco;
+    loco.name = "snake_driver: locomotion";
+    loco.hardware_id = hw;
+    if (s.state == core::DriverState::kFault) {
+      loco.level = DiagnosticStatus::ERROR;
+      loco.message = std::string("fault: ") + s.fault_reason.data();
+    } else if (s.state == core::DriverState::kStopped) {
+      loco.level = DiagnosticStatus::WARN;
+      loco.message = "torque off";
+    } else if (s.locomotion_gated) {
+      loco.level = DiagnosticStatus::WARN;
+      loco.message = s.pose_received ? "base pose stale: locomotion held" : "no base pose yet: locomotion held";
+    } else {
+      loco.level = DiagnosticStatus::OK;
+      loco.message = core::to_string(s.state);
+    }
+    loco.values = {kv("state", core::to_string(s.state)), kv("gait", s.gait.data()),
+                   kv("fault", s.fault_reason.data()), kv("last_fault", s.last_fault.data()),
+                   kv("pose_received", s.pose_received ? "true" : "false"),
+                   kv("pose_fresh", s.pose_fresh ? "true" : "false"),
+                   kv("locomotion_held_for_pose", s.locomotion_gated ? "true" : "false"),
+                   kv("commands_accepted", str(controller_.commands_accepted())),
+                   kv("commands_refused", str(controller_.commands_refused())),
+                   kv("commands_applied", str(s.commands_applied)), kv("last_refusal", controller_.last_refusal()),
+                   kv("poses_refused", str(s.poses_refused)),
+                   kv("fault_action", core::to_string(config_.controller.fault_action))};
+    array.status.push_back(loco);
+
+    DiagnosticStatus bus;
+    bus.name = "snake_driver: bus";
+    bus.hardware_id = config_.serial.device;
+    bus.level = s.consecutive_failed_cycles > 0 ? DiagnosticStatus::WARN : DiagnosticStatus::OK;
+    bus.message = s.consecutive_failed_cycles > 0 ? str(s.consecutive_failed_cycles) + " consecutive failed cycles" : "ok";
+    const auto& c = s.bus;
+    bus.values = {kv("port", config_.serial.device), kv("baud", str(config_.serial.baud_bps)),
+                  kv("transactions", str(c.transactions)), kv("bytes_sent", str(c.bytes_sent)),
+                  kv("bytes_received", str(c.bytes_received)), kv("packets_received", str(c.packets_received)),
+                  kv("crc_errors", str(c.crc_errors)), kv("timeouts", str(c.timeouts)), kv("malformed", str(c.malformed)),
+                  kv("hardware_error_alerts", str(c.hardware_error_alerts)), kv("servo_errors", str(c.servo_errors)),
+                  kv("unexpected_packets", str(c.unexpected_packets)), kv("io_errors", str(c.io_errors)),
+                  kv("failed_cycles", str(s.failed_cycles)),
+                  kv("consecutive_failed_cycles", str(s.consecutive_failed_cycles))};
+    array.status.push_back(bus);
+
+    for (std::size_t j = 0; j < s.servos.size(); ++j) {
+      const core::ServoDiagnostics& d = s.servos[j];
+      DiagnosticStatus st;
+      st.name = "snake_driver: servo " + str(int(d.id)) + " (joint_" + str(j + 1) + ")";
+      st.hardware_id = "dynamixel " + str(int(d.id));
+      const std::string bits = controller_.table().describe_hardware_error(d.hardware_error_bits);
+      if (d.hardware_error) {
+        st.level = DiagnosticStatus::ERROR;
+        st.message = "hardware error: " + bits;
+      } else if (d.stale) {
+        st.level = DiagnosticStatus::WARN;
+        st.message = "no reply for " + str(d.consecutive_misses) + " cycles";
+      } else {
+        st.level = DiagnosticStatus::OK;
+        st.message = "ok";
+      }
+      st.values = {kv("id", str(int(d.id))), kv("temperature_c", std::isnan(d.temperature_c) ? "unknown" : fixed(d.temperature_c, 0)),
+                   kv("voltage_v", std::isnan(d.voltage_v) ? "unknown" : fixed(d.voltage_v, 1)),
+                   kv("hardware_error", d.hardware_error ? "true" : "false"),
+                   kv("hardware_error_bits", str(int(d.hardware_error_bits))), kv("hardware_error_names", bits),
+                   kv("stale", d.stale ? "true" : "false"), kv("consecutive_misses", str(d.consecutive_misses)),
+                   kv("timeouts", str(d.timeouts)), kv("crc_errors", str(d.crc_errors)),
+                   kv("implausible", str(d.implausible)), kv("other_errors", str(d.other_errors)),
+                   kv("present_ticks", str(d.present_ticks)), kv("goal_ticks", str(d.goal_ticks)),
+                   kv("goal_min_ticks", str(d.min_ticks)), kv("goal_max_ticks", str(d.max_ticks))};
+      array.status.push_back(st);
+    }
+    diagnostics_pub_.publish(array);
+  }
+
+  // ---- callbacks (spinner threads) ----
+  void on_pose(const geometry_msgs::PoseStamped::ConstPtr& msg) {
+    if (!msg->header.frame_id.empty() && msg->header.frame_id != config_.world_frame) {
+      ROS_WARN_THROTTLE(5.0, "base_pose in frame '%s' ignored: the driver expects '%s' (~world_frame)",
+                        msg->header.frame_id.c_str(), config_.world_frame.c_str());
+      return;
+    }
+    const auto& p = msg->pose.position;
+    const auto& q = msg->pose.orientation;
+    if (!controller_.set_base_pose(now_s(), Eigen::Vector3d(p.x, p.y, p.z), Eigen::Quaterniond(q.w, q.x, q.y, q.z)))
+      ROS_WARN_THROTTLE(5.0, "base_pose ignored: not finite, or a zero quaternion");
+  }
+
+  void on_gait_command(const snake_autonomy::GaitCommand::ConstPtr& msg) {
+    core::GaitCommandRequest c;
+    c.gait = msg->gait;
+    c.amplitude = msg->amplitude;
+    c.omega = msg->omega;
+    c.phase = msg->phase;
+    c.bias = msg->bias;
+    c.steer = msg->steer;
+    c.delta_rad = msg->delta;
+    const std::string why = controller_.command_gait(c);
+    if (why.empty()) {
+      ROS_DEBUG("gait command accepted: %s", controller_.commanded_gait().c_str());
+    } else {
+      ROS_WARN("gait command refused, the running gait is unchanged:\n%s", why.c_str());
+    }
+  }
+
+  bool on_enable_torque(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
+    return answer(req.data ? core::DriverRequest::kEnableTorque : core::DriverRequest::kDisableTorque, 0, res);
+  }
+  bool on_hold(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+    return answer(core::DriverRequest::kHold, 0, res);
+  }
+  bool on_reboot(snake_autonomy::RebootServo::Request& req, snake_autonomy::RebootServo::Response& res) {
+    return answer(core::DriverRequest::kRebootServo, req.id, res);
+  }
+  template <typename Response>
+  bool answer(core::DriverRequest request, std::uint8_t id, Response& res) {
+    const core::RequestResult r = controller_.call(request, id, config_.service_timeout_s);
+    res.success = r.success;
+    res.message = r.message;
+    if (r.success) {
+      ROS_INFO("driver/%s: %s", core::to_string(request), r.message.c_str());
+    } else {
+      ROS_WARN("driver/%s refused: %s", core::to_string(request), r.message.c_str());
+    }
+    return true;
+  }
+
+  ros::NodeHandle& nh_;
+  const DriverNodeConfig& config_;
+  const core::RobotModel& model_;
+  dxl::SerialBus& bus_;
+  core::DriverController& controller_;
+  const Clock::time_point epoch_;
+
+  std::atomic<bool> running_{false};
+  std::atomic<bool> reset_window_{false};
+  std::atomic<int> rt_error_{0};
+  std::thread loop_thread_, publisher_thread_;
+  LoopSnapshot work_;       // loop thread only
+  std::mutex snapshot_mutex_;
+  std::condition_variable snapshot_cv_;
+  LoopSnapshot shared_;     // under snapshot_mutex_
+  std::uint64_t seq_ = 0;   // loop thread only
+  LoopSnapshot published_;  // publisher thread only
+
+  // Publisher thread only.
+  sensor_msgs::JointState joint_states_;
+  std::vector<geometry_msgs::TransformStamped> transforms_;
+  geometry_msgs::PoseStamped com_pose_;
+  snake_autonomy::BoundState bound_state_;
+  tf2_ros::TransformBroadcaster tf_;
+  core::DriverState logged_state_ = core::DriverState::kStopped;
+  std::string logged_fault_;
+  bool logged_stale_ = false;
+  std::uint64_t logged_overruns_ = 0;
+
+  ros::Publisher joint_states_pub_, com_pose_pub_, bound_state_pub_, diagnostics_pub_;
+  ros::Subscriber pose_sub_, gait_sub_;
+  ros::ServiceServer enable_srv_, hold_srv_, reboot_srv_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "driver");
+  ros::NodeHandle nh, pnh("~");
+
+  std::vector<std::string> errors;
+  const DriverNodeConfig config = snake_autonomy::ros_driver::read_driver_params(pnh, errors);
+  if (!errors.empty()) {
+    ROS_FATAL("driver: refusing to start, the parameters have problems:%s", join(errors).c_str());
+    return 1;
+  }
+  std::unique_ptr<core::RobotModel> model;
+  std::unique_ptr<core::GaitLibrary> gaits;
+  std::unique_ptr<dxl::ControlTable> table;
+  try {
+    model = std::make_unique<core::RobotModel>(core::RobotModel::from_yaml_file(config.robot_file()));
+    gaits = std::make_unique<core::GaitLibrary>(core::GaitLibrary::from_yaml_file(config.gaits_file));
+    const std::string table_file = config.control_table_file.empty()
+                                       ? config.config_dir + "/dynamixel/" + model->servos.model + ".yaml"
+                                       : config.control_table_file;
+    table = std::make_unique<dxl::ControlTable>(dxl::ControlTable::from_yaml_file(table_file));
+  } catch (const std::exception& e) {
+    ROS_FATAL("driver: refusing to start: %s", e.what());
+    return 1;
+  }
+
+  // The port and the servos may take a moment (the mocked bus starting beside us): retry until
+  // connect_timeout_s, then give up naming the last problem.
+  const auto give_up = Clock::now() + std::chrono::duration<double>(config.connect_timeout_s);
+  std::unique_ptr<dxl::SerialBus> bus;
+  std::unique_ptr<core::DriverController> controller;
+  std::string last_problem;
+  while (ros::ok()) {
+    try {
+      if (!bus) bus = std::make_unique<dxl::SerialBus>(config.serial);
+      if (!controller) controller = std::make_unique<core::DriverController>(*model, *gaits, *table, *bus, config.controller);
+      controller->start(0.0);
+      break;
+    } catch (const dxl::SerialError& e) {
+      last_problem = e.what();
+    } catch (const core::ConfigError& e) {
+      last_problem = e.what();
+      if (!bus || !controller) {  // a configuration problem: retrying cannot help
+        ROS_FATAL("driver: refusing to start: %s", e.what());
+        return 1;
+      }
+    }
+    if (Clock::now() > give_up) {
+      ROS_FATAL("driver: no usable servo bus after %.1f s: %s", config.connect_timeout_s, last_problem.c_str());
+      return 1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  if (!ros::ok()) return 0;
+  dxl::SerialBus* bus_ptr = bus.get();
+  controller->set_reconnect([bus_ptr](std::string* why) {
+    try {
+      bus_ptr->reopen();
+      return true;
+    } catch (const std::exception& e) {
+      *why = e.what();
+      return false;
+    }
+  });
+  ROS_INFO("driver: %d servos on %s at %d baud, loop %.0f Hz, state %s%s%s", model->num_joints,
+           config.serial.device.c_str(), config.serial.baud_bps, config.loop.rate_hz,
+           core::to_string(controller->state()), controller->state() == core::DriverState::kFault ? ": " : "",
+           controller->state() == core::DriverState::kFault ? controller->fault_reason() : "");
+
+  DriverNode node(nh, config, *model, *bus, *controller);
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  node.run_threads();
+  ros::waitForShutdown();
+  spinner.stop();
+  node.stop();
+  return 0;
+}

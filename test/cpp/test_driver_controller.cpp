@@ -1,0 +1,599 @@
+// DriverController on FakeServoBus: the loop's contract (limits, gait commands, faults, stale pose,
+// requests, shutdown) and that update() never allocates.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <functional>
+#include <memory>
+#include <new>
+#include <thread>
+
+#include "snake_autonomy/core/driver_controller.hpp"
+#include "snake_autonomy/dynamixel/fake_servo_bus.hpp"
+#include "test_helpers.hpp"
+
+using namespace snake_autonomy::core;
+using snake_autonomy::dynamixel::ControlTable;
+using snake_autonomy::dynamixel::FakeServoBus;
+using snake_autonomy::test::cobra;
+using snake_autonomy::test::source_path;
+
+// ---- allocation counter: counts operator new calls while g_count_allocations is set ----
+namespace {
+std::atomic<bool> g_count_allocations{false};
+std::atomic<long> g_allocations{0};
+}  // namespace
+// GCC cannot tell that these free() calls pair with the malloc() in operator new below.
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+void* operator new(std::size_t size) {
+  if (g_count_allocations.load(std::memory_order_relaxed)) {
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
+    if (std::getenv("SNAKE_ABORT_ON_ALLOCATION")) std::abort();  // run under gdb to see where
+  }
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+namespace {
+
+constexpr double kDt = 0.01;
+constexpr double kDeg = M_PI / 180.0;
+
+struct Rig {
+  RobotModel model;
+  GaitLibrary gaits;
+  ControlTable table;
+  std::unique_ptr<FakeServoBus> bus;
+  std::unique_ptr<DriverController> ctl;
+  double t = 0.0;
+  bool feed_pose = true;
+
+  explicit Rig(DriverConfig config = DriverConfig{}, const std::function<void(RobotModel&)>& edit = {},
+               const std::function<void(FakeServoBus&)>& before_start = {})
+      : model(cobra()),
+        gaits(GaitLibrary::from_yaml_file(source_path("config/gaits.yaml"))),
+        table(ControlTable::from_yaml_file(source_path("config/dynamixel/xh540_w270.yaml"))) {
+    if (edit) edit(model);
+    std::vector<std::uint8_t> ids;
+    for (int id : model.servos.ids) ids.push_back(static_cast<std::uint8_t>(id));
+    bus = std::make_unique<FakeServoBus>(table, ids);
+    if (before_start) before_start(*bus);
+    ctl = std::make_unique<DriverController>(model, gaits, table, *bus, config);
+  }
+  void start() { ctl->start(t); }
+  bool step(int cycles = 1) {
+    bool ok = true;
+    for (int k = 0; k < cycles; ++k) {
+      t += kDt;
+      if (feed_pose) ctl->set_base_pose(t, Eigen::Vector3d(1.0, 2.0, 0.0), Eigen::Quaterniond::Identity());
+      ok = ctl->update(t, kDt) && ok;
+    }
+    return ok;
+  }
+  RequestResult request(DriverRequest r, std::uint8_t id = 0) {
+    const auto ticket = ctl->post(r, id);
+    step();
+    RequestResult out;
+    EXPECT_TRUE(ctl->take_result(ticket, &out));
+    return out;
+  }
+  std::string command(const std::string& gait) {
+    GaitCommandRequest c;
+    c.gait = gait;
+    return ctl->command_gait(c);
+  }
+  std::int64_t goal(int id) const { return bus->get(static_cast<std::uint8_t>(id), "goal_position"); }
+  std::int64_t torque(int id) const { return bus->get(static_cast<std::uint8_t>(id), "torque_enable"); }
+};
+
+}  // namespace
+
+TEST(DriverConfig, ValidateCollectsEveryProblem) {
+  DriverConfig c;
+  c.max_failed_cycles = 0;
+  c.pose_timeout_s = -1.0;
+  c.max_step_s = 0.0;
+  c.max_joint_velocity_rad_s = std::nan("");
+  const auto errors = c.validate();
+  ASSERT_EQ(errors.size(), 4u);
+  EXPECT_NE(errors[0].find("max_failed_cycles: 0"), std::string::npos) << errors[0];
+  std::string all;
+  for (const auto& e : errors) all += e + "\n";
+  for (const char* key : {"pose_timeout_s: -1", "max_step_s: 0", "max_joint_velocity_rad_s: nan"})
+    EXPECT_NE(all.find(key), std::string::npos) << all;
+  EXPECT_TRUE(DriverConfig{}.validate().empty());
+  try {
+    Rig rig(c);
+    FAIL() << "an invalid configuration was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("pose_timeout_s"), std::string::npos) << e.what();
+  }
+  SafeAction a;
+  EXPECT_TRUE(parse_safe_action("torque_off", &a));
+  EXPECT_EQ(a, SafeAction::kTorqueOff);
+  EXPECT_FALSE(parse_safe_action("limp", &a));
+}
+
+TEST(DriverController, StartEnablesTorqueAndHoldsThePresentPosture) {
+  Rig rig({}, {}, [](FakeServoBus& b) { b.set(3, "present_position", 2048 + 300); });
+  rig.start();
+  EXPECT_EQ(rig.ctl->state(), DriverState::kHolding);
+  for (int id = 1; id <= 11; ++id) EXPECT_EQ(rig.torque(id), 1) << id;
+  EXPECT_EQ(rig.goal(3), 2048 + 300);  // no jump at torque-on
+  rig.step(20);
+  EXPECT_EQ(rig.goal(3), 2048 + 300);
+  EXPECT_NEAR(rig.ctl->position_rad()[2], 300 * 2 * M_PI / 4096, 1e-12);
+  EXPECT_EQ(rig.bus->refused_writes(), 0u);
+}
+
+TEST(DriverController, StartNamesEveryServoThatIsNotUsable) {
+  Rig rig({}, {}, [](FakeServoBus& b) {
+    b.set_dead(5, true);
+    b.set(3, "operating_mode", 1);
+  });
+  try {
+    rig.start();
+    FAIL() << "started with a dead servo";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("servo 5 (joint_5): no answer"), std::string::npos) << what;
+    EXPECT_NE(what.find("servo 3 (joint_3): operating_mode 1"), std::string::npos) << what;
+  }
+  EXPECT_FALSE(rig.ctl->update(0.01, 0.01));  // not started: nothing happens
+}
+
+TEST(DriverController, DirectionAndZeroOffsetMapJointsToTicks) {
+  Rig rig({}, [](RobotModel& m) {
+    m.servos.directions[0] = -1;
+    m.servos.zero_offsets_ticks[0] = 100;
+  });
+  std::int32_t ticks = 0;
+  ASSERT_TRUE(rig.ctl->joint_rad_to_ticks(0, 90 * kDeg, &ticks));
+  EXPECT_EQ(ticks, 2048 + 100 - 1024);
+  EXPECT_NEAR(rig.ctl->ticks_to_joint_rad(0, 2048 + 100 - 1024), 90 * kDeg, 1e-12);
+  EXPECT_NEAR(rig.ctl->ticks_to_joint_rad(0, 2048 + 100), 0.0, 1e-12);
+  EXPECT_FALSE(rig.ctl->joint_rad_to_ticks(0, std::nan(""), &ticks));
+  // Limits are mirrored: joint [-90, 90] deg = ticks [2148 - 1024, 2148 + 1024].
+  EXPECT_EQ(rig.ctl->servos()[0].min_ticks, 2148 - 1024);
+  EXPECT_EQ(rig.ctl->servos()[0].max_ticks, 2148 + 1024);
+}
+
+TEST(DriverController, GaitCommandDrivesTheGoalsThroughTheCpg) {
+  Rig rig;
+  rig.start();
+  EXPECT_EQ(rig.command("sidewind"), "");
+  rig.step(300);
+  EXPECT_EQ(rig.ctl->state(), DriverState::kRunning);
+  EXPECT_FALSE(rig.ctl->locomotion_gated());
+  // The CPG output reaches the bus: goals follow the CPG within the slew limit, and they move.
+  std::int64_t lo = 1 << 30, hi = -(1 << 30);
+  for (int k = 0; k < 150; ++k) {
+    rig.step();
+    const auto& q = rig.ctl->cpg().output();
+    for (int j = 0; j < 11; ++j) EXPECT_NEAR(rig.ctl->goal_rad()[j], q[j], 1e-9) << j;
+    lo = std::min(lo, rig.goal(2));
+    hi = std::max(hi, rig.goal(2));
+  }
+  EXPECT_GT(hi - lo, 600);  // yaw joint 2 swings about ±45 deg (±512 ticks)
+  EXPECT_EQ(rig.bus->goal_writes(2), rig.bus->sync_writes() - 1);  // every cycle wrote (all but the torque-on write)
+  DriverSnapshot snap = rig.ctl->make_snapshot();
+  rig.ctl->fill_snapshot(snap);
+  EXPECT_STREQ(snap.gait.data(), "sidewind");
+  EXPECT_EQ(snap.commands_applied, 1u);
+  EXPECT_TRUE(snap.pose_fresh);
+  // Kinematics ran from the base pose.
+  EXPECT_NEAR(rig.ctl->kinematics().link_positions[0].x(), 1.0, 1e-12);
+  EXPECT_GT(snap.bbox_span.norm(), 0.1);
+}
+
+TEST(DriverController, GoalsNeverLeaveTheJointOrServoLimits) {
+  Rig rig({}, [](RobotModel& m) {
+    for (int j = 0; j < m.num_joints; ++j) {
+      m.joint_lower_rad[j] = -20 * kDeg;
+      m.joint_upper_rad[j] = 25 * kDeg;
+    }
+  }, [](FakeServoBus& b) { b.set(4, "max_position_limit", 2100); });
+  rig.start();
+  GaitCommandRequest c;
+  c.gait = "sidewind";
+  c.amplitude.assign(11, 3.0);  // clamped to 70 deg by the CPG, then to the joint limits
+  c.bias.assign(11, 1.5);
+  ASSERT_EQ(rig.ctl->command_gait(c), "");
+  const std::int64_t lo = 2048 - std::lround(20.0 / 360 * 4096), hi = 2048 + std::lround(25.0 / 360 * 4096);
+  for (int k = 0; k < 600; ++k) {
+    rig.step();
+    for (int id = 1; id <= 11; ++id) {
+      ASSERT_GE(rig.goal(id), lo) << id;
+      ASSERT_LE(rig.goal(id), id == 4 ? 2100 : hi) << id;
+    }
+  }
+  EXPECT_EQ(rig.goal(4), 2100);  // pushed against the servo's own limit
+  EXPECT_EQ(rig.bus->refused_writes(), 0u);
+}
+
+TEST(DriverController, GoalsAreSlewLimited) {
+  DriverConfig cfg;
+  cfg.max_joint_velocity_rad_s = 1.0;
+  Rig rig(cfg);
+  rig.start();
+  GaitCommandRequest c;
+  c.gait = "hold";
+  c.bias.assign(11, 0.0);
+  c.bias[0] = 60 * kDeg;
+  ASSERT_EQ(rig.ctl->command_gait(c), "");
+  double prev = 0.0;
+  for (int k = 0; k < 200; ++k) {
+    rig.step();
+    const double g = rig.ctl->goal_rad()[0];
+    ASSERT_LE(std::abs(g - prev), 1.0 * kDt + 1e-12);
+    prev = g;
+  }
+  EXPECT_GT(prev, 30 * kDeg);
+}
+
+TEST(DriverController, RefusedCommandLeavesTheRunningGaitUntouched) {
+  Rig rig;
+  rig.start();
+  ASSERT_EQ(rig.command("sidewind"), "");
+  rig.step(50);
+  const GaitParameters before = rig.ctl->cpg().targets();
+  GaitCommandRequest c;
+  c.gait = "moonwalk";
+  c.amplitude.assign(5, 0.1);
+  c.omega.assign(11, 1.0);
+  c.omega[3] = std::nan("");
+  c.bias.assign(11, 0.0);
+  c.bias[7] = INFINITY;
+  const std::string why = rig.ctl->command_gait(c);
+  for (const char* part : {"unknown gait 'moonwalk'", "amplitude: 5 values", "omega[3] (joint_4): nan",
+                           "bias[7] (joint_8): inf"})
+    EXPECT_NE(why.find(part), std::string::npos) << part << " in:\n" << why;
+  GaitCommandRequest fast;
+  fast.omega.assign(11, 2 * M_PI * 5.0);
+  EXPECT_NE(rig.ctl->command_gait(fast).find("exceeds"), std::string::npos);
+  GaitCommandRequest steer_turn;
+  steer_turn.gait = "turn_left";
+  steer_turn.steer = true;
+  steer_turn.delta_rad = 0.1;
+  EXPECT_NE(rig.ctl->command_gait(steer_turn).find("not steerable"), std::string::npos);
+  rig.step(10);
+  const GaitParameters& after = rig.ctl->cpg().targets();
+  EXPECT_TRUE(after.amplitude.isApprox(before.amplitude));
+  EXPECT_TRUE(after.omega.isApprox(before.omega));
+  EXPECT_TRUE(after.bias.isApprox(before.bias));
+  EXPECT_EQ(rig.ctl->commanded_gait(), "sidewind");
+  EXPECT_EQ(rig.ctl->commands_refused(), 3u);
+  EXPECT_EQ(rig.ctl->state(), DriverState::kRunning);
+}
+
+TEST(DriverController, SteeringModulatesTheYawAmplitudesOfOneCommand) {
+  Rig rig;
+  rig.start();
+  GaitCommandRequest c;
+  c.gait = "sidewind";
+  c.steer = true;
+  c.delta_rad = 5 * kDeg;
+  ASSERT_EQ(rig.ctl->command_gait(c), "");
+  rig.step();
+  const auto& a = rig.ctl->cpg().targets().amplitude;
+  EXPECT_NEAR(a[1], (45 + 2 * 5) * kDeg, 1e-9);  // first yaw joint, weight 2
+  EXPECT_NEAR(a[9], (45 - 2 * 5) * kDeg, 1e-9);  // last yaw joint, weight -2
+  EXPECT_NEAR(a[0], 15 * kDeg, 1e-9);            // pitch untouched
+  GaitCommandRequest plain;  // no gait name, no steer: the nominal sidewind again
+  ASSERT_EQ(rig.ctl->command_gait(plain), "");
+  rig.step();
+  EXPECT_NEAR(rig.ctl->cpg().targets().amplitude[1], 45 * kDeg, 1e-9);
+}
+
+TEST(DriverController, StalePoseHoldsLocomotionAndFreshPosesResumeIt) {
+  Rig rig;
+  rig.feed_pose = false;
+  rig.start();
+  ASSERT_EQ(rig.command("sidewind"), "");
+  rig.step(5);
+  // No pose yet: identity for the kinematics, locomotion held.
+  EXPECT_TRUE(rig.ctl->locomotion_gated());
+  EXPECT_EQ(rig.ctl->cpg().targets().amplitude.norm(), 0.0);
+  EXPECT_NEAR(rig.ctl->kinematics().link_positions[0].norm(), 0.0, 1e-12);
+  rig.feed_pose = true;
+  rig.step(200);
+  EXPECT_FALSE(rig.ctl->locomotion_gated());
+  EXPECT_NEAR(rig.ctl->cpg().targets().amplitude[1], 45 * kDeg, 1e-9);
+  EXPECT_GT(rig.ctl->cpg().amplitudes()[1], 20 * kDeg);
+  // Poses stop: after pose_timeout_s (0.5 s) the waves decay and stay down.
+  rig.feed_pose = false;
+  rig.step(45);
+  EXPECT_FALSE(rig.ctl->locomotion_gated());
+  rig.step(10);
+  EXPECT_TRUE(rig.ctl->locomotion_gated());
+  EXPECT_FALSE(rig.ctl->pose_fresh());
+  rig.step(400);
+  EXPECT_LT(rig.ctl->cpg().amplitudes().cwiseAbs().maxCoeff(), 0.5 * kDeg);
+  EXPECT_EQ(rig.ctl->state(), DriverState::kRunning);
+  // Fresh poses: the commanded gait comes back.
+  rig.feed_pose = true;
+  rig.step(100);
+  EXPECT_FALSE(rig.ctl->locomotion_gated());
+  EXPECT_GT(rig.ctl->cpg().amplitudes()[1], 10 * kDeg);
+  // A non-finite pose is refused and does not count as fresh.
+  EXPECT_FALSE(rig.ctl->set_base_pose(rig.t, Eigen::Vector3d(NAN, 0, 0), Eigen::Quaterniond::Identity()));
+  EXPECT_FALSE(rig.ctl->set_base_pose(rig.t, Eigen::Vector3d::Zero(), Eigen::Quaterniond(0, 0, 0, 0)));
+}
+
+TEST(DriverController, PoseNotRequiredRunsWithoutOne) {
+  DriverConfig cfg;
+  cfg.require_pose = false;
+  Rig rig(cfg);
+  rig.feed_pose = false;
+  rig.start();
+  ASSERT_EQ(rig.command("sidewind"), "");
+  rig.step(100);
+  EXPECT_FALSE(rig.ctl->locomotion_gated());
+  EXPECT_GT(rig.ctl->cpg().amplitudes()[1], 20 * kDeg);
+}
+
+TEST(DriverController, CrcErrorsAreCountedAndTheLastGoodStateKept) {
+  Rig rig;
+  rig.start();
+  rig.bus->set_follow_goal(false);
+  rig.bus->set(4, "present_position", 2048 + 100);
+  rig.step();
+  EXPECT_NEAR(rig.ctl->position_rad()[3], 100 * 2 * M_PI / 4096, 1e-12);
+  rig.bus->inject_crc_errors(4, 3);
+  rig.bus->set(4, "present_position", 2048 + 400);
+  EXPECT_FALSE(rig.step());
+  EXPECT_TRUE(rig.ctl->servos()[3].stale);
+  EXPECT_NEAR(rig.ctl->position_rad()[3], 100 * 2 * M_PI / 4096, 1e-12);  // last good value
+  rig.step(2);
+  EXPECT_TRUE(rig.step());
+  EXPECT_FALSE(rig.ctl->servos()[3].stale);
+  EXPECT_NEAR(rig.ctl->position_rad()[3], 400 * 2 * M_PI / 4096, 1e-12);
+  EXPECT_EQ(rig.ctl->servos()[3].crc_errors, 3u);
+  EXPECT_EQ(rig.ctl->state(), DriverState::kHolding);  // 3 < max_failed_cycles
+  DriverSnapshot snap = rig.ctl->make_snapshot();
+  rig.ctl->fill_snapshot(snap);
+  EXPECT_EQ(snap.bus.crc_errors, 3u);
+  EXPECT_EQ(snap.failed_cycles, 3u);
+}
+
+TEST(DriverController, DeadServoStopsLocomotionAfterNFailedCyclesAndHolds) {
+  DriverConfig cfg;
+  cfg.max_failed_cycles = 5;
+  Rig rig(cfg);
+  rig.start();
+  ASSERT_EQ(rig.command("sidewind"), "");
+  rig.step(200);
+  rig.bus->set_dead(5, true);
+  rig.step(4);
+  EXPECT_EQ(rig.ctl->state(), DriverState::kRunning);
+  rig.step();
+  ASSERT_EQ(rig.ctl->state(), DriverState::kFault);
+  const std::string why = rig.ctl->fault_reason();
+  EXPECT_NE(why.find("servo 5 (joint_5) timeout for 5 cycles"), std::string::npos) << why;
+  // Hold: the goals stop at the position measured when the fault came; torque stays on.
+  const std::int32_t measured = rig.ctl->servos()[2].present_ticks;
+  rig.step();
+  const std::int64_t g3 = rig.goal(3);
+  EXPECT_EQ(g3, measured);
+  rig.step(50);
+  EXPECT_EQ(rig.goal(3), g3);
+  EXPECT_EQ(rig.torque(3), 1);
+  EXPECT_NE(rig.command("sidewind"), "");  // refused in a fault
+  // Recovery: the servo answers again, enable torque checks everything and holds.
+  rig.bus->set_dead(5, false);
+  const RequestResult r = rig.request(DriverRequest::kEnableTorque);
+  EXPECT_TRUE(r.success) << r.message;
+  EXPECT_EQ(rig.ctl->state(), DriverState::kHolding);
+  EXPECT_EQ(rig.command("sidewind"), "");
+  rig.step(20);
+  EXPECT_EQ(rig.ctl->state(), DriverState::kRunning);
+  EXPECT_EQ(rig.bus->refused_writes(), 0u);
+}
+
+TEST(DriverController, FaultActionTorqueOff) {
+  DriverConfig cfg;
+  cfg.max_failed_cycles = 3;
+  cfg.fault_action = SafeAction::kTorqueOff;
+  Rig rig(cfg);
+  rig.start();
+  ASSERT_EQ(rig.command("sidewind"), "");
+  rig.step(50);
+  rig.bus->set_dead(2, true);
+  rig.step(3);
+  ASSERT_EQ(rig.ctl->state(), DriverState::kFault);
+  for (int id = 1; id <= 11; ++id) {
+    if (id != 2) {
+      EXPECT_EQ(rig.torque(id), 0) << id;
+    }
+  }
+}
+
+TEST(DriverController, HardwareErrorStopsAtOnceAndRebootRecovers) {
+  Rig rig;
+  rig.start();
+  ASSERT_EQ(rig.command("sidewind"), "");
+  rig.step(100);
+  rig.bus->set_hardware_error(6, 1 << 5);  // overload
+  rig.step();
+  ASSERT_EQ(rig.ctl->state(), DriverState::kFault);
+  const std::string why = rig.ctl->fault_reason();
+  EXPECT_NE(why.find("servo 6 (joint_6): overload"), std::string::npos) << why;
+  EXPECT_EQ(rig.ctl->servos()[5].hardware_error_bits, 1 << 5);
+  EXPECT_EQ(rig.torque(7), 1);  // the others hold
+  // Enabling torque is refused while the error is there; reboot is refused for an unknown ID.
+  RequestResult r = rig.request(DriverRequest::kEnableTorque);
+  EXPECT_FALSE(r.success);
+  EXPECT_NE(r.message.find("servo 6 (joint_6) has a hardware error (overload): reboot it first"), std::string::npos)
+      << r.message;
+  r = rig.request(DriverRequest::kRebootServo, 42);
+  EXPECT_FALSE(r.success);
+  r = rig.request(DriverRequest::kRebootServo, 6);
+  EXPECT_TRUE(r.success) << r.message;
+  r = rig.request(DriverRequest::kEnableTorque);
+  EXPECT_TRUE(r.success) << r.message;
+  EXPECT_EQ(rig.ctl->state(), DriverState::kHolding);
+  for (int id = 1; id <= 11; ++id) EXPECT_EQ(rig.torque(id), 1) << id;
+  DriverSnapshot snap = rig.ctl->make_snapshot();
+  rig.ctl->fill_snapshot(snap);
+  EXPECT_EQ(snap.fault_reason[0], '\0');
+  EXPECT_NE(std::string(snap.last_fault.data()).find("overload"), std::string::npos);
+}
+
+TEST(DriverController, BusDownAndGarbageRepliesStopLocomotion) {
+  DriverConfig cfg;
+  cfg.max_failed_cycles = 4;
+  {
+    Rig rig(cfg);
+    rig.start();
+    rig.bus->set_bus_down(true);
+    rig.step(4);
+    ASSERT_EQ(rig.ctl->state(), DriverState::kFault);
+    EXPECT_NE(std::string(rig.ctl->fault_reason()).find("I/O error"), std::string::npos) << rig.ctl->fault_reason();
+    // Recovery reopens the port through the hook.
+    RequestResult r = rig.request(DriverRequest::kEnableTorque);
+    EXPECT_FALSE(r.success);
+    EXPECT_NE(r.message.find("I/O error"), std::string::npos) << r.message;
+    int reopened = 0;
+    rig.ctl->set_reconnect([&](std::string*) {
+      ++reopened;
+      rig.bus->set_bus_down(false);
+      return true;
+    });
+    r = rig.request(DriverRequest::kEnableTorque);
+    EXPECT_TRUE(r.success) << r.message;
+    EXPECT_EQ(reopened, 1);
+  }
+  {
+    Rig rig(cfg);
+    rig.start();
+    rig.bus->set_garbage(3, true);
+    rig.step(4);
+    ASSERT_EQ(rig.ctl->state(), DriverState::kFault);
+    EXPECT_EQ(rig.ctl->servos()[2].implausible, 4u);
+    EXPECT_NE(std::string(rig.ctl->fault_reason()).find("servo 3 (joint_3)"), std::string::npos);
+  }
+}
+
+TEST(DriverController, HoldDisableEnableRequests) {
+  Rig rig;
+  rig.start();
+  ASSERT_EQ(rig.command("sidewind"), "");
+  rig.step(150);
+  RequestResult r = rig.request(DriverRequest::kHold);
+  EXPECT_TRUE(r.success) << r.message;
+  EXPECT_EQ(rig.ctl->state(), DriverState::kHolding);
+  const std::int64_t g = rig.goal(2);
+  rig.step(30);
+  EXPECT_EQ(rig.goal(2), g);
+  r = rig.request(DriverRequest::kRebootServo, 2);
+  EXPECT_FALSE(r.success);  // torque on
+  r = rig.request(DriverRequest::kDisableTorque);
+  EXPECT_TRUE(r.success);
+  EXPECT_EQ(rig.ctl->state(), DriverState::kStopped);
+  for (int id = 1; id <= 11; ++id) EXPECT_EQ(rig.torque(id), 0) << id;
+  EXPECT_NE(rig.command("sidewind").find("torque is off"), std::string::npos);
+  r = rig.request(DriverRequest::kHold);
+  EXPECT_FALSE(r.success);
+  // Someone bends joint 2 past its limit while limp: enabling torque is refused.
+  rig.bus->set(2, "present_position", 2048 + 1100);
+  r = rig.request(DriverRequest::kEnableTorque);
+  EXPECT_FALSE(r.success);
+  EXPECT_NE(r.message.find("servo 2 (joint_2) at 96.7 deg is outside its limits"), std::string::npos) << r.message;
+  rig.bus->set(2, "present_position", 2048 + 1000);
+  r = rig.request(DriverRequest::kEnableTorque);
+  EXPECT_TRUE(r.success) << r.message;
+  EXPECT_EQ(rig.goal(2), 2048 + 1000);
+}
+
+TEST(DriverController, ShutdownLeavesTheConfiguredState) {
+  for (SafeAction action : {SafeAction::kHold, SafeAction::kTorqueOff}) {
+    DriverConfig cfg;
+    cfg.shutdown_action = action;
+    Rig rig(cfg);
+    rig.start();
+    ASSERT_EQ(rig.command("sidewind"), "");
+    rig.step(120);
+    rig.bus->set_follow_goal(false);
+    rig.bus->set(1, "present_position", 2100);
+    EXPECT_TRUE(rig.ctl->shutdown());
+    if (action == SafeAction::kHold) {
+      EXPECT_EQ(rig.torque(1), 1);
+      EXPECT_EQ(rig.goal(1), 2100);  // frozen at the present position
+    } else {
+      for (int id = 1; id <= 11; ++id) EXPECT_EQ(rig.torque(id), 0) << id;
+    }
+  }
+}
+
+TEST(DriverController, FastSyncReadWorksAndLosesTheCycleOnACorruptSharedPacket) {
+  DriverConfig cfg;
+  cfg.fast_sync_read = true;
+  Rig rig(cfg);
+  rig.start();
+  ASSERT_EQ(rig.command("sidewind"), "");
+  EXPECT_TRUE(rig.step(50));
+  rig.bus->inject_crc_errors(7, 1);
+  EXPECT_FALSE(rig.step());
+  for (const auto& d : rig.ctl->servos()) EXPECT_TRUE(d.stale);
+  EXPECT_TRUE(rig.step());
+}
+
+TEST(DriverController, StatusReadFillsVoltageAndTemperature) {
+  DriverConfig cfg;
+  cfg.status_every_cycles = 5;
+  Rig rig(cfg);
+  rig.start();
+  EXPECT_TRUE(std::isnan(rig.ctl->servos()[0].temperature_c));
+  rig.bus->set(9, "present_temperature", 61);
+  rig.step(5);
+  EXPECT_DOUBLE_EQ(rig.ctl->servos()[8].temperature_c, 61.0);
+  EXPECT_NEAR(rig.ctl->servos()[8].voltage_v, 12.0, 1e-9);
+}
+
+TEST(DriverController, UpdateNeverAllocates) {
+  Rig rig;
+  rig.start();
+  ASSERT_EQ(rig.command("sidewind"), "");
+  rig.step(2);
+  DriverSnapshot snap = rig.ctl->make_snapshot();
+  g_allocations = 0;
+  g_count_allocations = true;
+  rig.step(100);                   // running, poses fed
+  rig.bus->inject_crc_errors(3, 2);  // failed cycles
+  rig.feed_pose = false;
+  rig.step(100);                   // the pose goes stale: gating
+  rig.bus->set_dead(4, true);
+  rig.step(15);                    // fault: message formatting, hold
+  rig.ctl->fill_snapshot(snap);
+  g_count_allocations = false;
+  EXPECT_EQ(rig.ctl->state(), DriverState::kFault);
+  EXPECT_EQ(g_allocations.load(), 0);
+}
+
+TEST(DriverController, OtherThreadsNeverBlockTheLoop) {
+  Rig rig;
+  rig.start();
+  std::atomic<bool> run{true};
+  std::atomic<long> cycles{0};
+  std::thread loop([&] {
+    double t = 0.0;
+    while (run) {
+      t += 0.001;
+      rig.ctl->set_base_pose(t, Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity());
+      rig.ctl->update(t, 0.001);
+      ++cycles;
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+  });
+  for (int k = 0; k < 20; ++k) {
+    EXPECT_EQ(rig.command(k % 2 ? "sidewind" : "turn_left"), "");
+    const RequestResult r = rig.ctl->call(k % 2 ? DriverRequest::kHold : DriverRequest::kEnableTorque, 0, 2.0);
+    EXPECT_TRUE(r.success) << r.message;
+  }
+  run = false;
+  loop.join();
+  EXPECT_GT(cycles.load(), 20);
+}

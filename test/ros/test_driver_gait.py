@@ -1,0 +1,75 @@
+#!/usr/bin/env python3
+"""rostest: driver_node on the mocked servo bus: joint_states flow, a commanded gait reaches the
+mock's goal positions, a refused command leaves the gait running, a stale pose holds locomotion
+and fresh poses resume it, driver/hold freezes the goals."""
+import math
+import unittest
+
+import rospy
+import rostest
+
+from driver_test_helpers import DriverHarness, wait_for
+
+LOCO = "snake_driver: locomotion"
+
+
+class DriverGait(unittest.TestCase):
+    h = None
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("test_driver_gait")
+        cls.h = DriverHarness(rospy.get_param("~port"))
+        wait_for(lambda: cls.h.state() == "holding", 20.0, "the driver to hold its posture after start")
+
+    def test_1_gait_reaches_the_mock(self):
+        h = self.h
+        names = wait_for(lambda: h.joint_states and list(h.joint_states.name), 5.0, "joint_states")
+        self.assertEqual(names, [f"joint_{i}" for i in range(1, 12)])
+        h.command("sidewind")
+        h.wait_diag(LOCO, lambda s: s.message == "running", 5.0, "running")
+        # Yaw joint 2 swings about +-45 deg = +-512 ticks once the amplitude has grown.
+        h.wait_moving(2, 600, 12.0)
+        # The mock's servos follow their goals: joint_states report the motion, in radians.
+        positions = []
+        wait_for(lambda: positions.append(h.joint_states.position[1]) or
+                 (max(positions) - min(positions) > math.radians(40)), 5.0, "joint_2 to move in joint_states")
+        self.assertEqual(h.value(LOCO, "gait"), "sidewind")
+
+    def test_2_refused_command_leaves_the_gait_running(self):
+        h = self.h
+        refused = int(h.value(LOCO, "commands_refused"))
+        h.command("sidewind", amplitude=[0.1, 0.2, 0.3])
+        h.command("no_such_gait")
+        h.command("sidewind", omega=[float("nan")] * 11)
+        s = h.wait_diag(LOCO, lambda s: int(h.value(LOCO, "commands_refused")) >= refused + 3, 5.0,
+                        "three refusals in the diagnostics")
+        self.assertIn("omega[0] (joint_1): nan", h.value(LOCO, "last_refusal"))
+        self.assertEqual(s.message, "running")
+        self.assertEqual(h.value(LOCO, "gait"), "sidewind")
+        self.assertGreater(h.goal_span(2, 1.5), 600)
+
+    def test_3_stale_pose_holds_and_fresh_poses_resume(self):
+        h = self.h
+        h.pose_on = False
+        h.wait_diag(LOCO, lambda s: s.message == "base pose stale: locomotion held", 5.0, "the stale-pose hold")
+        # The waves decay (critically damped) and the goals come to rest; no com_pose meanwhile.
+        wait_for(lambda: h.goal_span(2, 0.5) <= 20, 10.0, "the goals to come to rest")
+        count = h.com_count
+        self.assertLessEqual(h.goal_span(2, 0.5), 20)
+        self.assertEqual(h.com_count, count, "com_pose published from a stale pose")
+        h.pose_on = True
+        h.wait_diag(LOCO, lambda s: s.message == "running", 5.0, "running again")
+        wait_for(lambda: h.com_count > count, 5.0, "com_pose again")
+        h.wait_moving(2, 600, 12.0)
+
+    def test_4_hold_service_freezes_the_goals(self):
+        h = self.h
+        r = h.hold()
+        self.assertTrue(r.success, r.message)
+        h.wait_diag(LOCO, lambda s: s.message == "holding", 5.0, "holding")
+        self.assertLessEqual(h.goal_span(2, 1.0), 0)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("snake_autonomy", "driver_gait", DriverGait)
