@@ -38,6 +38,10 @@ from snake_autonomy.srv import LoadMission, LoadMissionResponse
 RECORDED = {  # topic -> type, recorded into the run's bag besides com_pose and our own outputs
     "base_pose": PoseStamped,
     "base_pose_status": DiagnosticStatus,
+    # the simulator's ground truth (sim_node); nothing publishes them on the robot
+    "ground_truth/base_pose": PoseStamped,
+    "ground_truth/camera_pose": PoseStamped,
+    "ground_truth/com_pose": PoseStamped,
 }
 
 

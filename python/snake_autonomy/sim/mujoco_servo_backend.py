@@ -39,6 +39,11 @@ class MujocoServoBackend(ServoBackend):
         self.paused_s = 0.0
         self._lock = threading.Lock()
 
+    @property
+    def lock(self) -> threading.Lock:
+        """Held while the plant is stepped or read: take it to read the plant from another thread."""
+        return self._lock
+
     # ---- unit mapping (pure) -------------------------------------------------------------------
     def joint_index(self, servo_id: int) -> int:
         try:
@@ -77,13 +82,17 @@ class MujocoServoBackend(ServoBackend):
 
     def advance(self, now_s: float) -> None:
         with self._lock:
-            if self._clock_offset_s is None:
-                self._clock_offset_s = now_s - self.plant.time_s
-            target = now_s - self._clock_offset_s
-            gap = target - self.plant.time_s
-            if gap > self.max_catch_up_s:
-                excess = gap - self.max_catch_up_s
-                self.paused_s += excess
-                self._clock_offset_s += excess
-                target -= excess
-            self.plant.step_to(target)
+            self.advance_locked(now_s)
+
+    def advance_locked(self, now_s: float) -> None:
+        """advance() for a caller that already holds `lock` (to read the plant at the same time)."""
+        if self._clock_offset_s is None:
+            self._clock_offset_s = now_s - self.plant.time_s
+        target = now_s - self._clock_offset_s
+        gap = target - self.plant.time_s
+        if gap > self.max_catch_up_s:
+            excess = gap - self.max_catch_up_s
+            self.paused_s += excess
+            self._clock_offset_s += excess
+            target -= excess
+        self.plant.step_to(target)

@@ -1,0 +1,181 @@
+"""sim_node: the simulated robot in real time. Wiring only: the logic is sim.realtime.RealTimeSim.
+
+Hosts the mocked servo bus on a pty (~port) with the MuJoCo plant behind it: driver_node talks
+Protocol 2.0 to the simulated servos exactly as to real ones. Publishes the pose source the
+experiment uses and the ground truth:
+
+Publishes   base_pose (geometry_msgs/PoseStamped, motion capture of base_link, 100 Hz; feedback mocap)
+            odom (nav_msgs/Odometry, the simulated RTAB-Map: camera pose, 30 Hz, null pose with
+            covariance 9999 while lost; feedback vio: pose_remap_node turns it into base_pose)
+            ground_truth/base_pose (PoseStamped, 100 Hz), ground_truth/camera_pose (PoseStamped, with
+            every odom message, same stamp), ground_truth/com_pose (PoseStamped, 10 Hz: centre of mass
+            and heading from the true base pose), sim/status (diagnostic_msgs/DiagnosticStatus, 1 Hz,
+            also on /diagnostics: simulated time, tilt, roll-over, joint goals beyond the limits).
+Subscribes  sim/disturbance (geometry_msgs/WrenchStamped: header.frame_id = the body, base_link or
+            link_1..link_11; world-frame force and torque; lasts ~disturbance_duration_s),
+            tracking_status (the mission's active waypoint: arms the mission's mid-leg disturbances).
+Params      ~feedback (mocap|vio), ~seed, ~start ("x,y,heading_deg" of the centre of mass), ~port,
+            ~sim_config, ~robot_config, ~tracker_config, ~mission (for its disturbances), ~world_frame
+            (odom), ~camera_frame (camera), ~rate_hz (physics and sensor poll, 200), ~disturbance_duration_s.
+"""
+import math
+import threading
+import time
+from pathlib import Path
+
+import rospy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import PoseStamped, WrenchStamped
+from nav_msgs.msg import Odometry
+
+from snake_autonomy.msg import TrackingStatus
+from snake_autonomy.sim.realtime import RealTimeSim, SimSetup
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def _pose(msg_pose, position, quat):
+    msg_pose.position.x, msg_pose.position.y, msg_pose.position.z = (float(v) for v in position)
+    o = msg_pose.orientation
+    o.x, o.y, o.z, o.w = (float(v) for v in quat)
+
+
+class SimNode:
+    def __init__(self):
+        start = str(rospy.get_param("~start", "0,0,0"))
+        try:
+            start_t = tuple(float(v) for v in start.split(","))
+            assert len(start_t) == 3
+        except (ValueError, AssertionError):
+            raise ValueError(f"~start: expected x,y,heading_deg, got {start!r}") from None
+        config = ROOT / "config"
+        setup = SimSetup(feedback=rospy.get_param("~feedback", "mocap"), seed=int(rospy.get_param("~seed", 0)),
+                         start=start_t, port=rospy.get_param("~port", "/tmp/snake_sim_bus"),
+                         sim_config=rospy.get_param("~sim_config", str(config / "sim.yaml")),
+                         robot=rospy.get_param("~robot_config", str(config / "robots" / "cobra.yaml")),
+                         tracker_config=rospy.get_param("~tracker_config", str(config / "tracker.yaml")),
+                         mission=rospy.get_param("~mission", ""))
+        self.world_frame = rospy.get_param("~world_frame", "odom")
+        self.camera_frame = rospy.get_param("~camera_frame", "camera")
+        self.rate_hz = float(rospy.get_param("~rate_hz", 200.0))
+        self.duration_s = float(rospy.get_param("~disturbance_duration_s", 0.1))
+        self.sim = RealTimeSim(setup)
+        self.feedback = setup.feedback
+        self.pub_base = rospy.Publisher("base_pose", PoseStamped, queue_size=20) if self.feedback == "mocap" else None
+        self.pub_odom = rospy.Publisher("odom", Odometry, queue_size=20) if self.feedback == "vio" else None
+        self.pub_gt_base = rospy.Publisher("ground_truth/base_pose", PoseStamped, queue_size=20)
+        self.pub_gt_cam = rospy.Publisher("ground_truth/camera_pose", PoseStamped, queue_size=20)
+        self.pub_gt_com = rospy.Publisher("ground_truth/com_pose", PoseStamped, queue_size=10)
+        self.pub_status = rospy.Publisher("sim/status", DiagnosticStatus, queue_size=2, latch=True)
+        self.pub_diag = rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=2)
+        rospy.Subscriber("sim/disturbance", WrenchStamped, self.on_disturbance, queue_size=10)
+        rospy.Subscriber("tracking_status", TrackingStatus, self.on_status, queue_size=10)
+        self.sim.start()
+        rospy.loginfo(f"simulated {self.sim.robot.name}: seed {setup.seed}, {self.feedback} feedback, servo bus on "
+                      f"{setup.port}, start {start_t}; {self.sim.params.summary()['floor_friction']:.3f} floor friction")
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self.loop, name="sim", daemon=True)
+        self._thread.start()
+
+    # -- subscriptions -------------------------------------------------------------------------------
+    def on_disturbance(self, msg):
+        f, t = msg.wrench.force, msg.wrench.torque
+        force = [f.x, f.y, f.z] if (f.x, f.y, f.z) != (0, 0, 0) else None
+        torque = [t.x, t.y, t.z] if (t.x, t.y, t.z) != (0, 0, 0) else None
+        try:
+            self.sim.plant._body_id(msg.header.frame_id)
+        except ValueError as exc:
+            rospy.logerr(f"sim/disturbance: {exc}")
+            return
+        self.sim.disturb(msg.header.frame_id, force, torque, self.duration_s)
+
+    def on_status(self, msg):
+        self.sim.set_target(msg.waypoint_index)
+
+    # -- the loop ------------------------------------------------------------------------------------
+    def loop(self):
+        period = 1.0 / self.rate_hz
+        next_t = time.monotonic()
+        last_status = 0.0
+        k = 0
+        while not self._stop.is_set() and not rospy.is_shutdown():
+            now = time.monotonic()
+            try:
+                out = self.sim.step(now)
+                self.publish(out, k)
+            except rospy.ROSException:
+                break
+            k += 1
+            if now - last_status >= 1.0:
+                last_status = now
+                self.publish_status()
+            next_t += period
+            delay = next_t - time.monotonic()
+            if delay < -0.5:
+                next_t = time.monotonic()   # fell far behind (machine busy): do not burst
+            elif delay > 0:
+                time.sleep(delay)
+
+    def publish(self, out, k):
+        stamp = rospy.Time.now()
+        for text in out.fired:
+            rospy.logwarn(f"disturbance: {text}")
+        if out.mocap is not None:
+            gt = PoseStamped()
+            gt.header.stamp, gt.header.frame_id = stamp, self.world_frame
+            _pose(gt.pose, *out.truth_base)
+            self.pub_gt_base.publish(gt)
+            if self.pub_base is not None:
+                m = PoseStamped()
+                m.header.stamp, m.header.frame_id = stamp, self.world_frame
+                _pose(m.pose, out.mocap.position_m, out.mocap.quat_xyzw)
+                self.pub_base.publish(m)
+        if out.vio is not None and self.pub_odom is not None:
+            o = Odometry()
+            o.header.stamp, o.header.frame_id, o.child_frame_id = stamp, self.world_frame, self.camera_frame
+            _pose(o.pose.pose, out.vio.position_m, out.vio.quat_xyzw)
+            o.pose.covariance = out.vio.covariance_row_major()
+            self.pub_odom.publish(o)
+            gt = PoseStamped()
+            gt.header.stamp, gt.header.frame_id = stamp, self.world_frame
+            _pose(gt.pose, *out.truth_camera)
+            self.pub_gt_cam.publish(gt)
+        if k % max(1, int(round(self.rate_hz / 10.0))) == 0:
+            with self.sim.backend.lock:
+                x, y, h = self.sim.true_com_pose()
+            c = PoseStamped()
+            c.header.stamp, c.header.frame_id = stamp, self.world_frame
+            _pose(c.pose, (x, y, 0.0), (0.0, 0.0, math.sin(h / 2), math.cos(h / 2)))
+            self.pub_gt_com.publish(c)
+
+    def publish_status(self):
+        s = self.sim.status()
+        bad = s["rolled_over"] or s["limit_violations"]
+        if s["rolled_over"]:
+            rospy.logerr_throttle(10.0, f"the simulated robot rolled over (tilt {s['max_tilt_deg']:.0f} deg)")
+        status = DiagnosticStatus(
+            level=DiagnosticStatus.ERROR if bad else DiagnosticStatus.OK, name="sim", hardware_id="mujoco",
+            message=("rolled over" if s["rolled_over"] else
+                     f"{s['limit_violations']} joint goals beyond the limits" if s["limit_violations"] else "running"),
+            values=[KeyValue(k, f"{v:.3f}" if isinstance(v, float) else str(v)) for k, v in s.items()])
+        self.pub_status.publish(status)
+        arr = DiagnosticArray(status=[status])
+        arr.header.stamp = rospy.Time.now()
+        self.pub_diag.publish(arr)
+
+    def shutdown(self):
+        self._stop.set()
+        self._thread.join(2.0)
+        self.sim.stop()
+
+
+def main():
+    rospy.init_node("sim")
+    try:
+        node = SimNode()
+    except (ValueError, OSError, RuntimeError) as exc:
+        rospy.logfatal(str(exc))
+        return 1
+    rospy.on_shutdown(node.shutdown)
+    rospy.spin()
+    return 0
