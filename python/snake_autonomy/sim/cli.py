@@ -43,6 +43,7 @@ def add_arguments(parser):
     exp.add_argument("--feedback", choices=("mocap", "vio", "both"), default="both")
     exp.add_argument("--out", required=True, metavar="DIR")
     exp.add_argument("--jobs", type=int, default=1, help="parallel runs (default 1; the machine is shared)")
+    exp.add_argument("--starts", help="single only: a subset of the 13 start poses, e.g. 0,7 or 0-3 (default all)")
     exp.add_argument("--time-limit", type=float, metavar="S", help="override the mission's time limit")
     _common(exp)
 
@@ -100,6 +101,7 @@ def _experiment(args) -> int:
     for fb in feedbacks:
         summaries.append(run_experiment(args.name, seeds, fb, args.out, jobs=max(1, args.jobs),
                                         plots=not args.no_plots, progress=not args.no_progress,
+                                        starts=parse_seeds(args.starts) if args.starts else None,
                                         time_limit_s=args.time_limit, sim_config=args.sim_config,
                                         gaits=args.gaits))
     print(TABLE_HEADER)

@@ -50,13 +50,20 @@ def _single_starts() -> List[tuple]:
 SINGLE_STARTS = _single_starts()
 
 
-def runs_of(name: str, seeds: Sequence[int], feedback: str, **spec_kwargs) -> List[RunSpec]:
+def runs_of(name: str, seeds: Sequence[int], feedback: str, starts: Optional[Sequence[int]] = None,
+            **spec_kwargs) -> List[RunSpec]:
+    """The runs of an experiment; `starts`: indices into SINGLE_STARTS (single only; None: all 13)."""
     if name not in EXPERIMENTS:
         raise ValueError(f"experiment: expected one of {', '.join(EXPERIMENTS)}, got {name!r}")
-    starts = SINGLE_STARTS if name == "single" else [(0.0, 0.0, 0.0)]
+    poses = SINGLE_STARTS if name == "single" else [(0.0, 0.0, 0.0)]
+    chosen = range(len(poses)) if starts is None or name != "single" else list(starts)
+    bad = [k for k in chosen if not 0 <= k < len(poses)]
+    if bad:
+        raise ValueError(f"starts: {bad} out of range 0-{len(poses) - 1}")
     out = []
     for seed in seeds:
-        for k, start in enumerate(starts):
+        for k in chosen:
+            start = poses[k]
             label = f"seed{seed}" + (f"_start{k:02d}" if name == "single" else "")
             out.append(RunSpec(mission=EXPERIMENTS[name], seed=int(seed), feedback=feedback, start=start,
                                label=label, **spec_kwargs))
@@ -72,12 +79,12 @@ def _run_one(args):
 
 
 def run_experiment(name: str, seeds: Sequence[int], feedback: str, out, jobs: int = 1, plots: bool = True,
-                   progress: bool = True, **spec_kwargs) -> Dict[str, Any]:
+                   progress: bool = True, starts: Optional[Sequence[int]] = None, **spec_kwargs) -> Dict[str, Any]:
     """Runs every (seed, start) of an experiment with one feedback; writes the runs and the summary
     into out/<feedback>/. Returns the summary (see summarise)."""
     out_dir = Path(out) / feedback
     out_dir.mkdir(parents=True, exist_ok=True)
-    specs = runs_of(name, seeds, feedback, **spec_kwargs)
+    specs = runs_of(name, seeds, feedback, starts=starts, **spec_kwargs)
     work = [(s, out_dir, plots) for s in specs]
     results = []
     t0 = time.perf_counter()
@@ -209,6 +216,7 @@ def summary_figure(out_dir: Path, summary, results) -> Path:
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 6), gridspec_kw={"width_ratios": [1.2, 1]})
     cmap = plt.get_cmap("tab10")
     waypoints = None
+    labelled = set()
     for n, (label, m) in enumerate(results):
         traj = out_dir / label / "trajectory.csv"
         if not traj.is_file():
@@ -216,7 +224,8 @@ def summary_figure(out_dir: Path, summary, results) -> Path:
         data = np.genfromtxt(traj, delimiter=",", names=True)
         seed = m.get("seed", 0) or 0
         ax.plot(data["x_true"], data["y_true"], "-", lw=0.8, alpha=0.8, color=cmap(seed % 10),
-                label=f"seed {seed}" if label.endswith(("start00",)) or "start" not in label else None)
+                label=None if seed in labelled else f"seed {seed}")
+        labelled.add(seed)
         ax.plot(data["x_true"][0], data["y_true"][0], "o", ms=3, color=cmap(seed % 10))
         for d in m.get("disturbances", []):
             t = d["t_s"]
@@ -240,7 +249,8 @@ def summary_figure(out_dir: Path, summary, results) -> Path:
     data = [[m["waypoints"][k]["time_s"] for _, m in results
              if k < len(m["waypoints"]) and m["waypoints"][k]["time_s"] is not None] for k in range(n_wp)]
     if any(data):
-        bx.boxplot([d if d else [np.nan] for d in data], labels=[f"WP{k}" for k in range(n_wp)])
+        bx.boxplot([d if d else [np.nan] for d in data])
+        bx.set_xticks(range(1, n_wp + 1), [f"WP{k}" for k in range(n_wp)])
         for k, d in enumerate(data):
             bx.plot(np.full(len(d), k + 1) + np.random.default_rng(k).uniform(-0.15, 0.15, len(d)), d, ".",
                     ms=4, alpha=0.6, color="tab:blue")

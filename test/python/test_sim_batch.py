@@ -1,0 +1,125 @@
+"""The batch runner: closed loop on the simulated robot without ROS (sim.batch, sim.experiments).
+
+Kept small for `make test` (about 20 s): the single-waypoint experiment on two seeds and two of its
+13 start poses (one behind the waypoint, one in front); the full sweeps are `snake_autonomy sim
+experiment ...` (README)."""
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from snake_autonomy import _core
+from snake_autonomy.control import WaypointTracker
+from snake_autonomy.missions import MissionError, load_defaults
+from snake_autonomy.sim.batch import BatchRun, RunSpec
+from snake_autonomy.sim.disturbances import parse_triggers
+from snake_autonomy.sim.experiments import SINGLE_STARTS, run_experiment
+from snake_autonomy.sim.sim_driver import SimDriver
+
+ROOT = Path(__file__).resolve().parents[2]
+SHORT = str(ROOT / "test" / "ros" / "missions" / "sim_short.yaml")
+
+
+def test_single_waypoint_experiment_two_seeds(tmp_path):
+    """Every run reaches the waypoint within d_th and psi_wp, no roll-over, no goal beyond a limit;
+    the summary table and figure are written."""
+    summary = run_experiment("single", [0, 1], "mocap", tmp_path, starts=[1, 6], progress=False)
+    assert summary["runs"] == 4 and summary["accepted"], summary["failed_runs"]
+    assert summary["rolled_over"] == 0 and summary["limit_violations"] == 0
+    assert summary["final_distance_m"]["max"] <= 0.35
+    assert summary["final_yaw_error_deg"]["max"] <= 30.0
+    out = tmp_path / "mocap"
+    for name in ("summary.json", "summary.md", "summary.png"):
+        assert (out / name).is_file()
+    m = json.loads((out / "seed0_start01" / "metrics.json").read_text())
+    assert m["start"] == list(SINGLE_STARTS[1])
+    assert (out / "seed0_start01" / "trajectory.png").is_file()
+
+
+def test_sim_run_cli_metrics_contract(tmp_path):
+    """`snake_autonomy sim run` writes metrics.json with the keys checks rely on; VIO feedback goes
+    through the pose remapper and gets evaluated against the plant's camera pose."""
+    out = tmp_path / "run"
+    rc = subprocess.call([sys.executable, str(ROOT / "scripts" / "snake_autonomy"), "sim", "run", "--mission", SHORT,
+                          "--seed", "2", "--feedback", "vio", "--out", str(out), "--start", "0,0,0",
+                          "--time-limit", "40", "--no-progress"])
+    m = json.loads((out / "metrics.json").read_text())
+    assert rc == 0, m["outcome"]
+    for key, kind in (("rolled_over", bool), ("limit_violations", int), ("sim_time_s", float)):
+        assert isinstance(m[key], kind)
+    assert m["limit_violations"] == 0 and m["rolled_over"] is False
+    w = m["waypoints"][0]
+    assert w["reached"] is True and isinstance(w["time_s"], float)
+    assert w["final_distance_m"] <= 0.35 and abs(w["final_yaw_error_deg"]) <= 30.0
+    assert m["vio"]["samples"] > 100
+    assert m["vio_evaluation"]["ape_translation_m"]["rmse"] < 0.2
+    assert (out / "trajectory.png").is_file() and (out / "evaluation" / "stats.json").is_file()
+
+
+def test_sim_run_cli_usage_errors(tmp_path):
+    cli = [sys.executable, str(ROOT / "scripts" / "snake_autonomy"), "sim", "run", "--out", str(tmp_path)]
+    assert subprocess.call(cli + ["--mission", "no_such_mission"], stderr=subprocess.DEVNULL) == 2
+    assert subprocess.call(cli + ["--mission", SHORT, "--start", "1,2"], stderr=subprocess.DEVNULL) == 2
+
+
+def test_batch_run_deterministic_per_seed():
+    """Same seed, same everything: the same decisions and path; another seed: another path."""
+    def run(seed):
+        r = BatchRun(RunSpec(mission=SHORT, seed=seed, time_limit_s=8.0)).run()
+        return r.decisions, r.trajectory
+    (d1, t1), (d2, t2), (_, t3) = run(4), run(4), run(5)
+    assert d1["gait"] == d2["gait"] and d1["distance"] == d2["distance"]
+    assert np.array_equal(t1["x_true"], t2["x_true"]) and np.array_equal(t1["y_true"], t2["y_true"])
+    assert not np.array_equal(t1["x_true"], t3["x_true"])
+
+
+def test_sim_driver_holds_on_stale_pose_and_keeps_goals_in_limits():
+    robot = _core.RobotModel.from_yaml(str(ROOT / "config" / "robots" / "cobra.yaml"))
+    library = _core.GaitLibrary.from_yaml(str(ROOT / "config" / "gaits.yaml"))
+    drv = SimDriver(robot, library, pose_timeout_s=0.5)
+    q = np.zeros(robot.num_joints)
+    assert drv.command_gait("sidewind", True, math.radians(20)) == ""
+    assert "unknown gait" in drv.command_gait("moonwalk")
+    assert "not steerable" in drv.command_gait("turn_left", True, 0.1)
+    moving = []
+    last_pose = None
+    for k in range(1, 600):
+        t = k * 0.01
+        if t < 3.0:
+            drv.set_base_pose(t, [0, 0, 0], [0, 0, 0, 1])
+            last_pose = t
+        prev = drv.goal_rad.copy() if drv.goal_rad is not None else q
+        goal = drv.update(t, 0.01, q)
+        assert np.all(goal <= robot.joint_upper_rad + 1e-12) and np.all(goal >= robot.joint_lower_rad - 1e-12)
+        assert np.all(np.abs(goal - prev) <= 4.5 * 0.01 + 1e-9)          # the slew limit
+        moving.append(np.max(np.asarray(drv.cpg.amplitudes)))
+        assert (drv.com_pose() is not None) == (t - last_pose <= 0.5 + 1e-9)   # com_pose only while fresh
+    assert moving[250] > 0.5                     # sidewinding before the pose went stale
+    assert moving[-1] < 0.05                     # amplitudes decayed: locomotion held (ERRATA #7)
+
+
+def test_far_blend_max_gap_steers_on_the_bearing_behind_the_waypoint():
+    """Behind the waypoint (heading 0, robot at +1.2 m facing it): Algorithm 1 as printed blends the
+    opposite headings into a perpendicular error; with the gap limit the bearing alone steers."""
+    literal = WaypointTracker([(0.0, 0.0, 0.0)])
+    gapped = WaypointTracker([(0.0, 0.0, 0.0)], far_blend_max_gap=math.radians(90))
+    _, _, _, w, e = literal.errors(1.2, 0.05, math.pi, 0)
+    assert w > 0.1 and abs(e) > math.radians(40)              # would turn away from the waypoint
+    _, _, rel, w, e = gapped.errors(1.2, 0.05, math.pi, 0)
+    assert w == 0.0 and e == pytest.approx(rel) and abs(e) < math.radians(5)
+    assert gapped.errors(0.2, 0.0, math.pi, 0)[3] > 0.5        # NEAR branch: the blend as printed
+
+
+def test_tracker_overrides_and_disturbance_triggers_are_checked():
+    d = load_defaults(overrides={"delta0_deg": 7.0, "heading_offset_deg": 81.0})
+    assert d["tracker"]["delta0"] == pytest.approx(math.radians(7.0)) and d["heading_offset_deg"] == 81.0
+    with pytest.raises(MissionError, match="delta_zero_deg: unknown key"):
+        load_defaults(overrides={"delta_zero_deg": 7.0})
+    with pytest.raises(ValueError) as exc:
+        parse_triggers([{"link": "link_6", "force_n": [0, 1], "waypoint": 3, "distance_m": -1}], 2)
+    text = str(exc.value)
+    assert "force_n: expected 3 numbers" in text and "waypoint" in text and "distance_m: must be > 0" in text
