@@ -60,12 +60,12 @@ def test_seed_draws_within_ranges(config):
     assert nominal.floor_friction == pytest.approx(config.physics.floor_friction.nominal)
 
 
-@pytest.mark.parametrize("source, bound", [("library", 0.25), ("serpenoid", 0.40)])
+@pytest.mark.parametrize("source, bound", [("library", 0.18), ("serpenoid", 0.40)])
 def test_sidewinding_moves_sideways(robot, config, library, source, bound):
-    """Steady sidewinding at 0.7 Hz (yaw 45 deg, pitch 15 deg, waves 90 deg apart), seeds 0-4
-    (bench/sim_locomotion): the library's gait (40 deg per joint) 0.33-0.34 m/s, the serpenoid
-    of sim/serpenoid.py (30 deg per joint) 0.52-0.54 m/s, as the thesis's simulation (about
-    0.5 m/s, ERRATA #8). Each bound is about 75 % of the measured minimum: a broken contact model,
+    """Steady sidewinding (yaw 45 deg, pitch 15 deg, waves 90 deg apart, 30 deg per joint), seeds
+    0-4 (bench/sim_locomotion): the library's gait at its 0.35 Hz (the 1 Hz tracker's frequency,
+    gaits.yaml) 0.24 m/s, the serpenoid of sim/serpenoid.py at 0.7 Hz 0.52-0.54 m/s, as the thesis's
+    simulation (about 0.5 m/s, ERRATA #8). Each bound is about 75 % of the measured minimum: a broken contact model,
     gait phase or servo model falls far below it (a snake that slides in place, rolls or lies
     still); friction and gain randomisation does not. The upper bound catches a plant that
     launches itself: 1.5 m/s is not reachable (ERRATA #8)."""
@@ -78,8 +78,9 @@ def test_sidewinding_moves_sideways(robot, config, library, source, bound):
 
 
 def test_steering_turns_both_ways(robot, config, library):
-    """Amplitude modulation (COBRA: 2-3 deg/s per degree of delta; the plant 2.1 with the
-    library's sidewinding): delta > 0 turns counter-clockwise relative to delta < 0."""
+    """Amplitude modulation: delta > 0 turns counter-clockwise relative to delta < 0. (COBRA: 2-3
+    deg/s per degree of delta; the plant 2.0-2.5 with the library's sidewinding at 0.7 Hz, 0.6-1.0
+    at the library's 0.35 Hz: the turn per gait cycle is what stays.)"""
     params = config.draw(seed=4)
     delta = np.radians(8.0)
     left = run_open_loop(Plant(robot, params), CpgGait(robot, library, "sidewind", delta),
@@ -87,14 +88,14 @@ def test_steering_turns_both_ways(robot, config, library):
     right = run_open_loop(Plant(robot, params), CpgGait(robot, library, "sidewind", -delta),
                           cycles=2, settle_cycles=2)
     per_degree = (left.turn_rate_deg_s - right.turn_rate_deg_s) / 16.0
-    assert 1.0 < per_degree < 4.0
+    assert 0.3 < per_degree < 4.0
 
 
 @pytest.mark.parametrize("gait, sign", [("turn_left", +1), ("turn_right", -1),
                                          ("near_turn_left", +1), ("near_turn_right", -1)])
 def test_turn_in_place_directions(robot, config, library, gait, sign):
     """gaits.yaml's convention (REP 103): *_left turns toward positive yaw, *_right negative,
-    in place (measured: turn 25-32 deg/s, near turns 14 deg/s, all under 0.03 m/s)."""
+    in place (measured at 0.35 Hz: turns +-26 deg/s, near turns +-17 deg/s, all under 0.01 m/s)."""
     f = run_open_loop(Plant(robot, config.draw(seed=2)), CpgGait(robot, library, gait),
                       cycles=2)
     assert sign * f.turn_rate_deg_s > 8.0
