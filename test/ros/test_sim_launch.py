@@ -12,7 +12,6 @@ driver's loop jitter, bus latency and a mission that starts before the first pos
   ROS path is within 0.5 m of the batch path) and end within 0.5 m.
 """
 import itertools
-import math
 import threading
 import time
 import unittest

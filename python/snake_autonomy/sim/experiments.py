@@ -15,7 +15,6 @@ ground-truth path over the waypoints, and the time each waypoint took). Acceptan
 waypoint reached (within d_th and psi_wp: the tracker's own test) in every run, no roll-over, no
 joint goal beyond a limit, and in the disturbance experiment recovery after every push and twist.
 """
-import json
 import math
 import os
 import sys
