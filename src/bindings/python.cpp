@@ -251,8 +251,12 @@ void bind_kinematics(py::module_& m) {
 // uses, the control table, conversions, and SerialBus (the GIL is released while it waits).
 }  // namespace
 
+#include "snake_autonomy/core/driver_config.hpp"
+#include "snake_autonomy/core/driver_controller.hpp"
+#include "snake_autonomy/core/gait_command.hpp"
 #include "snake_autonomy/dynamixel/control_table.hpp"
 #include "snake_autonomy/dynamixel/conversions.hpp"
+#include "snake_autonomy/dynamixel/fake_servo_bus.hpp"
 #include "snake_autonomy/dynamixel/protocol.hpp"
 #include "snake_autonomy/dynamixel/serial_bus.hpp"
 
@@ -423,8 +427,10 @@ void bind_dynamixel(py::module_& parent) {
         "2.69 mA per unit, signed.");
   m.def("amps_to_current", [](double amps) { return dx::amps_to_current(amps); }, py::arg("amps"));
 
+  py::class_<dx::ServoBus>(m, "ServoBus", "A Dynamixel bus the driver talks to (SerialBus, FakeServoBus); abstract.");
+
   using Bus = dx::SerialBus;
-  py::class_<Bus>(m, "SerialBus", "ServoBus on a serial port (termios2); every call returns a Status, never raises.")
+  py::class_<Bus, dx::ServoBus>(m, "SerialBus", "ServoBus on a serial port (termios2); every call returns a Status, never raises.")
       .def(py::init([](const std::string& device, int baud_bps, bool low_latency, double latency_s,
                        double return_delay_s, double margin) {
              dx::SerialConfig c;
@@ -504,16 +510,193 @@ void bind_dynamixel(py::module_& parent) {
       .def_property_readonly("low_latency_applied", [](Bus& b) { return b.port().low_latency_applied(); },
                              "False when the driver refused ASYNC_LOW_LATENCY (always on a pty).");
 }
+
 // ---------------------------------------------------------------------------------------------
+// The driver's control loop (DriverController) and the in-process bus it can run on
+// (FakeServoBus, submodule dynamixel): the batch simulator runs the very same controller as
+// driver_node, the plant's servo states written into the fake bus and its goals read back.
+
+double yaw_of(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)); }
+
+void bind_driver(py::module_& m) {
+  py::class_<DriverConfig>(m, "DriverConfig", "Configuration of DriverController (config/driver.yaml documents every key).")
+      .def(py::init([](bool fast_sync_read, int max_failed_cycles, int status_every_cycles,
+                       const std::string& fault_action, const std::string& shutdown_action, bool torque_on_start,
+                       double max_joint_velocity_rad_s, double max_frequency_hz, double max_step_s,
+                       int plausible_margin_ticks, double pose_timeout_s, bool require_pose) {
+             DriverConfig c;
+             std::vector<std::string> errors;
+             if (!parse_safe_action(fault_action, &c.fault_action))
+               errors.push_back("fault_action: '" + fault_action + "', expected 'hold' or 'torque_off'");
+             if (!parse_safe_action(shutdown_action, &c.shutdown_action))
+               errors.push_back("shutdown_action: '" + shutdown_action + "', expected 'hold' or 'torque_off'");
+             c.fast_sync_read = fast_sync_read;
+             c.max_failed_cycles = max_failed_cycles;
+             c.status_every_cycles = status_every_cycles;
+             c.torque_on_start = torque_on_start;
+             c.max_joint_velocity_rad_s = max_joint_velocity_rad_s;
+             c.max_frequency_hz = max_frequency_hz;
+             c.max_step_s = max_step_s;
+             c.plausible_margin_ticks = plausible_margin_ticks;
+             c.pose_timeout_s = pose_timeout_s;
+             c.require_pose = require_pose;
+             for (const auto& e : c.validate()) errors.push_back(e);
+             if (!errors.empty()) {
+               std::string what = "driver configuration:";
+               for (const auto& e : errors) what += "\n  " + e;
+               throw py::value_error(what);
+             }
+             return c;
+           }),
+           py::kw_only(), py::arg("fast_sync_read") = DriverConfig{}.fast_sync_read,
+           py::arg("max_failed_cycles") = DriverConfig{}.max_failed_cycles,
+           py::arg("status_every_cycles") = DriverConfig{}.status_every_cycles,
+           py::arg("fault_action") = std::string(to_string(DriverConfig{}.fault_action)),
+           py::arg("shutdown_action") = std::string(to_string(DriverConfig{}.shutdown_action)),
+           py::arg("torque_on_start") = DriverConfig{}.torque_on_start,
+           py::arg("max_joint_velocity_rad_s") = DriverConfig{}.max_joint_velocity_rad_s,
+           py::arg("max_frequency_hz") = DriverConfig{}.max_frequency_hz,
+           py::arg("max_step_s") = DriverConfig{}.max_step_s,
+           py::arg("plausible_margin_ticks") = DriverConfig{}.plausible_margin_ticks,
+           py::arg("pose_timeout_s") = DriverConfig{}.pose_timeout_s, py::arg("require_pose") = DriverConfig{}.require_pose,
+           "The defaults with keyword overrides; ValueError lists every problem (DriverConfig::validate).")
+      .def("validate", &DriverConfig::validate, "Every problem, naming key and value (empty when usable).")
+      .def_readwrite("fast_sync_read", &DriverConfig::fast_sync_read)
+      .def_readwrite("max_failed_cycles", &DriverConfig::max_failed_cycles)
+      .def_readwrite("status_every_cycles", &DriverConfig::status_every_cycles)
+      .def_property_readonly("fault_action", [](const DriverConfig& c) { return std::string(to_string(c.fault_action)); },
+                             "'hold' or 'torque_off'")
+      .def_property_readonly("shutdown_action",
+                             [](const DriverConfig& c) { return std::string(to_string(c.shutdown_action)); },
+                             "'hold' or 'torque_off'")
+      .def_readwrite("torque_on_start", &DriverConfig::torque_on_start)
+      .def_readwrite("max_joint_velocity_rad_s", &DriverConfig::max_joint_velocity_rad_s)
+      .def_readwrite("max_frequency_hz", &DriverConfig::max_frequency_hz)
+      .def_readwrite("max_step_s", &DriverConfig::max_step_s)
+      .def_readwrite("plausible_margin_ticks", &DriverConfig::plausible_margin_ticks)
+      .def_readwrite("pose_timeout_s", &DriverConfig::pose_timeout_s)
+      .def_readwrite("require_pose", &DriverConfig::require_pose);
+
+  py::module_ dm = m.attr("dynamixel").cast<py::module_>();
+  using Fake = dx::FakeServoBus;
+  py::class_<Fake, dx::ServoBus>(dm, "FakeServoBus",
+                                 "In-process ServoBus: control-table memory per servo, faults on command (tests, "
+                                 "the batch simulator).")
+      .def(py::init<const dx::ControlTable&, const std::vector<std::uint8_t>&>(), py::arg("table"), py::arg("ids"),
+           "Memory from the table's defaults; ConfigError for an ID outside 0..252 or a repeated one.")
+      .def("get", &Fake::get, py::arg("id"), py::arg("entry"),
+           "Value of a control-table entry (e.g. 'goal_position'); ConfigError for an unknown ID or entry.")
+      .def("set", &Fake::set, py::arg("id"), py::arg("entry"), py::arg("value"),
+           "Writes an entry's memory, no checks (e.g. 'present_position' ticks from a plant).")
+      .def("set_follow_goal", &Fake::set_follow_goal, py::arg("follow"),
+           "True (default): a goal position becomes the present position at once; False: present values are the caller's.")
+      .def("set_dead", &Fake::set_dead, py::arg("id"), py::arg("dead"), "The servo never answers (TIMEOUT).")
+      .def("inject_timeouts", &Fake::inject_timeouts, py::arg("id"), py::arg("count"),
+           "The next `count` replies of the servo time out.")
+      .def("inject_crc_errors", &Fake::inject_crc_errors, py::arg("id"), py::arg("count"),
+           "The next `count` replies of the servo have a bad CRC.")
+      .def("set_garbage", &Fake::set_garbage, py::arg("id"), py::arg("garbage"),
+           "Replies carry garbage bytes with a valid CRC.")
+      .def("set_hardware_error", &Fake::set_hardware_error, py::arg("id"), py::arg("bits"),
+           "Hardware Error Status bits: alert bit in every reply, torque off (REBOOT clears it).")
+      .def("set_bus_down", &Fake::set_bus_down, py::arg("down"), "Every call returns IO_ERROR (the port is gone).")
+      .def("clear_faults", &Fake::clear_faults, "Removes every injected fault.")
+      .def("counters", [](const Fake& b) { return counters_dict(b.counters()); }, "Error and traffic counters (dict).")
+      .def("reset_counters", &Fake::reset_counters, "Zero the counters.")
+      .def_property_readonly("sync_writes", &Fake::sync_writes, "SYNC_WRITEs received")
+      .def_property_readonly("sync_reads", &Fake::sync_reads, "SYNC_READs received")
+      .def("goal_writes", &Fake::goal_writes, py::arg("id"), "Goal positions the servo accepted.")
+      .def_property_readonly("refused_writes", &Fake::refused_writes, "writes refused (range, limits, EEPROM)");
+
+  py::class_<DriverController>(
+      m, "DriverController",
+      "The driver's control loop (src/core/driver_controller.cpp), the one driver_node runs: gait commands, CPG + "
+      "steering, stale-pose gating, slew limit, joint limits, faults, kinematics. Call start(), then update() at "
+      "the loop's rate; everything from one thread.")
+      .def(py::init<const RobotModel&, const GaitLibrary&, const dx::ControlTable&, dx::ServoBus&, const DriverConfig&>(),
+           py::arg("model"), py::arg("gaits"), py::arg("table"), py::arg("bus"), py::arg("config"),
+           py::keep_alive<1, 5>(),
+           "Checks everything (ConfigError lists every problem); keeps the bus alive as long as the controller.")
+      .def("start", &DriverController::start, py::arg("t_s"),
+           "Talks to every servo (model, mode, limits, errors, position); torque on and holding "
+           "(torque_on_start) or stopped; ConfigError lists every servo that fails.")
+      .def("update", &DriverController::update, py::arg("t_s"), py::arg("dt_s"),
+           "One cycle: read the servos, gait, CPG, goals, write, kinematics. False when the cycle failed.")
+      .def("shutdown", &DriverController::shutdown, "Leaves the servos as shutdown_action says; False when the bus failed.")
+      .def(
+          "command_gait",
+          [](DriverController& d, const std::string& gait, const std::vector<double>& amplitude,
+             const std::vector<double>& omega, const std::vector<double>& phase, const std::vector<double>& bias,
+             bool steer, double delta_rad) {
+            GaitCommandRequest r;
+            r.gait = gait;
+            r.amplitude = amplitude;
+            r.omega = omega;
+            r.phase = phase;
+            r.bias = bias;
+            r.steer = steer;
+            r.delta_rad = delta_rad;
+            return d.command_gait(r);
+          },
+          py::arg("gait") = "", py::arg("amplitude") = std::vector<double>{}, py::arg("omega") = std::vector<double>{},
+          py::arg("phase") = std::vector<double>{}, py::arg("bias") = std::vector<double>{}, py::arg("steer") = false,
+          py::arg("delta_rad") = 0.0,
+          "A gait command (msg/GaitCommand.msg), taken at the next update(). '' when accepted, else every reason.")
+      .def(
+          "set_base_pose",
+          [](DriverController& d, double t_s, const Eigen::Vector3d& position, const Eigen::Vector4d& orientation) {
+            return d.set_base_pose(t_s, position,
+                                   Eigen::Quaterniond(orientation(3), orientation(0), orientation(1), orientation(2)));
+          },
+          py::arg("t_s"), py::arg("position"), py::arg("orientation"),
+          "base_link pose at t_s (the loop's clock), orientation as (x, y, z, w). False (ignored) when not finite.")
+      .def_property_readonly("state", [](const DriverController& d) { return std::string(to_string(d.state())); },
+                             "'stopped', 'holding', 'running' or 'fault'")
+      .def_property_readonly("fault_reason", [](const DriverController& d) { return std::string(d.fault_reason()); },
+                             "the active fault ('' when none)")
+      .def_property_readonly("commanded_gait", &DriverController::commanded_gait, "the gait of the last accepted command")
+      .def_property_readonly("last_refusal", &DriverController::last_refusal, "why the last refused command was refused")
+      .def_property_readonly("commands_accepted", &DriverController::commands_accepted)
+      .def_property_readonly("commands_refused", &DriverController::commands_refused)
+      .def_property_readonly("ids", &DriverController::ids, "servo IDs in joint order")
+      .def_property_readonly("position_rad", [](const DriverController& d) { return Eigen::VectorXd(d.position_rad()); },
+                             "measured joint angles")
+      .def_property_readonly("goal_rad", [](const DriverController& d) { return Eigen::VectorXd(d.goal_rad()); },
+                             "joint goals of the last cycle (before rounding to ticks)")
+      .def_property_readonly("pose_fresh", &DriverController::pose_fresh, "the base pose is younger than pose_timeout_s")
+      .def_property_readonly("locomotion_gated", &DriverController::locomotion_gated,
+                             "running, but held for a stale base pose")
+      .def_property_readonly("cpg", &DriverController::cpg, py::return_value_policy::reference_internal,
+                             "the loop's CPG (read only)")
+      .def_property_readonly("kinematics", &DriverController::kinematics, py::return_value_policy::reference_internal,
+                             "KinematicState of the last cycle (base pose of the latest sample, measured joints)")
+      .def_property_readonly("com", [](const DriverController& d) { return Eigen::Vector3d(d.kinematics().com); },
+                             "(3,) centre of mass of the last cycle, world frame")
+      .def_property_readonly("vc_rotation",
+                             [](const DriverController& d) { return Eigen::Matrix3d(d.kinematics().vc_rotation); },
+                             "(3, 3) virtual chassis of the last cycle")
+      .def_property_readonly("com_yaw", [](const DriverController& d) { return yaw_of(d.kinematics().vc_rotation); },
+                             "yaw of the virtual chassis (rad), as com_pose carries it")
+      .def("ticks_to_joint_rad", &DriverController::ticks_to_joint_rad, py::arg("joint"), py::arg("ticks"),
+           "Servo ticks -> joint angle (direction, zero offset).")
+      .def(
+          "joint_rad_to_ticks",
+          [](const DriverController& d, int joint, double rad) -> py::object {
+            std::int32_t t = 0;
+            return d.joint_rad_to_ticks(joint, rad, &t) ? py::object(py::int_(t)) : py::object(py::none());
+          },
+          py::arg("joint"), py::arg("rad"), "Joint angle -> servo ticks (no clamping); None when not representable.");
+}
 
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
-  m.doc() = "snake_autonomy C++ core: robot model, CPG, gaits, steering, kinematics, Dynamixel Protocol 2.0";
+  m.doc() = "snake_autonomy C++ core: robot model, CPG, gaits, steering, kinematics, Dynamixel Protocol 2.0, the driver's loop";
   py::register_exception<ConfigError>(m, "ConfigError", PyExc_ValueError);
   bind_robot_model(m);
   bind_cpg(m);
   bind_gaits(m);
   bind_kinematics(m);
   bind_dynamixel(m);
+  bind_driver(m);
 }

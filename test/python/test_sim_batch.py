@@ -18,7 +18,6 @@ from snake_autonomy.missions import MissionError, load_defaults
 from snake_autonomy.sim.batch import BatchRun, RunSpec
 from snake_autonomy.sim.disturbances import parse_triggers
 from snake_autonomy.sim.experiments import SINGLE_STARTS, run_experiment
-from snake_autonomy.sim.sim_driver import SimDriver
 
 ROOT = Path(__file__).resolve().parents[2]
 SHORT = str(ROOT / "test" / "ros" / "missions" / "sim_short.yaml")
@@ -77,29 +76,70 @@ def test_batch_run_deterministic_per_seed():
     assert not np.array_equal(t1["x_true"], t3["x_true"])
 
 
-def test_sim_driver_holds_on_stale_pose_and_keeps_goals_in_limits():
+def _controller(**config):
+    """The bound C++ DriverController on a FakeServoBus whose present values stay where the test puts them."""
     robot = _core.RobotModel.from_yaml(str(ROOT / "config" / "robots" / "cobra.yaml"))
     library = _core.GaitLibrary.from_yaml(str(ROOT / "config" / "gaits.yaml"))
-    drv = SimDriver(robot, library, pose_timeout_s=0.5)
-    q = np.zeros(robot.num_joints)
-    assert drv.command_gait("sidewind", True, math.radians(20)) == ""
-    assert "unknown gait" in drv.command_gait("moonwalk")
-    assert "not steerable" in drv.command_gait("turn_left", True, 0.1)
+    table = _core.dynamixel.ControlTable.from_yaml(str(ROOT / "config" / "dynamixel" / "xh540_w270.yaml"))
+    bus = _core.dynamixel.FakeServoBus(table, robot.servo_ids)
+    bus.set_follow_goal(False)
+    return robot, bus, _core.DriverController(robot, library, table, bus, _core.DriverConfig(**config))
+
+
+def test_driver_controller_holds_on_stale_pose_and_keeps_goals_in_limits():
+    robot, bus, drv = _controller(pose_timeout_s=0.5)
+    assert "torque is off" in drv.command_gait(gait="sidewind")      # refused before start
+    drv.start(0.0)
+    assert drv.state == "holding" and all(bus.get(i, "torque_enable") == 1 for i in robot.servo_ids)
+    assert drv.command_gait(gait="sidewind", steer=True, delta_rad=math.radians(20)) == ""
+    assert "unknown gait" in drv.command_gait(gait="moonwalk")
+    assert "not steerable" in drv.command_gait(gait="turn_left", steer=True, delta_rad=0.1)
     moving = []
     last_pose = None
+    prev = drv.goal_rad
     for k in range(1, 600):
         t = k * 0.01
         if t < 3.0:
-            drv.set_base_pose(t, [0, 0, 0], [0, 0, 0, 1])
+            assert drv.set_base_pose(t, [0, 0, 0], [0, 0, 0, 1])
             last_pose = t
-        prev = drv.goal_rad.copy() if drv.goal_rad is not None else q
-        goal = drv.update(t, 0.01, q)
+        assert drv.update(t, 0.01)
+        goal = drv.goal_rad
         assert np.all(goal <= robot.joint_upper_rad + 1e-12) and np.all(goal >= robot.joint_lower_rad - 1e-12)
         assert np.all(np.abs(goal - prev) <= 4.5 * 0.01 + 1e-9)          # the slew limit
+        ticks = np.array([bus.get(i, "goal_position") for i in robot.servo_ids])
+        assert np.all(np.abs(np.array([drv.ticks_to_joint_rad(j, int(v)) for j, v in enumerate(ticks)]) - goal)
+                      <= math.pi / 4096 + 1e-12)                          # written to the bus, rounded to ticks
+        prev = goal
         moving.append(np.max(np.asarray(drv.cpg.amplitudes)))
-        assert (drv.com_pose() is not None) == (t - last_pose <= 0.5 + 1e-9)   # com_pose only while fresh
+        assert drv.pose_fresh == (t - last_pose <= 0.5 + 1e-9)            # com_pose only while fresh
+    assert drv.state == "running" and drv.locomotion_gated
     assert moving[250] > 0.5                     # sidewinding before the pose went stale
     assert moving[-1] < 0.05                     # amplitudes decayed: locomotion held (ERRATA #7)
+    assert drv.set_base_pose(6.0, [0, 0, 0], [0, 0, 0, 0]) is False   # no length: ignored
+
+
+def test_driver_controller_binding_config_faults_and_lifetime():
+    with pytest.raises(ValueError, match="max_joint_velocity_rad_s"):
+        _core.DriverConfig(max_joint_velocity_rad_s=-1.0)
+    with pytest.raises(ValueError, match="fault_action"):
+        _core.DriverConfig(fault_action="explode")
+    assert _core.DriverConfig(pose_timeout_s=0.25).pose_timeout_s == 0.25
+    robot, bus, drv = _controller(max_failed_cycles=3)
+    del bus                                       # the controller keeps its bus alive
+    import gc
+    gc.collect()
+    drv.start(0.0)
+    drv.set_base_pose(0.0, [1.0, 2.0, 0.0], [0, 0, 0, 1])
+    assert drv.update(0.01, 0.01)
+    ref = _core.Kinematics(robot).compute([1.0, 2.0, 0.0], [0, 0, 0, 1], np.zeros(robot.num_joints))
+    assert np.allclose(drv.com, ref.com) and np.allclose(drv.vc_rotation, ref.vc_rotation)
+    assert drv.com_yaw == pytest.approx(math.atan2(ref.vc_rotation[1, 0], ref.vc_rotation[0, 0]))
+    robot2, bus2, drv2 = _controller(max_failed_cycles=3)
+    drv2.start(0.0)
+    bus2.set_dead(robot2.servo_ids[4], True)
+    for k in range(1, 4):
+        assert drv2.update(k * 0.01, 0.01) is False
+    assert drv2.state == "fault" and "servo 5" in drv2.fault_reason
 
 
 def test_far_blend_max_gap_steers_on_the_bearing_behind_the_waypoint():

@@ -7,12 +7,16 @@
 Every 10 ms of simulated time (the driver's 100 Hz):
 
     plant.step_to(t) -> pose source (mocap 100 Hz | simulated RTAB-Map 30 Hz -> gate -> eq. 3.1)
-    -> SimDriver.update (CPG, steering, slew limit, joint limits, kinematics: the driver's cycle)
-    -> plant.set_joint_targets -> com_pose (fresh base pose only) -> MissionRunner.on_pose
+    -> DriverController.set_base_pose
+    -> servo states (MujocoServoBackend: ticks, velocity, current) into a FakeServoBus
+    -> DriverController.update (the C++ driver's cycle: gait command, CPG + steering, stale-pose
+       gating, slew limit, joint limits, faults, kinematics) -> goal ticks from the bus -> plant
+    -> com_pose (fresh base pose only) -> MissionRunner.on_pose
 
 and at the tracker's rate (config/tracker.yaml rate_hz, 1 Hz) MissionRunner.step -> gait command.
 The classes are the ROS path's: the mission node wraps MissionRunner, pose_remap_node the gate and
-remapper, driver_node the C++ twin of SimDriver; the plant and sensors are the sim node's.
+remapper, driver_node the same DriverController (here through _core, over an in-process bus
+instead of the mocked one on a pty); the plant and sensors are the sim node's.
 
 Configuration of the simulated robot: config/sim.yaml (physics, sensors, and its `tracker:`
 section merged over config/tracker.yaml). The start pose is the tracker's view: the centre of mass
@@ -38,8 +42,8 @@ from ..missions.runner import MissionRunner
 from .config import SimConfig
 from .disturbances import parse_triggers
 from .feedback import make_feedback
+from .mujoco_servo_backend import MujocoServoBackend
 from .plant import Plant
-from .sim_driver import SimDriver
 
 ROOT = Path(__file__).resolve().parents[3]
 CONFIG = ROOT / "config"
@@ -59,6 +63,7 @@ class RunSpec:
     robot: str = str(CONFIG / "robots" / "cobra.yaml")
     gaits: str = str(CONFIG / "gaits.yaml")
     tracker_config: str = str(CONFIG / "tracker.yaml")
+    driver_config: str = str(CONFIG / "driver.yaml")   # the DriverController's keys of driver_node's file
     randomize: bool = True                    # per-seed physics (False: the ranges' midpoints)
     settle_s: float = 0.5                     # pose source running before the mission starts
     label: str = ""                           # free text for tables
@@ -126,6 +131,82 @@ def start_base_pose(robot, kinematics, start_xy_heading: Sequence[float], headin
     return x - com[0], y - com[1], yaw
 
 
+DRIVER_CONFIG_KEYS = ("fast_sync_read", "max_failed_cycles", "status_every_cycles", "fault_action", "shutdown_action",
+                      "torque_on_start", "max_joint_velocity_rad_s", "max_frequency_hz", "max_step_s",
+                      "plausible_margin_ticks", "pose_timeout_s", "require_pose")
+
+
+def load_driver_config(path: str):
+    """_core.DriverConfig from driver_node's YAML (config/driver.yaml): the controller's keys, the
+    node's own (port, rates, frames) ignored; ValueError lists every problem."""
+    import yaml
+    raw = yaml.safe_load(Path(path).read_text()) or {}
+    return _core.DriverConfig(**{k: raw[k] for k in DRIVER_CONFIG_KEYS if k in raw})
+
+
+class LockStepDriver:
+    """The C++ DriverController (_core, the one driver_node runs) on the plant, in lock-step.
+
+    Every update: each servo's shaft state (MujocoServoBackend: direction, zero offset, current)
+    -> present position / velocity / current of a FakeServoBus (the core's unit conversions) ->
+    controller.update -> the goal ticks the controller wrote -> the plant's joint targets (the
+    backend again). Nothing of the controller is repeated here."""
+
+    def __init__(self, robot, library, plant: Plant, config, control_table: Optional[str] = None):
+        dx = _core.dynamixel
+        self.table = dx.ControlTable.from_yaml(control_table or str(CONFIG / "dynamixel" / f"{robot.servo_model}.yaml"))
+        self.ids = [int(i) for i in robot.servo_ids]
+        self.backend = MujocoServoBackend(plant)
+        self.bus = dx.FakeServoBus(self.table, self.ids)
+        self.bus.set_follow_goal(False)
+        self.controller = _core.DriverController(robot, library, self.table, self.bus, config)
+        self.lower_rad = np.asarray(robot.joint_lower_rad, float)
+        self.upper_rad = np.asarray(robot.joint_upper_rad, float)
+        self.cpg_clamped = 0              # CPG outputs beyond a joint limit (the goal was clamped)
+        self._write_states()
+        self.controller.start(plant.time_s)
+        if self.controller.state != "holding":
+            raise RuntimeError(f"the driver did not start: {self.controller.state} {self.controller.fault_reason}")
+
+    def command_gait(self, gait: str, steer: bool = False, delta_rad: float = 0.0) -> str:
+        return self.controller.command_gait(gait=gait, steer=steer, delta_rad=delta_rad)
+
+    def set_base_pose(self, t_s: float, position, quat_xyzw) -> bool:
+        return self.controller.set_base_pose(t_s, position, quat_xyzw)
+
+    def update(self, t_s: float, dt_s: float) -> None:
+        c = self.controller
+        self._write_states()
+        c.update(t_s, dt_s)
+        if c.state == "fault":
+            raise RuntimeError(f"the driver faulted: {c.fault_reason}")
+        if c.state == "running":
+            raw = c.cpg.unclamped_output
+            self.cpg_clamped += int(np.count_nonzero((raw < self.lower_rad) | (raw > self.upper_rad)))
+        get, set_goal, ticks_to_rad = self.bus.get, self.backend.set_goal, _core.dynamixel.ticks_to_rad
+        for sid in self.ids:
+            set_goal(sid, ticks_to_rad(get(sid, "goal_position")))
+
+    def com_pose(self) -> Optional[Tuple[float, float, float]]:
+        """(x, y, yaw) of the centre of mass and virtual chassis, as com_pose carries it; None while
+        the base pose is stale (the driver publishes com_pose only from a fresh one)."""
+        c = self.controller
+        if not c.pose_fresh:
+            return None
+        com = c.com
+        return float(com[0]), float(com[1]), c.com_yaw
+
+    def _write_states(self) -> None:
+        dx = _core.dynamixel
+        bus_set, state = self.bus.set, self.backend.state
+        rad_to_ticks, velocity, current = dx.rad_to_ticks, dx.rad_s_to_velocity, dx.amps_to_current
+        for sid in self.ids:
+            s = state(sid)
+            bus_set(sid, "present_position", rad_to_ticks(s.position_rad))
+            bus_set(sid, "present_velocity", velocity(s.velocity_rad_s))
+            bus_set(sid, "present_current", current(s.current_a))
+
+
 class BatchRun:
     def __init__(self, spec: RunSpec, robot=None, library=None):
         self.spec = spec
@@ -141,7 +222,7 @@ class BatchRun:
         self.kinematics = _core.Kinematics(self.robot)
         bx, by, byaw = start_base_pose(self.robot, self.kinematics, spec.start, self.heading_offset_rad)
         self.plant = Plant(self.robot, self.params, start=(bx, by, byaw))
-        self.driver = SimDriver(self.robot, self.library, pose_timeout_s=self.defaults["pose_timeout_s"])
+        self.driver = LockStepDriver(self.robot, self.library, self.plant, load_driver_config(spec.driver_config))
         self.feedback = make_feedback(spec.feedback, self.params, self.robot)
         self.runner = MissionRunner(self.mission, self.defaults["pose_timeout_s"], self.defaults["yaw_filter_window"],
                                     heading_offset_rad=self.heading_offset_rad)
@@ -191,7 +272,7 @@ class BatchRun:
             if ok != source_ok:
                 runner.set_source_status(ok, detail)
                 source_ok = ok
-            plant.set_joint_targets(driver.update(t, dt, plant.joint_positions_rad()))
+            driver.update(t, dt)
             com = driver.com_pose()
             if com is not None:
                 runner.on_pose(t, *com)
