@@ -7,7 +7,7 @@ import pytest
 from snake_autonomy import _core
 from snake_autonomy.estimation import (GateParams, PoseRemapper, TrackingGate, head_in_base,
                                        load_camera_calibration, load_gate_params)
-from snake_autonomy.estimation.transforms import (invert, make_transform, matrix_to_pose, matrix_to_quat,
+from snake_autonomy.transforms import (invert, make_transform, matrix_to_pose, matrix_to_quat,
                                                   pose_to_matrix, quat_to_matrix, rot_x, rot_z, rpy_to_matrix,
                                                   translation, yaw_of_quat)
 

@@ -9,7 +9,7 @@ import pytest
 from snake_autonomy import _core
 from snake_autonomy.sim.config import SimConfig
 from snake_autonomy.sim.plant import Plant
-from snake_autonomy.sim.transforms import matrix_from_quat_xyzw, rot_x, rot_z
+from snake_autonomy.transforms import quat_to_matrix, rot_x, rot_z
 
 
 def _trans(x, y, z):
@@ -69,7 +69,7 @@ def test_frames_match_eq_3_3_and_3_4(robot, plant):
             np.testing.assert_allclose(t[:3, 3], t_exp[:3, 3], atol=1e-9, err_msg=name)
             np.testing.assert_allclose(t[:3, :3], t_exp[:3, :3], atol=1e-9, err_msg=name)
             p, quat = plant.frame_pose(name)
-            np.testing.assert_allclose(matrix_from_quat_xyzw(quat), t_exp[:3, :3], atol=1e-9)
+            np.testing.assert_allclose(quat_to_matrix(*quat), t_exp[:3, :3], atol=1e-9)
 
 
 def test_axis_convention(robot, plant):

@@ -8,7 +8,7 @@ from snake_autonomy.sim.config import Range, SimConfig
 from snake_autonomy.sim.mocap import MocapSensor
 from snake_autonomy.sim.plant import Plant
 from snake_autonomy.sim.pose_sample import LOST_VARIANCE
-from snake_autonomy.sim.transforms import matrix_from_quat_xyzw, rot_z, transform
+from snake_autonomy.transforms import quat_to_matrix, rot_z, make_transform
 from snake_autonomy.sim.vio import SimulatedVio
 
 
@@ -57,8 +57,8 @@ def test_mocap_rate_and_truth(robot, config):
     last = samples[-1]
     p, q = plant.frame_pose("base_link")
     np.testing.assert_allclose(last.position_m, p, atol=1e-12)
-    np.testing.assert_allclose(matrix_from_quat_xyzw(last.quat_xyzw),
-                               matrix_from_quat_xyzw(q), atol=1e-9)
+    np.testing.assert_allclose(quat_to_matrix(*last.quat_xyzw),
+                               quat_to_matrix(*q), atol=1e-9)
 
 
 def test_vio_is_the_camera_pose_through_the_calibration(robot, config, calib):
@@ -70,7 +70,7 @@ def test_vio_is_the_camera_pose_through_the_calibration(robot, config, calib):
     s = vio.measure(plant.time_s, plant.frame_transform("head_link"))
     expected = plant.frame_transform("head_link") @ calib
     np.testing.assert_allclose(s.position_m, expected[:3, 3], atol=1e-12)
-    np.testing.assert_allclose(matrix_from_quat_xyzw(s.quat_xyzw), expected[:3, :3], atol=1e-9)
+    np.testing.assert_allclose(quat_to_matrix(*s.quat_xyzw), expected[:3, :3], atol=1e-9)
     assert not s.lost and s.covariance[0, 0] < 1.0
     # camera_link looks forward and is level: its x axis is the base's x axis
     np.testing.assert_allclose(expected[:3, 0], plant.frame_transform("base_link")[:3, 0],
@@ -81,7 +81,7 @@ def test_vio_rate_noise_drift(config, calib):
     config.vio.loss_rate_per_min = Range(0.0, 0.0)      # noise and drift only (losses: below)
     params = config.draw(seed=3)
     vio = SimulatedVio(params, calib)
-    head = transform(rot_z(0.4), (2.0, 1.0, 0.1))
+    head = make_transform(rot_z(0.4), (2.0, 1.0, 0.1))
     times = np.arange(0.0, 120.0, 1.0 / 30.0)
     samples = [vio.measure(t, head) for t in times]
     truth = (head @ calib)[:3, 3]
@@ -99,7 +99,7 @@ def test_vio_tracking_loss(config, calib):
     config.vio.loss_rate_per_min = Range(0.0, 0.0)      # the scheduled episode only
     params = config.draw(seed=4)
     vio = SimulatedVio(params, calib)
-    head = transform(rot_z(0.0), (0.0, 0.0, 0.1))
+    head = make_transform(rot_z(0.0), (0.0, 0.0, 0.1))
     samples = [vio.measure(t, head) for t in np.arange(0.0, 2.0, 1.0 / 30.0)]
     lost = [s for s in samples if s.lost]
     assert all(1.0 <= s.t_s < 1.5 for s in lost) and 14 <= len(lost) <= 16
@@ -111,7 +111,7 @@ def test_vio_tracking_loss(config, calib):
 
 def test_vio_random_losses_per_seed(config, calib):
     config.vio.loss_rate_per_min = Range(6.0, 6.0)     # one every 10 s on average
-    head = transform(translation=(0.0, 0.0, 0.1))
+    head = make_transform(translation=(0.0, 0.0, 0.1))
 
     def lost_times(seed):
         vio = SimulatedVio(config.draw(seed=seed), calib)
@@ -124,7 +124,7 @@ def test_vio_random_losses_per_seed(config, calib):
 
 
 def test_sensors_deterministic_per_seed(config, calib):
-    head = transform(rot_z(0.2), (1.0, 2.0, 0.1))
+    head = make_transform(rot_z(0.2), (1.0, 2.0, 0.1))
 
     def run(seed):
         params = config.draw(seed=seed)

@@ -22,7 +22,7 @@ from typing import Optional
 import numpy as np
 import yaml
 
-from .transforms import invert, make_transform, quat_to_matrix, rot_x, rpy_to_matrix, translation
+from ..transforms import invert, make_transform, quat_to_matrix, rot_x, rpy_to_matrix, translation
 
 DEG = math.pi / 180.0
 

@@ -29,7 +29,7 @@ from geometry_msgs.msg import Pose, PoseArray, PoseStamped
 from std_msgs.msg import String
 from std_srvs.srv import Trigger, TriggerResponse
 
-from snake_autonomy.estimation.transforms import yaw_of_quat
+from snake_autonomy.transforms import yaw_of_quat
 from snake_autonomy.missions import MissionError, gait_library_names, load_defaults, load_mission, read_overrides
 from snake_autonomy.missions.runner import MissionRunner
 from snake_autonomy.msg import GaitCommand, TrackingStatus

@@ -19,7 +19,7 @@ from std_srvs.srv import Trigger, TriggerResponse
 
 from snake_autonomy.estimation import (PoseRemapper, TrackingGate, load_camera_calibration,
                                        load_gate_params)
-from snake_autonomy.estimation.transforms import matrix_to_pose, pose_to_matrix
+from snake_autonomy.transforms import matrix_to_pose, pose_to_matrix
 
 ROOT = Path(__file__).resolve().parents[3]
 LEVELS = {"ok": DiagnosticStatus.OK, "waiting": DiagnosticStatus.WARN}

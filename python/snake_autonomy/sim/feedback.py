@@ -18,7 +18,7 @@ from typing import List, Optional, Tuple
 import numpy as np
 
 from ..estimation import PoseRemapper, TrackingGate, load_camera_calibration, load_gate_params
-from ..estimation.transforms import make_transform, matrix_to_pose, quat_to_matrix
+from ..transforms import make_transform, matrix_to_pose, quat_to_matrix
 from .mocap import MocapSensor
 from .vio import SimulatedVio
 

@@ -11,7 +11,7 @@ import numpy as np
 from .config import SimParams
 from .pose_sample import PoseSample, diagonal_covariance
 from .sensor_clock import SensorClock
-from .transforms import quat_xyzw_from_matrix, small_rotation
+from ..transforms import matrix_to_quat, rotvec_to_matrix
 
 
 class MocapSensor:
@@ -28,8 +28,8 @@ class MocapSensor:
         self.clock.tick(t_s)
         noise = self._rng.normal(size=6)
         position = world_t_frame[:3, 3] + self.position_std_m * noise[:3]
-        rotation = world_t_frame[:3, :3] @ small_rotation(self.rotation_std_rad * noise[3:])
-        return PoseSample(t_s, self.frame, position, quat_xyzw_from_matrix(rotation),
+        rotation = world_t_frame[:3, :3] @ rotvec_to_matrix(self.rotation_std_rad * noise[3:])
+        return PoseSample(t_s, self.frame, position, matrix_to_quat(rotation),
                           self._cov.copy())
 
     def poll(self, plant) -> Optional[PoseSample]:

@@ -25,7 +25,7 @@ import numpy as np
 from .config import SimParams
 from .disturbances import Disturbance, DisturbanceSchedule
 from .mjcf import build_mjcf
-from .transforms import quat_xyzw_from_matrix, transform
+from ..transforms import matrix_to_quat, make_transform
 
 
 #: A goal further than this beyond a joint limit counts as a limit violation (about one servo tick:
@@ -182,12 +182,12 @@ class Plant:
     def frame_transform(self, frame: str) -> np.ndarray:
         """4x4 world pose of a kinematic frame (base_link, head_link, link_1 ... link_N)."""
         sid = self._site_ids[frame]
-        return transform(self.data.site_xmat[sid].reshape(3, 3), self.data.site_xpos[sid])
+        return make_transform(self.data.site_xmat[sid].reshape(3, 3), self.data.site_xpos[sid])
 
     def frame_pose(self, frame: str):
         """(position (3,), quaternion xyzw (4,)) of a kinematic frame in the world."""
         t = self.frame_transform(frame)
-        return t[:3, 3].copy(), quat_xyzw_from_matrix(t[:3, :3])
+        return t[:3, 3].copy(), matrix_to_quat(t[:3, :3])
 
     def frame_positions(self) -> np.ndarray:
         """(num_frames, 3) world positions of every kinematic frame, in frame_names order."""
@@ -214,7 +214,7 @@ class Plant:
         self._goal[:] = q
         if base is not None:
             self.data.qpos[0:3] = base[:3, 3]
-            self.data.qpos[3:7] = np.roll(quat_xyzw_from_matrix(base[:3, :3]), 1)
+            self.data.qpos[3:7] = np.roll(matrix_to_quat(base[:3, :3]), 1)
         self.data.qvel[:] = 0
         mujoco.mj_forward(self.model, self.data)
 

@@ -29,7 +29,7 @@ from .mocap import MocapSensor
 from .mujoco_servo_backend import MujocoServoBackend
 from .plant import Plant
 from .pose_sample import PoseSample
-from .transforms import quat_xyzw_from_matrix
+from ..transforms import matrix_to_quat
 from .vio import SimulatedVio
 
 
@@ -119,12 +119,12 @@ class RealTimeSim:
             if self.mocap.clock.due(plant.time_s):
                 world_t_base = plant.frame_transform("base_link")
                 out.mocap = self.mocap.measure(plant.time_s, world_t_base)
-                out.truth_base = (world_t_base[:3, 3].copy(), quat_xyzw_from_matrix(world_t_base[:3, :3]))
+                out.truth_base = (world_t_base[:3, 3].copy(), matrix_to_quat(world_t_base[:3, :3]))
             if self.setup.feedback == "vio" and self.vio.clock.due(plant.time_s):
                 world_t_head = plant.frame_transform("head_link")
                 out.vio = self.vio.measure(plant.time_s, world_t_head)
                 cam = world_t_head @ self.vio.head_t_camera
-                out.truth_camera = (cam[:3, 3].copy(), quat_xyzw_from_matrix(cam[:3, :3]))
+                out.truth_camera = (cam[:3, 3].copy(), matrix_to_quat(cam[:3, :3]))
             tilt = plant.base_tilt_deg()
             self.max_tilt_deg = max(self.max_tilt_deg, tilt)
             if tilt > self.config.monitor.rollover_tilt_deg:

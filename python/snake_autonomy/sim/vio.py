@@ -25,7 +25,7 @@ import numpy as np
 from .config import SimParams
 from .pose_sample import PoseSample, diagonal_covariance
 from .sensor_clock import SensorClock
-from .transforms import quat_xyzw_from_matrix, rot_z, small_rotation, transform
+from ..transforms import matrix_to_quat, rot_z, rotvec_to_matrix, make_transform
 
 
 class SimulatedVio:
@@ -64,8 +64,8 @@ class SimulatedVio:
             return PoseSample.lost_sample(t_s, self.frame)
         estimate = self.drift_transform() @ world_t_camera
         position = estimate[:3, 3] + self.position_std_m * noise[:3]
-        rotation = estimate[:3, :3] @ small_rotation(self.rotation_std_rad * noise[3:])
-        return PoseSample(t_s, self.frame, position, quat_xyzw_from_matrix(rotation),
+        rotation = estimate[:3, :3] @ rotvec_to_matrix(self.rotation_std_rad * noise[3:])
+        return PoseSample(t_s, self.frame, position, matrix_to_quat(rotation),
                           self._cov.copy())
 
     def poll(self, plant) -> Optional[PoseSample]:
@@ -78,9 +78,9 @@ class SimulatedVio:
         """4x4 map from the world to the drifted odometry frame (identity at the start)."""
         pivot = np.zeros(3) if self._pivot is None else self._pivot
         dx, dy, dyaw = self._drift
-        about_pivot = (transform(translation=pivot) @ transform(rot_z(dyaw))
-                       @ transform(translation=-pivot))
-        return transform(translation=(dx, dy, 0.0)) @ about_pivot
+        about_pivot = (make_transform(translation=pivot) @ make_transform(rot_z(dyaw))
+                       @ make_transform(translation=-pivot))
+        return make_transform(translation=(dx, dy, 0.0)) @ about_pivot
 
     def lost(self, t_s: float) -> bool:
         if any(start <= t_s < end for start, end in self.scheduled_losses):

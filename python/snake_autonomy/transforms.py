@@ -1,11 +1,15 @@
-"""Homogeneous transforms with numpy (no ROS): quaternions are (x, y, z, w) as in geometry_msgs.
+"""Rigid-body helpers shared by the estimation, simulation and node code (no ROS).
 
-Notation: ``T_a_in_b`` (4x4) is the pose of frame a expressed in frame b: it maps coordinates in a
-to coordinates in b, p_b = T_a_in_b @ p_a. The thesis writes it T_a^b.
+Rotations go through scipy's `Rotation` (quaternion <-> matrix, rotation vectors, Euler angles);
+this module only fixes the package's conventions on top of it:
+- quaternions are (x, y, z, w), as in geometry_msgs and scipy; MuJoCo's (w, x, y, z) is converted
+  where MuJoCo is called;
+- `T_a_in_b` (4x4) is the pose of frame a in frame b: p_b = T_a_in_b @ p_a (the thesis's T_a^b).
 """
 import math
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 
 def rot_x(angle_rad: float) -> np.ndarray:
@@ -25,10 +29,16 @@ def rot_z(angle_rad: float) -> np.ndarray:
 
 def rpy_to_matrix(roll_rad: float, pitch_rad: float, yaw_rad: float) -> np.ndarray:
     """R = Rz(yaw) Ry(pitch) Rx(roll) (URDF / tf convention, fixed axes x-y-z)."""
-    return rot_z(yaw_rad) @ rot_y(pitch_rad) @ rot_x(roll_rad)
+    return Rotation.from_euler("xyz", [roll_rad, pitch_rad, yaw_rad]).as_matrix()
+
+
+def rotvec_to_matrix(rotvec) -> np.ndarray:
+    """Rotation matrix of a rotation vector (axis * angle, rad)."""
+    return Rotation.from_rotvec(np.asarray(rotvec, dtype=float)).as_matrix()
 
 
 def make_transform(rotation=None, translation=None) -> np.ndarray:
+    """4x4 homogeneous transform from a 3x3 rotation and a 3-vector (either may be omitted)."""
     T = np.eye(4)
     if rotation is not None:
         T[:3, :3] = rotation
@@ -51,39 +61,18 @@ def invert(T: np.ndarray) -> np.ndarray:
 
 
 def quat_to_matrix(x: float, y: float, z: float, w: float) -> np.ndarray:
-    """Rotation matrix of a quaternion (normalised first; raises ValueError on a zero or NaN one)."""
+    """Rotation matrix of a quaternion (normalised first; ValueError on a zero or non-finite one)."""
     q = np.array([x, y, z, w], dtype=float)
     n = float(np.linalg.norm(q))
     if not math.isfinite(n) or n < 1e-9:
         raise ValueError(f"quaternion: must be finite and non-zero, got {tuple(q)}")
-    x, y, z, w = q / n
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    return Rotation.from_quat(q / n).as_matrix()
 
 
-def matrix_to_quat(R: np.ndarray):
-    """(x, y, z, w) of a rotation matrix, w >= 0."""
-    m = R
-    tr = m[0, 0] + m[1, 1] + m[2, 2]
-    if tr > 0:
-        s = math.sqrt(tr + 1.0) * 2
-        w, x, y, z = 0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2]) * 2
-        w, x, y, z = (m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s
-    elif m[1, 1] > m[2, 2]:
-        s = math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2]) * 2
-        w, x, y, z = (m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s
-    else:
-        s = math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1]) * 2
-        w, x, y, z = (m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s
-    q = np.array([x, y, z, w])
-    q /= np.linalg.norm(q)
-    if q[3] < 0:
-        q = -q
-    return tuple(float(v) for v in q)
+def matrix_to_quat(R: np.ndarray) -> np.ndarray:
+    """(x, y, z, w) of a rotation matrix, with w >= 0."""
+    q = Rotation.from_matrix(np.asarray(R, dtype=float)).as_quat()
+    return -q if q[3] < 0 else q
 
 
 def pose_to_matrix(position, quaternion) -> np.ndarray:
@@ -92,8 +81,8 @@ def pose_to_matrix(position, quaternion) -> np.ndarray:
 
 
 def matrix_to_pose(T: np.ndarray):
-    """((x, y, z), (qx, qy, qz, qw)) of a 4x4."""
-    return tuple(float(v) for v in T[:3, 3]), matrix_to_quat(T[:3, :3])
+    """((x, y, z), (qx, qy, qz, qw)) of a 4x4, as tuples of floats (ready for a message)."""
+    return tuple(float(v) for v in T[:3, 3]), tuple(float(v) for v in matrix_to_quat(T[:3, :3]))
 
 
 def yaw_of_quat(x: float, y: float, z: float, w: float) -> float:
