@@ -15,6 +15,17 @@ std::string read_config_file(const std::string& path, const std::string& what) {
   return buffer.str();
 }
 
+YAML::Node load_config_yaml(const std::string& text, const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& ex) {
+    throw ConfigError(source + ": not valid YAML: " + ex.what());
+  }
+  if (!root.IsMap()) throw ConfigError(source + ": expected a mapping at the top level");
+  return root;
+}
+
 YAML::Node ConfigReader::child(const YAML::Node& parent, const std::string& key, const std::string& path,
                                bool required) {
   if (!parent || !parent.IsMap()) return YAML::Node();

@@ -37,13 +37,8 @@ void read_wave(const YAML::Node& gait, const std::string& axis, const std::strin
 }  // namespace
 
 GaitLibrary GaitLibrary::from_yaml_string(const std::string& text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& ex) {
-    throw ConfigError(source + ": not valid YAML: " + ex.what());
-  }
-  if (!root.IsMap() || !root["gaits"] || !root["gaits"].IsMap())
+  const YAML::Node root = load_config_yaml(text, source);
+  if (!root["gaits"] || !root["gaits"].IsMap())
     throw ConfigError(source + ": expected a mapping 'gaits:' of gait names to definitions");
   std::vector<std::string> errors;
   GaitLibrary lib;

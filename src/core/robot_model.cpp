@@ -132,13 +132,7 @@ void RobotModel::validate_or_throw() const {
 }
 
 RobotModel RobotModel::from_yaml_string(const std::string& text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& ex) {
-    throw ConfigError(source + ": not valid YAML: " + ex.what());
-  }
-  if (!root.IsMap()) throw ConfigError(source + ": expected a mapping at the top level");
+  const YAML::Node root = load_config_yaml(text, source);
 
   std::vector<std::string> errors;
   ConfigReader r(&errors);

@@ -4,9 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <sstream>
 
+#include "snake_autonomy/core/config_reader.hpp"
 #include "snake_autonomy/dynamixel/protocol.hpp"
 
 namespace snake_autonomy::dynamixel {
@@ -20,25 +20,6 @@ const char* const kRequiredEntries[] = {
 const std::size_t kNumRequiredEntries = sizeof(kRequiredEntries) / sizeof(kRequiredEntries[0]);
 
 namespace {
-
-std::string dump(const YAML::Node& n) {
-  YAML::Emitter e;
-  e << YAML::Flow << n;
-  return e.c_str();
-}
-
-template <typename T>
-bool get(const YAML::Node& n, const std::string& path, std::vector<std::string>* errors, T* out) {
-  try {
-    *out = n.as<T>();
-    return true;
-  } catch (const YAML::Exception&) {
-    errors->push_back(path + ": expected " +
-                      (std::is_same_v<T, std::string> ? "a string" : std::is_same_v<T, double> ? "a number" : "an integer") +
-                      ", got '" + dump(n) + "'");
-    return false;
-  }
-}
 
 const char* const kEntryKeys[] = {"address", "size", "access", "signed", "eeprom", "unit",
                                   "scale",   "default", "min", "max"};
@@ -161,36 +142,25 @@ std::string ControlTable::describe_hardware_error(std::uint8_t bits) const {
 }
 
 ControlTable ControlTable::from_yaml_file(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw ConfigError("control table file '" + path + "': cannot be opened");
-  std::stringstream s;
-  s << f.rdbuf();
-  return from_yaml_string(s.str(), path);
+  return from_yaml_string(core::read_config_file(path, "control table"), path);
 }
 
 ControlTable ControlTable::from_yaml_string(const std::string& text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw ConfigError(source + ": not valid YAML: " + e.what());
-  }
-  if (!root.IsMap()) throw ConfigError(source + ": expected a mapping at the top level");
+  const YAML::Node root = core::load_config_yaml(text, source);
   std::vector<std::string> errors;
+  core::ConfigReader r(&errors);
   ControlTable t;
-  if (root["model"]) get(root["model"], "model", &errors, &t.model);
-  else errors.push_back("model: missing");
-  if (root["model_number"]) get(root["model_number"], "model_number", &errors, &t.model_number);
-  else errors.push_back("model_number: missing");
-  if (root["position_centre_ticks"]) get(root["position_centre_ticks"], "position_centre_ticks", &errors, &t.position_centre_ticks);
+  r.scalar(r.child(root, "model", "model"), "model", &t.model);
+  r.scalar(r.child(root, "model_number", "model_number"), "model_number", &t.model_number);
+  if (root["position_centre_ticks"]) r.scalar(root["position_centre_ticks"], "position_centre_ticks", &t.position_centre_ticks);
   if (const auto bits = root["hardware_error_bits"]) {
     if (!bits.IsMap()) {
-      errors.push_back("hardware_error_bits: expected a mapping name: bit, got '" + dump(bits) + "'");
+      errors.push_back("hardware_error_bits: expected a mapping name: bit, got '" + core::ConfigReader::dump(bits) + "'");
     } else {
       for (const auto& kv : bits) {
         const std::string name = kv.first.as<std::string>();
         int bit = 0;
-        if (get(kv.second, "hardware_error_bits." + name, &errors, &bit)) t.hardware_error_bits.emplace_back(name, bit);
+        if (r.scalar(kv.second, "hardware_error_bits." + name, &bit)) t.hardware_error_bits.emplace_back(name, bit);
       }
     }
   }
@@ -204,7 +174,7 @@ ControlTable ControlTable::from_yaml_string(const std::string& text, const std::
       const std::string key = "entries." + e.name;
       const YAML::Node n = kv.second;
       if (!n.IsMap()) {
-        errors.push_back(key + ": expected a mapping, got '" + dump(n) + "'");
+        errors.push_back(key + ": expected a mapping, got '" + core::ConfigReader::dump(n) + "'");
         continue;
       }
       for (const auto& field : n) {
@@ -215,28 +185,26 @@ ControlTable ControlTable::from_yaml_string(const std::string& text, const std::
         }
       }
       int address = -1, size = 0;
-      if (n["address"]) get(n["address"], key + ".address", &errors, &address);
-      else errors.push_back(key + ".address: missing");
-      if (n["size"]) get(n["size"], key + ".size", &errors, &size);
-      else errors.push_back(key + ".size: missing");
+      r.scalar(r.child(n, "address", key + ".address"), key + ".address", &address);
+      r.scalar(r.child(n, "size", key + ".size"), key + ".size", &size);
       if (address < 0 || address > 0xFFFF) {
-        if (n["address"]) errors.push_back(key + ".address: " + dump(n["address"]) + " is not in 0..65535");
+        if (n["address"]) errors.push_back(key + ".address: " + core::ConfigReader::dump(n["address"]) + " is not in 0..65535");
       } else {
         e.address = static_cast<std::uint16_t>(address);
       }
       e.size = static_cast<std::uint8_t>(size < 0 || size > 255 ? 0 : size);
       std::string access = "r";
-      if (n["access"]) get(n["access"], key + ".access", &errors, &access);
+      if (n["access"]) r.scalar(n["access"], key + ".access", &access);
       if (access == "rw") e.writable = true;
       else if (access != "r") errors.push_back(key + ".access: '" + access + "' is not r or rw");
-      if (n["signed"]) get(n["signed"], key + ".signed", &errors, &e.is_signed);
-      if (n["eeprom"]) get(n["eeprom"], key + ".eeprom", &errors, &e.eeprom);
-      if (n["unit"]) get(n["unit"], key + ".unit", &errors, &e.unit);
-      if (n["scale"]) get(n["scale"], key + ".scale", &errors, &e.scale);
-      if (n["default"]) get(n["default"], key + ".default", &errors, &e.default_value);
+      if (n["signed"]) r.scalar(n["signed"], key + ".signed", &e.is_signed);
+      if (n["eeprom"]) r.scalar(n["eeprom"], key + ".eeprom", &e.eeprom);
+      if (n["unit"]) r.scalar(n["unit"], key + ".unit", &e.unit);
+      if (n["scale"]) r.scalar(n["scale"], key + ".scale", &e.scale);
+      if (n["default"]) r.scalar(n["default"], key + ".default", &e.default_value);
       if (n["min"] || n["max"]) {
         if (!n["min"] || !n["max"]) errors.push_back(key + ": min and max go together");
-        else e.has_range = get(n["min"], key + ".min", &errors, &e.min) & get(n["max"], key + ".max", &errors, &e.max);
+        else e.has_range = r.scalar(n["min"], key + ".min", &e.min) & r.scalar(n["max"], key + ".max", &e.max);
       }
       t.entries.push_back(std::move(e));
     }
@@ -244,11 +212,7 @@ ControlTable ControlTable::from_yaml_string(const std::string& text, const std::
   for (const auto& e : t.validate()) {
     if (std::find(errors.begin(), errors.end(), e) == errors.end()) errors.push_back(e);
   }
-  if (!errors.empty()) {
-    std::string what = source + ": invalid control table:";
-    for (const auto& e : errors) what += "\n  " + e;
-    throw ConfigError(what);
-  }
+  core::throw_if_errors(errors, source, "control table");
   return t;
 }
 

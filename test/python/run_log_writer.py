@@ -2,11 +2,14 @@
 
 argv: RUN_DIR READY_FILE HANDLE_SIGTERM(0|1). Writes com_pose at 50 poses per decision and one
 tracker decision per loop; after 3 decisions touches READY_FILE (waypoint 0 is reached at decision
-2). With HANDLE_SIGTERM=1 a SIGTERM closes the log like the mission node's shutdown hook.
+2). With HANDLE_SIGTERM=1 a SIGTERM closes the log like the mission node's shutdown hook. As in the
+node, the logging runs on a worker thread while the main thread only waits (rospy.spin): a handler
+that closed the log from inside a locked write on the same thread would deadlock.
 """
 import math
 import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -25,27 +28,34 @@ if handle:
         sys.exit(0)
     signal.signal(signal.SIGTERM, on_term)
 
-t = 100.0
-index = 0
-for k in range(10_000):
-    for i in range(50):
-        t += 0.02
-        x = min(1.0, 0.3 * (t - 100.0))
-        msg = PoseStamped()
-        msg.header.stamp.secs, msg.header.stamp.nsecs = int(t), int((t % 1) * 1e9)
-        msg.pose.position.x = x
-        msg.pose.orientation.w = 1.0
-        log.write("/com_pose", msg, t)
-        log.add_pose(t, x, 0.0)
-    reached = k == 2
-    target = index
-    index += int(reached)
-    d = max(0.0, 1.0 - min(1.0, 0.3 * (t - 100.0)))
-    st = TrackingStatus(waypoint_index=index, num_waypoints=2, waypoint_reached=reached, distance=d,
-                        yaw_error_abs=0.1, yaw_error_rel=0.2, yaw_error=0.15, w=0.5, mode=1, gait="sidewind")
-    st.header.stamp.secs, st.header.stamp.nsecs = int(t), int((t % 1) * 1e9)
-    log.write("/tracking_status", st, t)
-    log.add_decision(t, index, target, reached, d, 0.1, 0.2, 0.15)
-    if k == 3:
-        ready.write_text("ready")
-    time.sleep(0.02)
+
+def log_forever():
+    t = 100.0
+    index = 0
+    for k in range(10_000):
+        for i in range(50):
+            t += 0.02
+            x = min(1.0, 0.3 * (t - 100.0))
+            msg = PoseStamped()
+            msg.header.stamp.secs, msg.header.stamp.nsecs = int(t), int((t % 1) * 1e9)
+            msg.pose.position.x = x
+            msg.pose.orientation.w = 1.0
+            log.write("/com_pose", msg, t)
+            log.add_pose(t, x, 0.0)
+        reached = k == 2
+        target = index
+        index += int(reached)
+        d = max(0.0, 1.0 - min(1.0, 0.3 * (t - 100.0)))
+        st = TrackingStatus(waypoint_index=index, num_waypoints=2, waypoint_reached=reached, distance=d,
+                            yaw_error_abs=0.1, yaw_error_rel=0.2, yaw_error=0.15, w=0.5, mode=1, gait="sidewind")
+        st.header.stamp.secs, st.header.stamp.nsecs = int(t), int((t % 1) * 1e9)
+        log.write("/tracking_status", st, t)
+        log.add_decision(t, index, target, reached, d, 0.1, 0.2, 0.15)
+        if k == 3:
+            ready.write_text("ready")
+        time.sleep(0.02)
+
+
+threading.Thread(target=log_forever, daemon=True).start()
+while True:
+    time.sleep(0.1)

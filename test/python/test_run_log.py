@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from snake_autonomy.cli import main as cli_main
-from snake_autonomy.experiments import compute_metrics, read_run, write_results
+from snake_autonomy.experiments import RunLog, compute_metrics, read_run, write_results
 
 HERE = Path(__file__).resolve().parent
 WPS = [(1.0, 0.0, 0.0), (1.0, 1.0, math.pi / 2)]
@@ -113,3 +113,13 @@ def test_sigterm_closes_the_bag_and_writes_the_results(tmp_path):
 def test_report_cli_on_a_missing_bag(tmp_path, capsys):
     assert cli_main(["report", str(tmp_path / "nope.bag")]) == 1
     assert "no such file" in capsys.readouterr().err
+
+
+def test_a_decision_after_close_leaves_the_final_metrics(tmp_path):
+    """A tracker step racing the shutdown must not turn the final outcome back into 'running'."""
+    log = RunLog(tmp_path / "run", "race", [(1.0, 0.0, 0.0)], t_start_s=0.0, mission_yaml="")
+    log.add_decision(1.0, 0, 0, False, 1.0, 0.1, 0.2, 0.15)
+    log.close("aborted: SIGTERM", plots=False)
+    log.add_decision(2.0, 0, 0, False, 0.9, 0.1, 0.2, 0.15)
+    metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert metrics["outcome"] == "aborted: SIGTERM"

@@ -14,6 +14,10 @@ namespace snake_autonomy::core {
 // The whole text of a configuration file; throws ConfigError "<path>: cannot open <what>".
 std::string read_config_file(const std::string& path, const std::string& what);
 
+// The YAML document of a configuration text; throws ConfigError "<source>: not valid YAML: ..." or
+// "<source>: expected a mapping at the top level".
+YAML::Node load_config_yaml(const std::string& text, const std::string& source);
+
 class ConfigReader {
  public:
   explicit ConfigReader(std::vector<std::string>* errors) : errors_(errors) {}
@@ -68,8 +72,8 @@ class ConfigReader {
  private:
   template <typename T>
   static const char* type_name() {
-    if constexpr (std::is_same_v<T, int>) return "an integer";
     if constexpr (std::is_same_v<T, bool>) return "true or false";
+    if constexpr (std::is_integral_v<T>) return "an integer";
     if constexpr (std::is_floating_point_v<T>) return "a number";
     return "a string";
   }

@@ -81,7 +81,10 @@ class RunLog:
 
     def add_decision(self, t_s: float, waypoint_index: int, target_index: int, reached: bool, distance: float,
                      yaw_error_abs: float, yaw_error_rel: float, yaw_error: float, pose_stale: bool = False):
-        """One tracker step: updates metrics.json and flushes the bag to disk."""
+        """One tracker step: updates metrics.json and flushes the bag to disk. Ignored after close()
+        (a decision racing the shutdown must not turn the final metrics back into "running")."""
+        if self.closed:
+            return
         for k, v in (("t", t_s), ("waypoint_index", waypoint_index), ("target_index", target_index),
                      ("reached", reached), ("distance", distance), ("yaw_error_abs", yaw_error_abs),
                      ("yaw_error_rel", yaw_error_rel), ("yaw_error", yaw_error), ("pose_stale", pose_stale)):
