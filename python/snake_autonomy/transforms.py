@@ -70,8 +70,12 @@ def quat_to_matrix(x: float, y: float, z: float, w: float) -> np.ndarray:
 
 
 def matrix_to_quat(R: np.ndarray) -> np.ndarray:
-    """(x, y, z, w) of a rotation matrix, with w >= 0."""
-    q = Rotation.from_matrix(np.asarray(R, dtype=float)).as_quat()
+    """(x, y, z, w) of a rotation matrix, with w >= 0.
+
+    R must already be a rotation (from kinematics, MuJoCo or a product of rotations): scipy's
+    re-orthonormalisation is skipped (assume_valid), which costs 90 µs a call against 15 µs, and
+    this runs for every simulated sensor sample."""
+    q = Rotation.from_matrix(np.asarray(R, dtype=float), assume_valid=True).as_quat()
     return -q if q[3] < 0 else q
 
 
