@@ -202,24 +202,32 @@ Status Protocol2Bus::sync_write(std::uint16_t address, std::uint16_t length, con
   return send(size);
 }
 
+Status Protocol2Bus::send_group_read(std::uint8_t instruction_code, std::uint16_t address, std::uint16_t length,
+                                     const std::uint8_t* ids, std::size_t n, ServoReply* replies,
+                                     std::size_t* size) noexcept {
+  for (std::size_t i = 0; i < n; ++i) replies[i] = ServoReply{};
+  PacketEncoder e(tx_.data(), tx_.size());
+  e.begin(kBroadcastId, instruction_code);
+  e.put16(address);
+  e.put16(length);
+  e.put(ids, n);
+  *size = e.finish();
+  if (*size == 0) return Status::kInvalidArgument;
+  const Status sent = send(*size);
+  if (sent != Status::kOk) {
+    for (std::size_t i = 0; i < n; ++i) replies[i].status = sent;
+  }
+  return sent;
+}
+
 Status Protocol2Bus::sync_read(std::uint16_t address, std::uint16_t length, const std::uint8_t* ids, std::size_t n,
                                std::uint8_t* data, ServoReply* replies) noexcept {
   if (!valid_ids(ids, n) || length == 0 || !data || !replies || kStatusOverhead + length > kMaxPacketBytes) {
     return Status::kInvalidArgument;
   }
-  for (std::size_t i = 0; i < n; ++i) replies[i] = ServoReply{};
-  PacketEncoder e(tx_.data(), tx_.size());
-  e.begin(kBroadcastId, instruction::kSyncRead);
-  e.put16(address);
-  e.put16(length);
-  e.put(ids, n);
-  const std::size_t size = e.finish();
-  if (size == 0) return Status::kInvalidArgument;
-  const Status sent = send(size);
-  if (sent != Status::kOk) {
-    for (std::size_t i = 0; i < n; ++i) replies[i].status = sent;
-    return sent;
-  }
+  std::size_t size = 0;
+  const Status sent = send_group_read(instruction::kSyncRead, address, length, ids, n, replies, &size);
+  if (sent != Status::kOk) return sent;
   const SteadyTime deadline = deadline_for(size, n * (kStatusOverhead + length), n);
   std::size_t pending = n;
   while (pending > 0) {
@@ -266,19 +274,9 @@ Status Protocol2Bus::fast_sync_read(std::uint16_t address, std::uint16_t length,
       kStatusOverhead + n * (length + 4u) > kMaxPacketBytes) {
     return Status::kInvalidArgument;
   }
-  for (std::size_t i = 0; i < n; ++i) replies[i] = ServoReply{};
-  PacketEncoder e(tx_.data(), tx_.size());
-  e.begin(kBroadcastId, instruction::kFastSyncRead);
-  e.put16(address);
-  e.put16(length);
-  e.put(ids, n);
-  const std::size_t size = e.finish();
-  if (size == 0) return Status::kInvalidArgument;
-  const Status sent = send(size);
-  if (sent != Status::kOk) {
-    for (std::size_t i = 0; i < n; ++i) replies[i].status = sent;
-    return sent;
-  }
+  std::size_t size = 0;
+  const Status sent = send_group_read(instruction::kFastSyncRead, address, length, ids, n, replies, &size);
+  if (sent != Status::kOk) return sent;
   // One status packet from ID 0xFE whose parameters are, per servo, ERR ID DATA[length] CRC(2),
   // the last servo's CRC being the packet's own: n * (length + 4) - 2 parameter bytes. The packet
   // CRC covers every block; the intermediate CRCs are not checked.

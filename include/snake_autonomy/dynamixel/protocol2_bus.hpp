@@ -72,6 +72,10 @@ class Protocol2Bus : public ServoBus {
   // What receive() found.
   enum class Event : std::uint8_t { kPacket, kBadCrc, kMalformed, kDeadline, kIoError };
   Status send(std::size_t size) noexcept;
+  // Sends a (FAST_)SYNC_READ request for n servos and resets their replies; on a send failure every
+  // reply gets that status. *size receives the request's size on the wire.
+  Status send_group_read(std::uint8_t instruction_code, std::uint16_t address, std::uint16_t length,
+                         const std::uint8_t* ids, std::size_t n, ServoReply* replies, std::size_t* size) noexcept;
   Event receive(SteadyTime deadline, Packet* packet, std::uint8_t* id) noexcept;
   Status transact(std::uint8_t id, std::size_t tx_size, std::size_t data_bytes, std::uint8_t* data,
                   std::uint8_t* error) noexcept;
