@@ -2,6 +2,7 @@
 diagnostics, waiting on conditions with timeouts (never fixed sleeps)."""
 import threading
 import time
+import unittest
 
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray
@@ -136,3 +137,19 @@ class DriverHarness:
     def wait_moving(self, servo_id, min_span, timeout, window_s=1.5):
         return wait_for(lambda: self.goal_span(servo_id, window_s) >= min_span, timeout,
                         f"servo {servo_id}'s goals to swing over {min_span} ticks")
+
+
+LOCO = "snake_driver: locomotion"
+
+
+class DriverTestCase(unittest.TestCase):
+    """A rostest case against one driver_node: a harness on the mock's port (param ~port), created
+    once the driver holds its posture after start. Subclasses set NODE_NAME."""
+    NODE_NAME = "test_driver"
+    h = None
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node(cls.NODE_NAME)
+        cls.h = DriverHarness(rospy.get_param("~port"))
+        wait_for(lambda: cls.h.state() == "holding", 20.0, "the driver to hold its posture after start")

@@ -3,14 +3,11 @@
 socket: CRC errors and dropped/truncated replies are counted and the driver carries on; a servo
 that stops answering, a hardware error and the pty closing each stop locomotion (hold: goals
 frozen, torque stays on), say why in /diagnostics, and recover through the services."""
-import unittest
-
 import rospy
 import rostest
 
-from driver_test_helpers import DriverHarness, wait_for
+from driver_test_helpers import LOCO, DriverTestCase, wait_for
 
-LOCO = "snake_driver: locomotion"
 BUS = "snake_driver: bus"
 
 
@@ -18,14 +15,8 @@ def servo(i):
     return f"snake_driver: servo {i} (joint_{i})"
 
 
-class DriverFaults(unittest.TestCase):
-    h = None
-
-    @classmethod
-    def setUpClass(cls):
-        rospy.init_node("test_driver_faults")
-        cls.h = DriverHarness(rospy.get_param("~port"))
-        wait_for(lambda: cls.h.state() == "holding", 20.0, "the driver to hold its posture after start")
+class DriverFaults(DriverTestCase):
+    NODE_NAME = "test_driver_faults"
 
     def run_gait(self):
         self.h.command("sidewind")

@@ -3,24 +3,15 @@
 mock's goal positions, a refused command leaves the gait running, a stale pose holds locomotion
 and fresh poses resume it, driver/hold freezes the goals."""
 import math
-import unittest
 
 import rospy
 import rostest
 
-from driver_test_helpers import DriverHarness, wait_for
-
-LOCO = "snake_driver: locomotion"
+from driver_test_helpers import LOCO, DriverTestCase, wait_for
 
 
-class DriverGait(unittest.TestCase):
-    h = None
-
-    @classmethod
-    def setUpClass(cls):
-        rospy.init_node("test_driver_gait")
-        cls.h = DriverHarness(rospy.get_param("~port"))
-        wait_for(lambda: cls.h.state() == "holding", 20.0, "the driver to hold its posture after start")
+class DriverGait(DriverTestCase):
+    NODE_NAME = "test_driver_gait"
 
     def test_1_gait_reaches_the_mock(self):
         h = self.h
