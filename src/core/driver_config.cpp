@@ -32,6 +32,9 @@ std::vector<std::string> DriverConfig::validate() const {
     errors.push_back(s.str());
   };
   if (max_failed_cycles < 1 || max_failed_cycles > 1000) bad("max_failed_cycles", max_failed_cycles, "is not in 1 .. 1000");
+  if (return_delay_time_us != -1 &&
+      (return_delay_time_us < 0 || return_delay_time_us > 508 || return_delay_time_us % 2 != 0))
+    bad("return_delay_time_us", return_delay_time_us, "is not an even number in 0 .. 508 (or -1: leave as found)");
   if (status_every_cycles < 0) bad("status_every_cycles", status_every_cycles, "is negative (0 disables)");
   if (!(max_joint_velocity_rad_s > 0.0) || !std::isfinite(max_joint_velocity_rad_s))
     bad("max_joint_velocity_rad_s", max_joint_velocity_rad_s, "is not a positive number");

@@ -100,6 +100,7 @@ DriverController::DriverController(const RobotModel& model, const GaitLibrary& g
   addr_torque_ = table.at("torque_enable").address;
   addr_hw_error_ = table.at("hardware_error_status").address;
   addr_mode_ = table.at("operating_mode").address;
+  addr_return_delay_ = table.at("return_delay_time").address;
   addr_min_pos_ = table.at("min_position_limit").address;
   addr_max_pos_ = table.at("max_position_limit").address;
 
@@ -204,6 +205,8 @@ void DriverController::start(double t_s) {
     return "servo " + std::to_string(ids_[j]) + " (joint_" + std::to_string(j + 1) + ")";
   };
   std::vector<int> hw_errors;
+  start_notes_.clear();
+  int max_delay_us = 0;
   for (int j = 0; j < n_; ++j) {
     const std::uint8_t id = ids_[j];
     std::uint16_t model_number = 0;
@@ -217,6 +220,8 @@ void DriverController::start(double t_s) {
       problems.push_back(servo_name(j) + ": model number " + std::to_string(model_number) + ", expected " +
                          std::to_string(table_.model_number) + " (" + table_.model + ")");
     }
+    const int delay_us = settle_return_delay(j, servo_name(j), problems);
+    if (delay_us > max_delay_us) max_delay_us = delay_us;
     std::uint8_t mode = 0;
     s = bus_.read(id, addr_mode_, 1, &mode, &error);
     if (!dxl::has_data(s)) {
@@ -253,6 +258,7 @@ void DriverController::start(double t_s) {
       hw_errors.push_back(j);
     }
   }
+  bus_.set_return_delay_s(max_delay_us * 1e-6);
   if (problems.empty() && !read_feedback()) {
     for (int j = 0; j < n_; ++j) {
       if (diag_[j].stale)
@@ -291,6 +297,34 @@ void DriverController::start(double t_s) {
   } else {
     set_state(DriverState::kStopped);
   }
+}
+
+int DriverController::settle_return_delay(int j, const std::string& name, std::vector<std::string>& problems) {
+  const std::uint8_t id = ids_[j];
+  std::uint8_t units = 0, error = 0;
+  const dxl::Status s = bus_.read(id, addr_return_delay_, 1, &units, &error);
+  if (!dxl::has_data(s)) {
+    problems.push_back(name + ": reading return_delay_time failed (" + dxl::to_string(s) + ")");
+    return 0;
+  }
+  const int want_us = config_.return_delay_time_us;
+  if (want_us < 0 || units * 2 == want_us) return units * 2;
+  const std::uint8_t want = static_cast<std::uint8_t>(want_us / 2);
+  const dxl::Status w = bus_.write(id, addr_return_delay_, &want, 1, &error);
+  std::uint8_t back = units;
+  if (w == dxl::Status::kOk && dxl::has_data(bus_.read(id, addr_return_delay_, 1, &back, &error)) && back == want) {
+    start_notes_.push_back(name + ": Return Delay Time " + std::to_string(units * 2) + " us -> " +
+                           std::to_string(want_us) + " us (written to the servo's EEPROM)");
+    return want_us;
+  }
+  // An XH540 refuses EEPROM writes while its torque is on: carry on with the slower replies.
+  start_notes_.push_back(name + ": Return Delay Time is " + std::to_string(units * 2) + " us, writing " +
+                         std::to_string(want_us) + " us failed (" +
+                         (w == dxl::Status::kServoError ? std::string("EEPROM locked: torque is on; restart the driver "
+                                                                      "with the servo's torque off")
+                                                        : std::string(dxl::to_string(w))) +
+                         "); reply deadlines allow for " + std::to_string(units * 2) + " us");
+  return units * 2;
 }
 
 bool DriverController::shutdown() noexcept {

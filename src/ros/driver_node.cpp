@@ -520,6 +520,7 @@ int main(int argc, char** argv) {
       return false;
     }
   });
+  for (const auto& note : controller->start_notes()) ROS_WARN("driver: %s", note.c_str());
   ROS_INFO("driver: %d servos on %s at %d baud, loop %.0f Hz, state %s%s%s", model->num_joints,
            config.serial.device.c_str(), config.serial.baud_bps, config.loop.rate_hz,
            core::to_string(controller->state()), controller->state() == core::DriverState::kFault ? ": " : "",

@@ -125,6 +125,7 @@ DriverNodeConfig read_driver_params(const ros::NodeHandle& pnh, std::vector<std:
   r.get("fast_sync_read", &k.fast_sync_read);
   r.get("max_failed_cycles", &k.max_failed_cycles);
   r.get("status_every_cycles", &k.status_every_cycles);
+  r.get("return_delay_time_us", &k.return_delay_time_us);
   r.get("fault_action", &k.fault_action);
   r.get("shutdown_action", &k.shutdown_action);
   r.get("torque_on_start", &k.torque_on_start);

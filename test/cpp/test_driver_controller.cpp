@@ -145,6 +145,50 @@ TEST(DriverController, StartNamesEveryServoThatIsNotUsable) {
   EXPECT_FALSE(rig.ctl->update(0.01, 0.01));  // not started: nothing happens
 }
 
+TEST(DriverController, StartWritesTheReturnDelayTimeAndTheBusAllowsForTheSlowestServo) {
+  // Factory servos answer after 500 us (250 units): the driver writes 0 while torque is off.
+  Rig rig;
+  ASSERT_EQ(rig.bus->get(4, "return_delay_time"), 250);
+  rig.start();
+  for (int id = 1; id <= 11; ++id) EXPECT_EQ(rig.bus->get(static_cast<std::uint8_t>(id), "return_delay_time"), 0) << id;
+  EXPECT_EQ(rig.bus->return_delay_s(), 0.0);
+  ASSERT_EQ(rig.ctl->start_notes().size(), 11u);
+  EXPECT_NE(rig.ctl->start_notes()[0].find("servo 1 (joint_1): Return Delay Time 500 us -> 0 us"), std::string::npos)
+      << rig.ctl->start_notes()[0];
+  EXPECT_EQ(rig.ctl->state(), DriverState::kHolding);
+
+  // A servo whose torque is already on keeps its EEPROM locked: the driver carries on, says so,
+  // and the reply deadlines allow for its 500 us.
+  Rig locked({}, {}, [](FakeServoBus& b) {
+    for (int id = 1; id <= 11; ++id) b.set(static_cast<std::uint8_t>(id), "return_delay_time", 0);
+    b.set(7, "return_delay_time", 250);
+    b.set(7, "torque_enable", 1);
+  });
+  locked.start();
+  EXPECT_EQ(locked.bus->get(7, "return_delay_time"), 250);
+  EXPECT_DOUBLE_EQ(locked.bus->return_delay_s(), 500e-6);
+  ASSERT_EQ(locked.ctl->start_notes().size(), 1u);
+  EXPECT_NE(locked.ctl->start_notes()[0].find("servo 7 (joint_7): Return Delay Time is 500 us"), std::string::npos)
+      << locked.ctl->start_notes()[0];
+  EXPECT_NE(locked.ctl->start_notes()[0].find("torque is on"), std::string::npos) << locked.ctl->start_notes()[0];
+  EXPECT_EQ(locked.ctl->state(), DriverState::kHolding);
+
+  // -1 leaves the servos as found.
+  DriverConfig leave;
+  leave.return_delay_time_us = -1;
+  Rig as_found(leave);
+  as_found.start();
+  EXPECT_EQ(as_found.bus->get(2, "return_delay_time"), 250);
+  EXPECT_DOUBLE_EQ(as_found.bus->return_delay_s(), 500e-6);
+  EXPECT_TRUE(as_found.ctl->start_notes().empty());
+
+  DriverConfig odd;
+  odd.return_delay_time_us = 7;
+  const auto errors = odd.validate();
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("return_delay_time_us: 7"), std::string::npos) << errors[0];
+}
+
 TEST(DriverController, DirectionAndZeroOffsetMapJointsToTicks) {
   Rig rig({}, [](RobotModel& m) {
     m.servos.directions[0] = -1;

@@ -17,6 +17,9 @@ class DriverGait(DriverTestCase):
         h = self.h
         names = wait_for(lambda: h.joint_states and list(h.joint_states.name), 5.0, "joint_states")
         self.assertEqual(names, [f"joint_{i}" for i in range(1, 12)])
+        # The mock's servos start with the factory Return Delay Time (500 us); the driver wrote 0
+        # over Protocol 2.0 before enabling torque.
+        self.assertEqual({s["return_delay_us"] for s in h.mock_state().values()}, {0})
         h.command("sidewind")
         h.wait_diag(LOCO, lambda s: s.message == "running", 5.0, "running")
         # Yaw joint 2 swings about +-45 deg = +-512 ticks once the amplitude has grown.

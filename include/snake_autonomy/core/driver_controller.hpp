@@ -121,7 +121,11 @@ class DriverController {
   // hardware error status, present position. Throws ConfigError listing every servo that fails.
   // Then: torque on and kHolding (torque_on_start), or kStopped; kFault when a servo reports a
   // hardware error.
+  // Before that, each servo's Return Delay Time is set to config.return_delay_time_us where it differs
+  // (EEPROM: only while the servo's torque is off) and the bus's reply deadlines allow for the
+  // slowest servo; start_notes() says what was changed or could not be.
   void start(double t_s);
+  const std::vector<std::string>& start_notes() const noexcept { return start_notes_; }
   // One cycle (see the file comment). Returns false when the cycle failed (a missing reply or a
   // failed write). dt_s is clamped to [0, max_step_s].
   bool update(double t_s, double dt_s) noexcept;
@@ -206,6 +210,9 @@ class DriverController {
   void describe_bits(std::uint8_t bits, char* out, std::size_t size) const noexcept;
   std::int32_t clamp_goal(int joint, std::int32_t ticks) const noexcept;
   void set_limits(int joint, std::int32_t servo_min_ticks, std::int32_t servo_max_ticks) noexcept;
+  // Reads servo j's Return Delay Time, writes the configured one where it differs; returns the
+  // servo's delay in microseconds afterwards (problems: a failed read).
+  int settle_return_delay(int j, const std::string& name, std::vector<std::string>& problems);
   void goals_from_rad() noexcept;  // goal_rad_ -> clamped goal ticks -> the write buffer
 
   RobotModel model_;
@@ -217,6 +224,8 @@ class DriverController {
   std::vector<std::uint8_t> ids_;
   std::vector<int> directions_, zero_offsets_;
   std::uint16_t addr_torque_ = 0, addr_hw_error_ = 0, addr_mode_ = 0, addr_min_pos_ = 0, addr_max_pos_ = 0;
+  std::uint16_t addr_return_delay_ = 0;
+  std::vector<std::string> start_notes_;
   std::uint16_t addr_status_ = 0, status_bytes_ = 0, voltage_offset_ = 0, voltage_bytes_ = 2, temperature_offset_ = 0;
 
   // Bus buffers, sized in the constructor.

@@ -37,6 +37,9 @@ class FakeServoBus : public ServoBus {
                         std::uint8_t* data, ServoReply* replies) noexcept override;
   const BusCounters& counters() const noexcept override { return counters_; }
   void reset_counters() noexcept override { counters_ = BusCounters{}; }
+  // Kept for inspection only: the fake answers at once.
+  void set_return_delay_s(double seconds) noexcept override { return_delay_s_ = seconds; }
+  double return_delay_s() const noexcept override { return return_delay_s_; }
 
   // --- fault injection ---
   void set_dead(std::uint8_t id, bool dead);                 // never answers (kTimeout)
@@ -57,6 +60,7 @@ class FakeServoBus : public ServoBus {
   std::uint64_t refused_writes() const noexcept { return refused_writes_; }
 
  private:
+  double return_delay_s_ = 0.0;
   struct Servo {
     std::uint8_t id = 0;
     std::vector<std::uint8_t> memory;  // 1024 bytes, sized at construction

@@ -64,6 +64,8 @@ class Protocol2Bus : public ServoBus {
 
   const BusCounters& counters() const noexcept override { return counters_; }
   void reset_counters() noexcept override { counters_ = BusCounters{}; }
+  void set_return_delay_s(double seconds) noexcept override { timing_.return_delay_s = seconds; }
+  double return_delay_s() const noexcept override { return timing_.return_delay_s; }
 
   const BusTiming& timing() const noexcept { return timing_; }
   void set_timing(const BusTiming& timing) noexcept { timing_ = timing; }

@@ -85,6 +85,8 @@ class SerialBus : public ServoBus {
   }
   const BusCounters& counters() const noexcept override { return bus_.counters(); }
   void reset_counters() noexcept override { bus_.reset_counters(); }
+  void set_return_delay_s(double seconds) noexcept override { bus_.set_return_delay_s(seconds); }
+  double return_delay_s() const noexcept override { return bus_.return_delay_s(); }
 
   const SerialConfig& config() const noexcept { return config_; }
   SerialPort& port() noexcept { return port_; }

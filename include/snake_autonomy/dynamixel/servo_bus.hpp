@@ -76,6 +76,11 @@ class ServoBus {
 
   virtual const BusCounters& counters() const noexcept = 0;
   virtual void reset_counters() noexcept = 0;
+
+  // The servos' Return Delay Time (the wait before each status packet), which a bus with reply
+  // deadlines must allow for: once per reply, so n times in a sync read of n servos.
+  virtual void set_return_delay_s(double seconds) noexcept = 0;
+  virtual double return_delay_s() const noexcept = 0;
 };
 
 }  // namespace snake_autonomy::dynamixel

@@ -180,13 +180,14 @@ class MockServoBus:
             return out
 
     def state(self) -> dict:
-        """Per servo: goal and present ticks, torque, hardware error bits."""
+        """Per servo: goal and present ticks, torque, hardware error bits, Return Delay Time."""
         with self._lock:
             self._refresh()
             return {str(i): {"goal_ticks": self._read_entry(s, "goal_position"),
                              "present_ticks": self._read_entry(s, "present_position"),
                              "torque": bool(self._read_entry(s, "torque_enable")),
                              "hardware_error": self._read_entry(s, "hardware_error_status"),
+                             "return_delay_us": 2 * self._read_entry(s, "return_delay_time"),
                              "silent": s.silent}
                     for i, s in self._servos.items()}
 
