@@ -520,7 +520,7 @@ double yaw_of(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)); }
 
 void bind_driver(py::module_& m) {
   py::class_<DriverConfig>(m, "DriverConfig", "Configuration of DriverController (config/driver.yaml documents every key).")
-      .def(py::init([](bool fast_sync_read, int max_failed_cycles, int status_every_cycles,
+      .def(py::init([](bool fast_sync_read, int max_failed_cycles, int status_every_cycles, int return_delay_time_us,
                        const std::string& fault_action, const std::string& shutdown_action, bool torque_on_start,
                        double max_joint_velocity_rad_s, double max_frequency_hz, double max_step_s,
                        int plausible_margin_ticks, double pose_timeout_s, bool require_pose) {
@@ -533,6 +533,7 @@ void bind_driver(py::module_& m) {
              c.fast_sync_read = fast_sync_read;
              c.max_failed_cycles = max_failed_cycles;
              c.status_every_cycles = status_every_cycles;
+             c.return_delay_time_us = return_delay_time_us;
              c.torque_on_start = torque_on_start;
              c.max_joint_velocity_rad_s = max_joint_velocity_rad_s;
              c.max_frequency_hz = max_frequency_hz;
@@ -551,6 +552,7 @@ void bind_driver(py::module_& m) {
            py::kw_only(), py::arg("fast_sync_read") = DriverConfig{}.fast_sync_read,
            py::arg("max_failed_cycles") = DriverConfig{}.max_failed_cycles,
            py::arg("status_every_cycles") = DriverConfig{}.status_every_cycles,
+           py::arg("return_delay_time_us") = DriverConfig{}.return_delay_time_us,
            py::arg("fault_action") = std::string(to_string(DriverConfig{}.fault_action)),
            py::arg("shutdown_action") = std::string(to_string(DriverConfig{}.shutdown_action)),
            py::arg("torque_on_start") = DriverConfig{}.torque_on_start,
@@ -564,6 +566,7 @@ void bind_driver(py::module_& m) {
       .def_readwrite("fast_sync_read", &DriverConfig::fast_sync_read)
       .def_readwrite("max_failed_cycles", &DriverConfig::max_failed_cycles)
       .def_readwrite("status_every_cycles", &DriverConfig::status_every_cycles)
+      .def_readwrite("return_delay_time_us", &DriverConfig::return_delay_time_us)
       .def_property_readonly("fault_action", [](const DriverConfig& c) { return std::string(to_string(c.fault_action)); },
                              "'hold' or 'torque_off'")
       .def_property_readonly("shutdown_action",

@@ -15,7 +15,7 @@ import pytest
 from snake_autonomy import _core
 from snake_autonomy.control import WaypointTracker
 from snake_autonomy.missions import MissionError, load_defaults
-from snake_autonomy.sim.batch import BatchRun, RunSpec
+from snake_autonomy.sim.batch import BatchRun, RunSpec, load_driver_config
 from snake_autonomy.sim.disturbances import parse_triggers
 from snake_autonomy.sim.experiments import SINGLE_STARTS, run_experiment
 
@@ -118,12 +118,29 @@ def test_driver_controller_holds_on_stale_pose_and_keeps_goals_in_limits():
     assert drv.set_base_pose(6.0, [0, 0, 0], [0, 0, 0, 0]) is False   # no length: ignored
 
 
+def test_load_driver_config_takes_the_controllers_keys_of_driver_yaml(tmp_path):
+    """The batch path reads the same driver.yaml as driver_node: every controller key, the node's
+    own keys (port, rate, frames) ignored, bad values refused naming the key."""
+    cfg = load_driver_config(str(ROOT / "config" / "driver.yaml"))
+    assert cfg.return_delay_time_us == 0 and cfg.max_failed_cycles == 10 and cfg.fault_action == "hold"
+    f = tmp_path / "driver.yaml"
+    f.write_text("rate_hz: 250.0\nbase_frame: b\nreturn_delay_time_us: -1\nmax_failed_cycles: 4\n"
+                 "fault_action: torque_off\nrequire_pose: false\n")
+    cfg = load_driver_config(str(f))
+    assert (cfg.return_delay_time_us, cfg.max_failed_cycles, cfg.fault_action, cfg.require_pose) == (-1, 4, "torque_off", False)
+    f.write_text("return_delay_time_us: 3\n")
+    with pytest.raises(ValueError, match="return_delay_time_us: 3"):
+        load_driver_config(str(f))
+
+
 def test_driver_controller_binding_config_faults_and_lifetime():
     with pytest.raises(ValueError, match="max_joint_velocity_rad_s"):
         _core.DriverConfig(max_joint_velocity_rad_s=-1.0)
     with pytest.raises(ValueError, match="fault_action"):
         _core.DriverConfig(fault_action="explode")
     assert _core.DriverConfig(pose_timeout_s=0.25).pose_timeout_s == 0.25
+    with pytest.raises(ValueError, match="return_delay_time_us: 7"):
+        _core.DriverConfig(return_delay_time_us=7)
     robot, bus, drv = _controller(max_failed_cycles=3)
     del bus                                       # the controller keeps its bus alive
     import gc

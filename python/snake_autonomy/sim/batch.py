@@ -131,9 +131,9 @@ def start_base_pose(robot, kinematics, start_xy_heading: Sequence[float], headin
     return x - com[0], y - com[1], yaw
 
 
-DRIVER_CONFIG_KEYS = ("fast_sync_read", "max_failed_cycles", "status_every_cycles", "fault_action", "shutdown_action",
-                      "torque_on_start", "max_joint_velocity_rad_s", "max_frequency_hz", "max_step_s",
-                      "plausible_margin_ticks", "pose_timeout_s", "require_pose")
+# The controller's keys: the properties the binding gives DriverConfig, so a key added to the
+# binding is read from driver.yaml here without a second list.
+DRIVER_CONFIG_KEYS = tuple(k for k, v in vars(_core.DriverConfig).items() if isinstance(v, property))
 
 
 def load_driver_config(path: str):
