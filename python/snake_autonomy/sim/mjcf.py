@@ -49,8 +49,12 @@ def _f(x: float) -> str:
     return f"{float(x):.17g}"
 
 
-def build_mjcf(robot, params: SimParams) -> str:
-    """MJCF text of `robot` (a _core.RobotModel) with the physics of `params`."""
+def build_mjcf(robot, params: SimParams, scene_xml: str = "") -> str:
+    """MJCF text of `robot` (a _core.RobotModel) with the physics of `params`.
+
+    scene_xml: MJCF elements (bodies, geoms, cameras) placed in the worldbody beside the floor:
+    obstacles, pipes, the things a planner's world holds. Their geoms should set contype and
+    conaffinity so that the links touch them (links: contype 1, conaffinity 2 or 3)."""
     cfg = params.config
     phys, servo = cfg.physics, cfg.servo
     n = robot.num_joints
@@ -85,6 +89,7 @@ def build_mjcf(robot, params: SimParams) -> str:
         f'    <geom name="floor" type="plane" size="0 0 1" contype="2" conaffinity="1" '
         f'condim="{condim}" friction="{friction}"/>',
         '    <light pos="0 0 4" dir="0 0 -1" directional="true"/>',
+        *([scene_xml.rstrip("\n")] if scene_xml else []),
         f'    <body name="base_link" pos="0 0 {_f(r + phys.start_height_m)}">',
         '      <freejoint name="base"/>',
         '      <site name="base_link"/>',
