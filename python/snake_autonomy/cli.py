@@ -2,9 +2,14 @@
 
 Each subcommand module defines ``add_arguments(parser)`` and ``main(args) -> int`` and is imported
 only when its subcommand runs, so a broken or slow import in one never affects another.
+
+No traceback reaches a user: a subcommand reports the input problems it knows (exit 1); anything that
+still escapes it (a bad file refused by a loader, an out-of-memory, a bug) is printed here as one
+line naming the command, exit 1. ``SNAKE_AUTONOMY_DEBUG=1`` re-raises it, with its traceback.
 """
 import argparse
 import importlib
+import os
 import sys
 
 # subcommand -> (module, one-line help)
@@ -37,7 +42,27 @@ def main(argv=None) -> int:
         return 2
     if not hasattr(args, "_main"):
         parser.error(f"unknown command {args.command!r}")
-    return int(args._main(args) or 0)
+    try:
+        return int(args._main(args) or 0)
+    except KeyboardInterrupt:
+        return 130
+    except Exception as exc:  # noqa: BLE001 - the last guard: one line, never a traceback
+        if os.environ.get("SNAKE_AUTONOMY_DEBUG"):
+            raise
+        print(f"snake_autonomy {args.command}: error: {one_line(exc)}", file=sys.stderr)
+        return 1
+
+
+def one_line(exc: BaseException) -> str:
+    """The exception as one line: its message (an OSError with its file), else its type's name."""
+    if isinstance(exc, OSError) and exc.filename:
+        return f"{exc.filename}: {exc.strerror or exc}"
+    if isinstance(exc, MemoryError):
+        return "out of memory (input too large)"
+    if isinstance(exc, RecursionError):
+        return "input nested too deeply"
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if isinstance(exc, ValueError) else f"{type(exc).__name__}: {text}"
 
 
 if __name__ == "__main__":

@@ -1,18 +1,79 @@
 #include "snake_autonomy/core/config_reader.hpp"
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <system_error>
 
 #include "snake_autonomy/core/robot_model.hpp"
 
 namespace snake_autonomy::core {
 
+namespace {
+
+// Flow-style rendering that stops after `budget` characters (never walks a huge node whole).
+void dump_bounded(const YAML::Node& n, std::string* out, std::size_t budget, int depth) {
+  if (out->size() >= budget) return;
+  if (depth > 8) {
+    *out += "...";
+    return;
+  }
+  switch (n.Type()) {
+    case YAML::NodeType::Scalar:
+      *out += n.Scalar().substr(0, budget - out->size());
+      return;
+    case YAML::NodeType::Sequence: {
+      *out += "[";
+      bool first = true;
+      for (const auto& item : n) {
+        if (out->size() >= budget) return;
+        if (!first) *out += ", ";
+        first = false;
+        dump_bounded(item, out, budget, depth + 1);
+      }
+      *out += "]";
+      return;
+    }
+    case YAML::NodeType::Map: {
+      *out += "{";
+      bool first = true;
+      for (const auto& kv : n) {
+        if (out->size() >= budget) return;
+        if (!first) *out += ", ";
+        first = false;
+        dump_bounded(kv.first, out, budget, depth + 1);
+        *out += ": ";
+        dump_bounded(kv.second, out, budget, depth + 1);
+      }
+      *out += "}";
+      return;
+    }
+    case YAML::NodeType::Null:
+      *out += "~";
+      return;
+    case YAML::NodeType::Undefined:
+      return;
+  }
+}
+
+}  // namespace
+
 std::string read_config_file(const std::string& path, const std::string& what) {
-  std::ifstream in(path);
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) throw ConfigError(path + ": cannot open " + what + " (" + ec.message() + ")");
+  if (size > kMaxConfigBytes)
+    throw ConfigError(path + ": larger than " + std::to_string(kMaxConfigBytes) + " bytes (" +
+                      std::to_string(size) + "): not a " + what);
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path + ": cannot open " + what);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
+  std::string text(static_cast<std::size_t>(size), '\0');
+  in.read(text.data(), static_cast<std::streamsize>(size));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  const auto nul = text.find('\0');
+  if (nul != std::string::npos)
+    throw ConfigError(path + ": not a text file (NUL byte at offset " + std::to_string(nul) + "): not a " + what);
+  return text;
 }
 
 YAML::Node load_config_yaml(const std::string& text, const std::string& source) {
@@ -35,9 +96,13 @@ YAML::Node ConfigReader::child(const YAML::Node& parent, const std::string& key,
 }
 
 std::string ConfigReader::dump(const YAML::Node& n) {
-  YAML::Emitter e;
-  e << YAML::Flow << n;
-  return e.c_str();
+  std::string out;
+  dump_bounded(n, &out, kMaxDumpChars, 0);
+  if (out.size() >= kMaxDumpChars) {
+    out.resize(kMaxDumpChars);
+    out += "...";
+  }
+  return out;
 }
 
 void throw_if_errors(const std::vector<std::string>& errors, const std::string& source, const std::string& what) {

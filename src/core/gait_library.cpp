@@ -1,6 +1,7 @@
 #include "snake_autonomy/core/gait_library.hpp"
 
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 #include "snake_autonomy/core/config_reader.hpp"
@@ -9,6 +10,17 @@ namespace snake_autonomy::core {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
+// Loader bounds (physical ranges): a gait outside them is refused with its key and value.
+constexpr double kMaxFrequencyHz = 5.0;    // far above what the servos follow (the driver limits further)
+constexpr double kMaxAngleDeg = 180.0;     // |amplitude_deg|, |bias_deg|
+constexpr double kMaxPhaseDeg = 360.0;     // |lag_deg|, |offset_deg|
+constexpr std::size_t kMaxGaits = 256;
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
 
 void read_wave(const YAML::Node& gait, const std::string& axis, const std::string& where, WaveSpec* w,
                std::vector<std::string>* errors) {
@@ -20,18 +32,23 @@ void read_wave(const YAML::Node& gait, const std::string& axis, const std::strin
   }
   const std::string at = where + "." + axis;
   for (auto it = n.begin(); it != n.end(); ++it) {
-    const auto key = it->first.as<std::string>();
+    const auto key = it->first.IsScalar() ? it->first.Scalar() : ConfigReader::dump(it->first);
     if (key != "amplitude_deg" && key != "lag_deg" && key != "offset_deg" && key != "bias_deg")
       errors->push_back(at + "." + key + ": unknown key (expected amplitude_deg, lag_deg, offset_deg, bias_deg)");
   }
-  auto angle = [&](const char* key, bool required, double* out_rad) {
+  auto angle = [&](const char* key, bool required, double bound_deg, double* out_rad) {
     double deg = 0.0;
-    if (r.scalar(r.child(n, key, at + "." + key, required), at + "." + key, &deg)) *out_rad = deg * kDegToRad;
+    if (!r.scalar(r.child(n, key, at + "." + key, required), at + "." + key, &deg)) return;
+    if (std::abs(deg) > bound_deg) {
+      errors->push_back(at + "." + key + ": must be within +-" + fmt(bound_deg) + " deg, got " + fmt(deg));
+      return;
+    }
+    *out_rad = deg * kDegToRad;
   };
-  angle("amplitude_deg", true, &w->amplitude_rad);
-  angle("lag_deg", false, &w->lag_rad);
-  angle("offset_deg", false, &w->offset_rad);
-  angle("bias_deg", false, &w->bias_rad);
+  angle("amplitude_deg", true, kMaxAngleDeg, &w->amplitude_rad);
+  angle("lag_deg", false, kMaxPhaseDeg, &w->lag_rad);
+  angle("offset_deg", false, kMaxPhaseDeg, &w->offset_rad);
+  angle("bias_deg", false, kMaxAngleDeg, &w->bias_rad);
 }
 
 }  // namespace
@@ -40,22 +57,30 @@ GaitLibrary GaitLibrary::from_yaml_string(const std::string& text, const std::st
   const YAML::Node root = load_config_yaml(text, source);
   if (!root["gaits"] || !root["gaits"].IsMap())
     throw ConfigError(source + ": expected a mapping 'gaits:' of gait names to definitions");
+  if (root["gaits"].size() > kMaxGaits)
+    throw ConfigError(source + ": gaits: at most " + std::to_string(kMaxGaits) + " gaits, got " +
+                      std::to_string(root["gaits"].size()));
   std::vector<std::string> errors;
   GaitLibrary lib;
   for (auto it = root["gaits"].begin(); it != root["gaits"].end(); ++it) {
     GaitSpec g;
-    g.name = it->first.as<std::string>();
+    if (!it->first.IsScalar()) {
+      errors.push_back("gaits: a gait name must be a string, got '" + ConfigReader::dump(it->first) + "'");
+      continue;
+    }
+    g.name = it->first.Scalar();
     const std::string where = "gaits." + g.name;
     const YAML::Node n = it->second;
     if (!n.IsMap()) {
       errors.push_back(where + ": expected a mapping");
       continue;
     }
-    if (n["description"]) g.description = n["description"].as<std::string>();
+    ConfigReader(&errors).scalar(n["description"], where + ".description", &g.description);
     ConfigReader r(&errors);
     if (r.scalar(r.child(n, "frequency_hz", where + ".frequency_hz"), where + ".frequency_hz", &g.frequency_hz) &&
-        g.frequency_hz < 0.0)
-      errors.push_back(where + ".frequency_hz: must be >= 0, got " + std::to_string(g.frequency_hz));
+        (g.frequency_hz < 0.0 || g.frequency_hz > kMaxFrequencyHz))
+      errors.push_back(where + ".frequency_hz: must be in 0.." + fmt(kMaxFrequencyHz) + " Hz, got " +
+                       fmt(g.frequency_hz));
     read_wave(n, "pitch", where, &g.pitch, &errors);
     read_wave(n, "yaw", where, &g.yaw, &errors);
     r.scalar(r.child(n, "steerable", where + ".steerable", false), where + ".steerable", &g.steerable);

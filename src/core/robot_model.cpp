@@ -53,26 +53,35 @@ std::vector<int> RobotModel::pitch_joints() const {
 
 std::vector<std::string> RobotModel::validate() const {
   std::vector<std::string> e;
-  auto positive = [&](const std::string& key, double v) {
-    if (!(v > 0.0) || !std::isfinite(v)) e.push_back(key + ": must be a positive number, got " + fmt(v));
+  // a physical range (lo, hi]: positive and at most hi (e.g. no mass of 1e308 kg)
+  auto positive_upto = [&](const std::string& key, double v, double hi, const char* unit) {
+    if (!(v > 0.0) || !std::isfinite(v))
+      e.push_back(key + ": must be a positive number, got " + fmt(v));
+    else if (v > hi)
+      e.push_back(key + ": must be at most " + fmt(hi) + " " + unit + ", got " + fmt(v));
+  };
+  auto within = [&](const std::string& key, double v, double bound, const char* unit) {
+    if (!std::isfinite(v) || std::abs(v) > bound)
+      e.push_back(key + ": must be within +-" + fmt(bound) + " " + unit + ", got " + fmt(v));
   };
   auto length = [&](const std::string& key, std::size_t got, std::size_t want) {
     if (got != want)
       e.push_back(key + ": expected " + std::to_string(want) + " values, got " + std::to_string(got));
     return got == want;
   };
-  if (num_joints < 2) {
-    e.push_back("num_joints: must be an integer >= 2, got " + std::to_string(num_joints));
+  if (num_joints < 2 || num_joints > kMaxJoints) {
+    e.push_back("num_joints: must be an integer in 2.." + std::to_string(kMaxJoints) + ", got " +
+                std::to_string(num_joints));
     return e;  // every other length check depends on it
   }
   const auto n = static_cast<std::size_t>(num_joints);
   length("axis_pattern", axes.size(), n);
-  positive("head_length_m", head_length_m);
-  positive("link_length_m", link_length_m);
-  positive("link_radius_m", link_radius_m);
+  positive_upto("head_length_m", head_length_m, kMaxLengthM, "m");
+  positive_upto("link_length_m", link_length_m, kMaxLengthM, "m");
+  positive_upto("link_radius_m", link_radius_m, kMaxLengthM, "m");
   if (length("masses_kg", masses_kg.size(), n + 2))
     for (std::size_t i = 0; i < masses_kg.size(); ++i)
-      positive("masses_kg[" + std::to_string(i) + "]", masses_kg[i]);
+      positive_upto("masses_kg[" + std::to_string(i) + "]", masses_kg[i], kMaxMassKg, "kg");
   const bool lower_ok = length("joint_limits_deg.lower", joint_lower_rad.size(), n);
   const bool upper_ok = length("joint_limits_deg.upper", joint_upper_rad.size(), n);
   if (lower_ok && upper_ok) {
@@ -80,6 +89,9 @@ std::vector<std::string> RobotModel::validate() const {
       const double lo = joint_lower_rad[i], hi = joint_upper_rad[i];
       if (!std::isfinite(lo) || !std::isfinite(hi) || lo >= hi)
         e.push_back("joint_limits_deg[" + std::to_string(i) + "]: lower must be < upper, got lower " +
+                    fmt(lo / kDegToRad) + ", upper " + fmt(hi / kDegToRad));
+      else if (lo < -M_PI - 1e-12 || hi > M_PI + 1e-12)
+        e.push_back("joint_limits_deg[" + std::to_string(i) + "]: must be within +-180, got lower " +
                     fmt(lo / kDegToRad) + ", upper " + fmt(hi / kDegToRad));
     }
   }
@@ -104,22 +116,24 @@ std::vector<std::string> RobotModel::validate() const {
       if (std::abs(servos.zero_offsets_ticks[i]) > 2048)
         e.push_back("servos.zero_offsets_ticks[" + std::to_string(i) + "]: must be within +-2048, got " +
                     std::to_string(servos.zero_offsets_ticks[i]));
-  positive("cpg.mu", cpg.mu);
-  positive("cpg.gamma", cpg.gamma);
-  positive("cpg.amplitude_limit_deg", cpg.amplitude_limit_rad / kDegToRad);
+  positive_upto("cpg.mu", cpg.mu, kMaxCpgRate, "1/s");
+  positive_upto("cpg.gamma", cpg.gamma, kMaxCpgRate, "rad/s");
+  positive_upto("cpg.amplitude_limit_deg", cpg.amplitude_limit_rad / kDegToRad, 180.0, "deg");
   const std::size_t n_yaw = yaw_joints().size();
   if (axes.size() == n) length("steering.weights", steering.weights.size(), n_yaw);
   for (std::size_t i = 0; i < steering.weights.size(); ++i)
-    if (!std::isfinite(steering.weights[i]))
-      e.push_back("steering.weights[" + std::to_string(i) + "]: must be finite, got " + fmt(steering.weights[i]));
-  positive("steering.delta_limit_deg", steering.delta_limit_rad / kDegToRad);
-  if (!std::isfinite(steering.delta_offset_rad))
-    e.push_back("steering.delta_offset_deg: must be finite, got " + fmt(steering.delta_offset_rad / kDegToRad));
+    within("steering.weights[" + std::to_string(i) + "]", steering.weights[i], kMaxSteeringWeight, "");
+  positive_upto("steering.delta_limit_deg", steering.delta_limit_rad / kDegToRad, 90.0, "deg");
+  within("steering.delta_offset_deg", steering.delta_offset_rad / kDegToRad, 90.0, "deg");
+  within("steering.amplitude_min_deg", steering.amplitude_min_rad / kDegToRad, 180.0, "deg");
+  within("steering.amplitude_max_deg", steering.amplitude_max_rad / kDegToRad, 180.0, "deg");
   if (!(steering.amplitude_min_rad < steering.amplitude_max_rad))
     e.push_back("steering.amplitude_min_deg: must be < amplitude_max_deg, got " +
                 fmt(steering.amplitude_min_rad / kDegToRad) + " and " + fmt(steering.amplitude_max_rad / kDegToRad));
   if (!(bbox_padding_m >= 0.0) || !std::isfinite(bbox_padding_m))
     e.push_back("bounding_box_padding_m: must be >= 0, got " + fmt(bbox_padding_m));
+  else if (bbox_padding_m > kMaxLengthM)
+    e.push_back("bounding_box_padding_m: must be at most " + fmt(kMaxLengthM) + " m, got " + fmt(bbox_padding_m));
   return e;
 }
 
@@ -139,6 +153,7 @@ RobotModel RobotModel::from_yaml_string(const std::string& text, const std::stri
   RobotModel m;
   r.scalar(r.child(root, "name", "name"), "name", &m.name);
   r.scalar(r.child(root, "num_joints", "num_joints"), "num_joints", &m.num_joints);
+  const bool joints_ok = m.num_joints >= 2 && m.num_joints <= kMaxJoints;  // before anything is sized by it
 
   std::vector<std::string> pattern;
   if (r.list(r.child(root, "axis_pattern", "axis_pattern"), "axis_pattern", &pattern)) {
@@ -153,7 +168,7 @@ RobotModel RobotModel::from_yaml_string(const std::string& text, const std::stri
                          "' (expected pitch or yaw)");
       }
     }
-    if (cycle.size() == pattern.size() && !cycle.empty() && m.num_joints > 0) {
+    if (cycle.size() == pattern.size() && !cycle.empty() && joints_ok) {
       if (cycle.size() > static_cast<std::size_t>(m.num_joints)) {
         errors.push_back("axis_pattern: " + std::to_string(cycle.size()) + " entries for " +
                          std::to_string(m.num_joints) + " joints");

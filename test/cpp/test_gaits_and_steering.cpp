@@ -69,7 +69,7 @@ gaits:
     FAIL() << "accepted a broken library";
   } catch (const ConfigError& e) {
     const std::string w = e.what();
-    EXPECT_NE(w.find("gaits.a.frequency_hz: must be >= 0, got -1"), std::string::npos) << w;
+    EXPECT_NE(w.find("gaits.a.frequency_hz: must be in 0..5 Hz, got -1"), std::string::npos) << w;
     EXPECT_NE(w.find("gaits.a.pitch.amplitude_deg: expected a number, got 'x'"), std::string::npos) << w;
     EXPECT_NE(w.find("gaits.a.yaw.lag: unknown key"), std::string::npos) << w;
     EXPECT_NE(w.find("gaits.b.frequency_hz: missing"), std::string::npos) << w;

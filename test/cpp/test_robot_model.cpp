@@ -43,7 +43,7 @@ TEST(RobotModel, AnyJointCountFromTwoWorks) {
   EXPECT_TRUE(m.validate().empty()) << m.validate().front();
   m.num_joints = 1;
   ASSERT_FALSE(m.validate().empty());
-  EXPECT_EQ(m.validate().front(), "num_joints: must be an integer >= 2, got 1");
+  EXPECT_EQ(m.validate().front(), "num_joints: must be an integer in 2..64, got 1");
 }
 
 TEST(RobotModel, ReportsEveryProblemNamingKeyAndValue) {

@@ -89,7 +89,7 @@ def test_every_problem_is_listed(tmp_path):
         "gaits.sidewind: unknown gait 'slither'",
         "gaits.wiggle: unknown tracker gait (value 'sidewind')",
         "tracker.kp: must be a finite number, got 'high'",
-        "time_limit_s: must be a positive number of seconds, got 0",
+        "time_limit_s: must be a positive number of seconds up to 86400, got 0",
         "colour: unknown key (value 'red')",
     ]
     for e in expected:

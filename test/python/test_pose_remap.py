@@ -181,3 +181,50 @@ def test_bad_gate_parameters(tmp_path):
     f.write_text("lost_tracking: {jump_cm: 3}\n")
     with pytest.raises(ValueError, match="lost_tracking.jump_cm: unknown key"):
         load_gate_params(f)
+
+
+# ---- absurd but finite poses (issue 10, point 5) -------------------------------------------------
+def test_a_first_pose_far_outside_the_workspace_is_refused_and_normal_poses_still_pass():
+    g = gate(workspace_m=100.0)
+    r = g.check(0.0, (1e300, 0, 0), IDQ, COV)
+    assert (r.ok, r.state) == (False, "invalid")
+    assert "position" in r.detail and "outside the workspace" in r.detail and "workspace_m 100" in r.detail
+    r = g.check(0.03, (0.1, 0.0, 0.0), IDQ, COV)   # was refused as "jumped inf m" until reset
+    assert r.ok and g.state == "ok"
+    assert not g.check(0.06, (0.1, -101.0, 0.0), IDQ, COV).ok   # the bound holds on every axis
+
+
+def test_a_huge_quaternion_is_not_a_unit_quaternion_and_not_a_zero_one():
+    g = gate()
+    r = g.check(0.0, (0, 0, 0), (0.0, 0.0, 1e200, 1e200), COV)
+    assert (r.ok, r.state) == (False, "invalid")
+    assert "not a unit quaternion (norm 1.41421e+200" in r.detail and "zero" not in r.detail
+    r = g.check(0.01, (0, 0, 0), (0.0, 0.0, 0.0, 1.05), COV)      # 5 % off: refused too
+    assert not r.ok and "not a unit quaternion (norm 1.05" in r.detail
+    assert g.check(0.02, (0, 0, 0), (0.0, 0.0, 0.0, 1.005), COV).ok   # within the 1 % tolerance
+    r = g.check(0.03, (0, 0, 0), (0.0, 0.0, 0.0, 0.0), COV)
+    assert (r.state, "zero quaternion" in r.detail) == ("lost", True)   # RTAB-Map's null pose
+
+
+@pytest.mark.parametrize("position,quat,cov,field", [
+    ((float("nan"), 0, 0), IDQ, COV, "position"),
+    ((0, 0, 0), (0, float("inf"), 0, 1), COV, "orientation"),
+    ((0, 0, 0), IDQ, (0.01, float("nan"), 0.01, 0.01, 0.01, 0.01), "covariance"),
+])
+def test_a_non_finite_value_is_blamed_on_its_own_field(position, quat, cov, field):
+    r = gate().check(0.0, position, quat, cov)
+    assert (r.ok, r.state) == (False, "invalid")
+    assert r.detail.startswith(f"non-finite {field} ")
+    others = {"position", "orientation", "covariance"} - {field}
+    assert not any(o in r.detail for o in others), r.detail
+
+
+def test_workspace_and_tolerance_come_from_camera_yaml(root, tmp_path):
+    p = load_gate_params(root / "config" / "camera.yaml")
+    assert (p.workspace_m, p.quaternion_tolerance) == (100.0, 0.01)
+    f = tmp_path / "cam.yaml"
+    f.write_text("lost_tracking: {workspace_m: -1, quaternion_tolerance: 2}\n")
+    with pytest.raises(ValueError) as err:
+        load_gate_params(f)
+    assert "lost_tracking.workspace_m: must be a positive number, got -1" in str(err.value)
+    assert "lost_tracking.quaternion_tolerance: must be at most 0.5, got 2" in str(err.value)

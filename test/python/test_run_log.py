@@ -74,6 +74,7 @@ def test_killed_run_leaves_a_readable_bag_and_the_known_metrics(tmp_path):
     proc.wait(timeout=10)
     metrics = json.loads((run_dir / "metrics.json").read_text())
     assert metrics["outcome"] == "running"            # the run never ended, what was known is there
+    assert "if the process died this is where it stopped" in metrics["note"] and metrics["updated_at"]
     assert metrics["waypoints"][0]["reached"] is True and metrics["num_decisions"] >= 4
     # rosbag refuses the unindexed bag; read_run reindexes a copy and leaves the original untouched
     import rosbag
@@ -81,7 +82,7 @@ def test_killed_run_leaves_a_readable_bag_and_the_known_metrics(tmp_path):
         rosbag.Bag(str(run_dir / "run.bag"))
     size = (run_dir / "run.bag").stat().st_size
     run = read_run(run_dir / "run.bag")
-    assert run["reindexed"] is True and run["meta"]["outcome"] == "killed"
+    assert run["reindexed"] is True and run["meta"]["outcome"] == "interrupted"
     assert (run_dir / "run.bag").stat().st_size == size
     assert len(run["decisions"]["t"]) >= metrics["num_decisions"]
     assert len(run["trajectory"]["t"]) >= 50 * metrics["num_decisions"]
@@ -90,7 +91,7 @@ def test_killed_run_leaves_a_readable_bag_and_the_known_metrics(tmp_path):
     out = tmp_path / "report"
     assert cli_main(["report", str(run_dir / "run.bag"), "--out", str(out)]) == 0
     rebuilt = json.loads((out / "metrics.json").read_text())
-    assert rebuilt["outcome"] == "killed" and rebuilt["waypoints"][0]["reached"] is True
+    assert rebuilt["outcome"] == "interrupted" and rebuilt["waypoints"][0]["reached"] is True
     assert rebuilt["waypoints"][0]["time_to_reach_s"] == pytest.approx(metrics["waypoints"][0]["time_to_reach_s"])
     assert (out / "yaw_errors.png").is_file()
 
@@ -123,3 +124,33 @@ def test_a_decision_after_close_leaves_the_final_metrics(tmp_path):
     log.add_decision(2.0, 0, 0, False, 0.9, 0.1, 0.2, 0.15)
     metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
     assert metrics["outcome"] == "aborted: SIGTERM"
+
+
+def test_an_interrupted_run_says_so_live_and_in_its_report(tmp_path, capsys):
+    """The process dies without close() (SIGKILL, simulated by dropping the log): metrics.json says it
+    was written live and how to rebuild it; `report BAG` marks the run interrupted."""
+    from geometry_msgs.msg import PoseStamped
+    log = RunLog(tmp_path / "run", "killed", WPS, t_start_s=10.0, mission_yaml="waypoints: []\n")
+    for k in range(3):
+        msg = PoseStamped()
+        msg.header.stamp.secs = 10 + k
+        msg.pose.orientation.w = 1.0
+        log.write("/com_pose", msg, 10.0 + k)
+        log.add_decision(10.0 + k, 0, 0, False, 1.0 - 0.1 * k, 0.1, 0.2, 0.15)
+    live = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert live["outcome"] == "running" and live["num_decisions"] == 3
+    assert live["note"].startswith("written while the run was live; if the process died this is where it stopped")
+    assert "snake_autonomy report " + str(tmp_path / "run" / "run.bag") in live["note"]
+    assert time.strptime(live["updated_at"], "%Y-%m-%dT%H:%M:%S%z")
+    del log                                            # no close(): the bag keeps no end event, no index
+    out = tmp_path / "report"
+    assert cli_main(["report", str(tmp_path / "run" / "run.bag"), "--out", str(out), "--no-plots"]) == 0
+    assert "outcome interrupted" in capsys.readouterr().out
+    rebuilt = json.loads((out / "metrics.json").read_text())
+    assert rebuilt["outcome"] == "interrupted" and rebuilt["meta"]["mission"] == "killed"
+    assert "no end of run" in rebuilt["meta"]["outcome_note"] and "note" not in rebuilt
+    closed = RunLog(tmp_path / "closed", "done", WPS, t_start_s=0.0, mission_yaml="")
+    closed.add_decision(1.0, 0, 0, False, 1.0, 0.1, 0.2, 0.15)
+    closed.close("aborted: test", plots=False)
+    final = json.loads((tmp_path / "closed" / "metrics.json").read_text())
+    assert final["outcome"] == "aborted: test" and "note" not in final

@@ -59,10 +59,12 @@ def test_sim_run_cli_metrics_contract(tmp_path):
     assert (out / "trajectory.png").is_file() and (out / "evaluation" / "stats.json").is_file()
 
 
-def test_sim_run_cli_usage_errors(tmp_path):
+def test_sim_run_cli_input_errors(tmp_path):
+    """A refused mission or option is one message and exit 1 (2 stays argparse's usage error)."""
     cli = [sys.executable, str(ROOT / "scripts" / "snake_autonomy"), "sim", "run", "--out", str(tmp_path)]
-    assert subprocess.call(cli + ["--mission", "no_such_mission"], stderr=subprocess.DEVNULL) == 2
-    assert subprocess.call(cli + ["--mission", SHORT, "--start", "1,2"], stderr=subprocess.DEVNULL) == 2
+    assert subprocess.call(cli + ["--mission", "no_such_mission"], stderr=subprocess.DEVNULL) == 1
+    assert subprocess.call(cli + ["--mission", SHORT, "--start", "1,2"], stderr=subprocess.DEVNULL) == 1
+    assert subprocess.call(cli + ["--mission", SHORT, "--seed", "x"], stderr=subprocess.DEVNULL) == 2
 
 
 def test_batch_run_deterministic_per_seed():

@@ -11,7 +11,15 @@
 
 namespace snake_autonomy::core {
 
-// The whole text of a configuration file; throws ConfigError "<path>: cannot open <what>".
+// Configuration files are small: larger ones are refused before they are read.
+inline constexpr std::size_t kMaxConfigBytes = std::size_t{1} << 20;
+// Longest list a configuration may hold (joints, ids, masses, ...): longer ones are refused unread.
+inline constexpr std::size_t kMaxConfigListLength = 1024;
+// Longest rendering of a value inside an error message (a huge or aliased node is cut short).
+inline constexpr std::size_t kMaxDumpChars = 120;
+
+// The whole text of a configuration file; throws ConfigError "<path>: cannot open <what>",
+// "<path>: larger than 1048576 bytes" or "<path>: not a text file (NUL byte at offset N)".
 std::string read_config_file(const std::string& path, const std::string& what);
 
 // The YAML document of a configuration text; throws ConfigError "<source>: not valid YAML: ..." or
@@ -52,6 +60,11 @@ class ConfigReader {
       errors_->push_back(path + ": expected a list, got '" + dump(n) + "'");
       return false;
     }
+    if (n.size() > kMaxConfigListLength) {
+      errors_->push_back(path + ": at most " + std::to_string(kMaxConfigListLength) + " values, got " +
+                         std::to_string(n.size()));
+      return false;
+    }
     out->clear();
     bool ok = true;
     for (std::size_t i = 0; i < n.size(); ++i) {
@@ -67,6 +80,7 @@ class ConfigReader {
 
   void error(const std::string& message) { errors_->push_back(message); }
 
+  // The value in flow style, at most kMaxDumpChars characters (then "...").
   static std::string dump(const YAML::Node& n);
 
  private:

@@ -40,6 +40,13 @@ class ConfigError : public std::runtime_error {
   explicit ConfigError(const std::string& what) : std::runtime_error(what) {}
 };
 
+// Physical ranges of a robot description (validate() refuses anything outside, naming key and value).
+inline constexpr int kMaxJoints = 64;               // num_joints in 2..64 (checked before any allocation)
+inline constexpr double kMaxMassKg = 100.0;         // per frame, (0, 100] kg
+inline constexpr double kMaxLengthM = 10.0;         // lengths, radius and bounding-box padding, (0, 10] m
+inline constexpr double kMaxCpgRate = 1000.0;       // cpg.mu (1/s) and cpg.gamma (rad/s), (0, 1000]
+inline constexpr double kMaxSteeringWeight = 100.0;  // |steering.weights[i]|
+
 struct RobotModel {
   std::string name;
   int num_joints = 0;

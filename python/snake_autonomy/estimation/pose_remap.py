@@ -20,8 +20,8 @@ from pathlib import Path
 from typing import Optional
 
 import numpy as np
-import yaml
 
+from ..safe_yaml import load_yaml_file
 from ..transforms import invert, make_transform, quat_to_matrix, rot_x, rpy_to_matrix, translation
 
 DEG = math.pi / 180.0
@@ -67,8 +67,7 @@ def load_camera_calibration(path) -> CameraCalibration:
     """config/camera.yaml: ``camera_in_head: {translation_m: [x, y, z], rpy_deg: [r, p, y]}`` or
     ``quaternion_xyzw: [...]`` instead of rpy_deg; ``calibrated: true|false``."""
     path = Path(path)
-    with open(path, "r", encoding="utf-8") as f:
-        data = yaml.safe_load(f)
+    data = load_yaml_file(path)
     problems = []
     section = data.get("camera_in_head") if isinstance(data, dict) else None
     if not isinstance(section, dict):
@@ -111,7 +110,7 @@ OK = "ok"
 WAITING = "waiting"      # no pose yet
 STALE = "stale"          # no pose for longer than stale_timeout_s
 LOST = "lost"            # RTAB-Map's null pose (covariance 9999) or a zero quaternion
-INVALID = "invalid"      # NaN / inf
+INVALID = "invalid"      # NaN / inf, a position outside the workspace, a quaternion that is not unit
 JUMP = "jump"            # moved further than the configured limit since the last good pose
 
 
@@ -125,13 +124,18 @@ class GateParams:
     max_rate_dps: float = 180.0       # stale_timeout_s: while stale the robot holds still)
     relock_after: int = 0             # after a jump, accept a new track after this many mutually
                                       # consistent poses; 0: never by itself (reset() re-arms)
+    workspace_m: float = 100.0        # |x|, |y|, |z| of an odometry position at most this (its frame)
+    quaternion_tolerance: float = 0.01  # | |q| - 1 | at most this (0 < tol <= 0.5); |q| = 0 is lost
 
     def problems(self):
         out = []
-        for name in ("stale_timeout_s", "lost_covariance", "jump_m", "jump_deg", "max_speed_mps", "max_rate_dps"):
+        for name in ("stale_timeout_s", "lost_covariance", "jump_m", "jump_deg", "max_speed_mps", "max_rate_dps",
+                     "workspace_m", "quaternion_tolerance"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 out.append(f"{name}: must be a positive number, got {v!r}")
+        if isinstance(self.quaternion_tolerance, (int, float)) and self.quaternion_tolerance > 0.5:
+            out.append(f"quaternion_tolerance: must be at most 0.5, got {self.quaternion_tolerance!r}")
         if isinstance(self.relock_after, bool) or not isinstance(self.relock_after, int) or self.relock_after < 0:
             out.append(f"relock_after: must be a non-negative integer, got {self.relock_after!r}")
         return out
@@ -185,17 +189,25 @@ class TrackingGate:
         diagonal entries. Returns whether to forward it and, if not, why."""
         p = self.params
         self._last_msg_t = t_s
-        values = list(position) + list(quaternion) + list(covariance_diag)
-        if not all(math.isfinite(v) for v in values):
-            return self._reject(INVALID, f"non-finite value in the pose: position {tuple(position)}, "
-                                         f"orientation {tuple(quaternion)}")
+        position, quaternion = tuple(float(v) for v in position), tuple(float(v) for v in quaternion)
+        covariance_diag = tuple(float(v) for v in covariance_diag)
+        for field_name, values in (("position", position), ("orientation", quaternion),
+                                   ("covariance", covariance_diag)):
+            if not all(math.isfinite(v) for v in values):
+                return self._reject(INVALID, f"non-finite {field_name} {values}")
         if any(c >= p.lost_covariance for c in covariance_diag):
             return self._reject(LOST, f"odometry lost: covariance {max(covariance_diag):g} >= "
                                       f"{p.lost_covariance:g} (null pose)")
-        try:
-            T = make_transform(quat_to_matrix(*quaternion), position)
-        except ValueError:
-            return self._reject(LOST, f"odometry lost: zero quaternion {tuple(quaternion)} (null pose)")
+        if any(abs(v) > p.workspace_m for v in position):
+            return self._reject(INVALID, f"position {position} outside the workspace "
+                                         f"(|x|, |y|, |z| <= workspace_m {p.workspace_m:g} m)")
+        norm = math.hypot(*quaternion)          # no overflow for components near 1e200
+        if norm == 0.0:
+            return self._reject(LOST, f"odometry lost: zero quaternion {quaternion} (null pose)")
+        if abs(norm - 1.0) > p.quaternion_tolerance:
+            return self._reject(INVALID, f"orientation {quaternion} is not a unit quaternion "
+                                         f"(norm {norm:.6g}, tolerance {p.quaternion_tolerance:g})")
+        T = make_transform(quat_to_matrix(*quaternion), position)
 
         if self._state == JUMP and p.relock_after > 0:
             return self._relock(t_s, T)
@@ -253,9 +265,10 @@ class TrackingGate:
 
 def load_gate_params(path) -> GateParams:
     """The ``lost_tracking:`` section of config/camera.yaml (absent: defaults)."""
-    with open(path, "r", encoding="utf-8") as f:
-        data = yaml.safe_load(f) or {}
-    section = data.get("lost_tracking") or {}
+    data = load_yaml_file(path) or {}
+    section = (data.get("lost_tracking") if isinstance(data, dict) else None) or {}
+    if not isinstance(section, dict):
+        raise ValueError(f"{path}: lost_tracking: expected a mapping, got {type(section).__name__}")
     fields = GateParams.__dataclass_fields__
     unknown = [f"lost_tracking.{k}: unknown key (value {v!r})" for k, v in section.items() if k not in fields]
     if unknown:

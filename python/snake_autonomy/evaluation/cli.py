@@ -3,6 +3,9 @@ loss, per-segment tables, plots and a one-page report. Errors print one message 
 import argparse
 import os
 import sys
+from pathlib import Path
+
+import numpy as np
 
 from .alignment import ALIGN_MODES
 from .errors import EvaluationError
@@ -51,7 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     loss = parser.add_argument_group("tracking loss and segments")
     loss.add_argument("--max-gap", type=float, default=None, metavar="S",
                       help="estimate stamps further apart than S seconds are a tracking loss "
-                           "(0: off; default: max(1 s, 20 median periods))")
+                           "(0: off; default: max(1 s, 20 median periods); negative: refused)")
     loss.add_argument("--lost-covariance", type=float, default=LOST_COVARIANCE, metavar="C",
                       help=f"Odometry covariance at or above C means lost (default {LOST_COVARIANCE:g}, RTAB-Map's)")
     loss.add_argument("--keep-loss", action="store_true",
@@ -82,6 +85,9 @@ def run(args) -> int:
 
     options = options_from_args(args)
     options.validate()
+    if not (np.isfinite(args.lost_covariance) and args.lost_covariance > 0):
+        raise EvaluationError(f"--lost-covariance: must be a positive number, got {args.lost_covariance}")
+    _check_output_paths(args)
     ref = load_trajectory(args.ref, args.ref_format, args.ref_topic, args.lost_covariance)
     est = load_trajectory(args.est, args.est_format, args.est_topic, args.lost_covariance)
     status = _status(args)
@@ -95,6 +101,22 @@ def run(args) -> int:
         if not args.quiet:
             print(f"\nwrote {len(paths)} files to {args.plots}")
     return 0
+
+
+def _check_output_paths(args) -> None:
+    """Creates the output folders now, so an unwritable path fails before the work, in one line."""
+    targets = [("--plots", Path(args.plots))] if args.plots else []
+    if args.json:
+        targets.append(("--json", Path(args.json).parent))
+        if Path(args.json).is_dir():
+            raise EvaluationError(f"--json {args.json}: is a folder; give a file name")
+    for option, folder in targets:
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise EvaluationError(f"{option}: cannot create the folder {folder}: {exc.strerror or exc}") from None
+        if not os.access(folder, os.W_OK):
+            raise EvaluationError(f"{option}: cannot write into {folder}: permission denied")
 
 
 def _status(args):
@@ -118,6 +140,10 @@ def main(args) -> int:
         return run(args)
     except EvaluationError as exc:
         print(f"snake_autonomy evaluate: error: {exc}", file=sys.stderr)
+        return 1
+    except OSError as exc:   # an output that could not be written after all (disk full, removed folder)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"snake_autonomy evaluate: error: cannot write {where}{exc.strerror or exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         return 130

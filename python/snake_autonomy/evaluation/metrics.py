@@ -27,6 +27,15 @@ RELATIONS = {"trans": "translation part", "trans_part": "translation part",
              "full": "full transformation", "point_distance": "point distance"}
 DELTA_UNITS = {"f": "frames", "m": "m"}
 SYNC_METHODS = {"nearest": "nearest_time", "interpolation": "interpolation"}
+# Option ranges: association windows and gaps up to an hour, clock offsets up to 1e10 s (any epoch),
+# RPE steps up to a million frames or metres.
+MAX_WINDOW_S = 3600.0
+MAX_T_OFFSET_S = 1e10
+MAX_DELTA = 1e6
+
+
+def _finite_in(v, lo: float, hi: float) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) and lo <= v <= hi
 
 logger = logging.getLogger(__name__)
 
@@ -47,7 +56,7 @@ class EvaluationOptions:
     delta: float = 1.0             # RPE step
     delta_unit: str = "f"          # f (frames) | m (metres of path)
     all_pairs: bool = False        # RPE: all pairs instead of consecutive ones
-    max_gap_s: Optional[float] = None  # stamps further apart are a loss (None: auto, <= 0: off)
+    max_gap_s: Optional[float] = None  # stamps further apart are a loss (None: auto, 0: off)
     exclude_loss: bool = True      # keep tracking-loss intervals out of alignment and statistics
     segment_keys: Sequence[str] = SEGMENT_KEYS
 
@@ -60,17 +69,23 @@ class EvaluationOptions:
             errors.append(f"relation={self.relation!r} (use one of {', '.join(RELATIONS)})")
         if self.align not in alignment_mod.ALIGN_MODES:
             errors.append(f"align={self.align!r} (use one of {', '.join(alignment_mod.ALIGN_MODES)})")
-        if not self.t_max_diff_s >= 0:
-            errors.append(f"t_max_diff_s={self.t_max_diff_s} (must be >= 0)")
+        if not _finite_in(self.t_max_diff_s, 0.0, MAX_WINDOW_S):
+            errors.append(f"t_max_diff_s={self.t_max_diff_s} (must be in 0..{MAX_WINDOW_S:g} s)")
+        if not _finite_in(self.t_offset_s, -MAX_T_OFFSET_S, MAX_T_OFFSET_S):
+            errors.append(f"t_offset_s={self.t_offset_s} (must be a finite number of seconds within "
+                          f"+-{MAX_T_OFFSET_S:g})")
+        if self.max_gap_s is not None and not _finite_in(self.max_gap_s, 0.0, MAX_WINDOW_S):
+            errors.append(f"max_gap_s={self.max_gap_s} (must be in 0..{MAX_WINDOW_S:g} s; 0 turns gaps off)")
         if self.sync not in SYNC_METHODS:
             errors.append(f"sync={self.sync!r} (use nearest or interpolation)")
         if self.delta_unit not in DELTA_UNITS:
             errors.append(f"delta_unit={self.delta_unit!r} (use f or m)")
-        if not self.delta > 0:
-            errors.append(f"delta={self.delta} (must be > 0)")
+        if not (_finite_in(self.delta, 0.0, MAX_DELTA) and self.delta > 0):
+            errors.append(f"delta={self.delta} (must be > 0 and at most {MAX_DELTA:g})")
         elif self.delta_unit == "f" and float(self.delta) != int(self.delta):
             errors.append(f"delta={self.delta} (must be a whole number of frames)")
-        if self.n_to_align == 0 or self.n_to_align < -1:
+        if isinstance(self.n_to_align, bool) or not isinstance(self.n_to_align, int) \
+                or self.n_to_align == 0 or self.n_to_align < -1:
             errors.append(f"n_to_align={self.n_to_align} (use -1 for all, or a positive count)")
         bad_keys = [k for k in self.segment_keys if k not in SEGMENT_KEYS]
         if bad_keys:

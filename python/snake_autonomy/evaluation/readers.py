@@ -1,9 +1,10 @@
 """Readers: TUM files, EuRoC ground-truth CSV and ROS 1 bag topics into evo trajectories.
 
 Parsing is evo's (``evo.tools.file_interface``, bags through ``rosbags``), so what we read is exactly
-what ``evo_ape`` reads. On top of it this module removes poses that are not poses (null/NaN) and, for
-``nav_msgs/Odometry``, poses whose covariance says tracking is lost, and reports both as
-tracking-loss intervals. Bag topics may be PoseStamped, PoseWithCovarianceStamped, Odometry,
+what ``evo_ape`` reads. On top of it this module refuses rows that are not poses (row_checks.py: NaN,
+inf, 1e308, non-unit quaternions, decreasing or repeated stamps), removes the tracking-loss markers
+(null poses and, for ``nav_msgs/Odometry``, poses whose covariance says tracking is lost) and reports
+both kinds of marker as tracking-loss intervals. Bag topics may be PoseStamped, PoseWithCovarianceStamped, Odometry,
 TransformStamped, or a TF frame: ``/tf:PARENT.CHILD`` (evo's syntax) or ``/tf:CHILD`` (the parent is
 then the root of CHILD's TF tree in the bag).
 """
@@ -15,6 +16,7 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from .errors import EvaluationError
+from .row_checks import check_rows
 from .tracking_loss import LossInterval, intervals_from_mask, null_pose_mask
 
 FORMATS = ("tum", "euroc", "bag")
@@ -69,6 +71,7 @@ def load_trajectory(path: str, fmt: Optional[str] = None, topic: Optional[str] =
         name = os.path.basename(path)
     if traj.num_poses == 0:
         raise EvaluationError(f"{path}: no poses in it")
+    check_rows(path if fmt != "bag" else name, traj.timestamps, traj.positions_xyz, traj.orientations_quat_wxyz)
     return _drop_lost(traj, name, cov_lost)
 
 
@@ -90,8 +93,7 @@ def trajectory_from_arrays(stamps_s, xyz, quat_xyzw, name: str = "trajectory",
                               f"{stamps.shape}, {xyz.shape}, {quat.shape}")
     if n == 0:
         raise EvaluationError(f"{name}: no poses")
-    if np.any(np.diff(stamps) < 0):
-        raise EvaluationError(f"{name}: stamps must not decrease")
+    check_rows(name, stamps, xyz, quat)
     traj = PoseTrajectory3D(xyz, np.roll(quat, 1, axis=1), stamps, name=name)
     lost = np.zeros(n, dtype=bool) if lost is None else np.asarray(lost, dtype=bool).reshape(-1)
     if lost.shape != (n,):

@@ -1,7 +1,8 @@
 """Tracking-loss intervals: where the estimate cannot be trusted, flagged and kept out of the statistics.
 
 Sources (thesis 4.1 failure modes: low texture, dark regions, head impact, jerky gait transitions):
-- ``null``: a pose that is not a pose (NaN, or a quaternion of zero norm: RTAB-Map's null transform);
+- ``null``: a quaternion of zero norm (RTAB-Map's null transform). NaN/inf rows are not markers: the
+  readers refuse them (row_checks.py);
 - ``covariance``: an Odometry message whose pose covariance diagonal reaches the loss threshold
   (RTAB-Map publishes 9999 when odometry is lost);
 - ``gap``: consecutive estimate stamps further apart than ``max_gap_s``; by default (None) that is

@@ -14,6 +14,7 @@ from typing import Any, Dict
 import numpy as np
 
 RUN_TOPIC = "/snake_autonomy/run"   # std_msgs/String, JSON events: start (mission, waypoints), end (outcome)
+INTERRUPTED = "interrupted"          # outcome of a run whose bag has no end event
 
 
 def _basename(topic: str) -> str:
@@ -97,7 +98,10 @@ def read_run(path, com_topic: str = "com_pose", status_topic: str = "tracking_st
     trajectory = {k: np.asarray(v, dtype=float)[order] for k, v in traj.items()}
     decisions = {k: np.asarray(v) for k, v in dec.items()}
     if "outcome" not in meta:
-        meta["outcome"] = "killed" if reindexed else "unknown"
+        # no end event: the recording process died (SIGKILL, power) before the run's final decision
+        meta["outcome"] = INTERRUPTED
+        meta["outcome_note"] = ("the bag has no end of run: the process recording it stopped before the "
+                                "run's final decision" + (" (the bag had no index: reindexed)" if reindexed else ""))
     return {"waypoints": waypoints, "trajectory": trajectory, "decisions": decisions, "meta": meta,
             "reindexed": reindexed}
 

@@ -5,7 +5,9 @@ process. Crash safety:
 
 - the bag is flushed (its open chunk closed and written) after every tracker decision, so a run
   killed with SIGKILL leaves a bag that reindexes to everything up to the last decision;
-- metrics.json is rewritten atomically after every decision (outcome "running" until the end);
+- metrics.json is rewritten atomically after every decision (outcome "running" until the end, with
+  ``updated_at`` and a ``note`` saying that a process that died leaves it there and that
+  ``snake_autonomy report BAG`` rebuilds the final figures, marking the run ``interrupted``);
 - ``close(outcome)`` (end, abort, time-out, SIGINT/SIGTERM) writes the bag's index and the full
   results folder from the closed bag: the same code path as ``snake_autonomy report BAG``.
 """
@@ -20,6 +22,8 @@ from .bag_io import RUN_TOPIC
 from .results import compute_metrics, write_json_atomic
 
 BAG_NAME = "run.bag"
+LIVE_NOTE = ("written while the run was live; if the process died this is where it stopped: "
+             "snake_autonomy report BAG rebuilds the final figures")
 
 
 def _to_time(t_s: float):
@@ -105,7 +109,11 @@ class RunLog:
                                       "meta": {k: v for k, v in self.meta.items() if k != "mission_yaml"}})
 
     def _write_metrics(self, outcome: str) -> None:
-        write_json_atomic(self.metrics_path, self.metrics(outcome))
+        metrics = self.metrics(outcome)
+        metrics["updated_at"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+        if outcome == "running":
+            metrics["note"] = LIVE_NOTE.replace("BAG", str(self.bag_path))
+        write_json_atomic(self.metrics_path, metrics)
 
     def close(self, outcome: str, t_s: Optional[float] = None, plots: bool = True) -> Dict[str, Path]:
         """Ends the run: closes the bag (writes its index) and writes the results folder.

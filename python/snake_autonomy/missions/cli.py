@@ -33,7 +33,11 @@ def main(args) -> int:
     except (MissionError, OSError) as exc:
         print(f"tracker defaults: {exc}", file=sys.stderr)
         return 1
-    library = gait_library_names(args.gaits)
+    try:
+        library = gait_library_names(args.gaits)
+    except (MissionError, OSError) as exc:
+        print(f"gait library: {exc}", file=sys.stderr)
+        return 1
     failed = 0
     for f in args.files:
         try:

@@ -21,9 +21,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
-import yaml
-
 from ..control.waypoint_tracker import TRACKER_GAITS, TrackerParams
+from ..safe_yaml import YamlFileError, load_yaml_file
 
 PACKAGE_ROOT = Path(__file__).resolve().parents[3]
 CONFIG_DIR = PACKAGE_ROOT / "config"
@@ -45,6 +44,11 @@ TRACKER_KEYS = {
     "far_blend_max_gap_deg": ("far_blend_max_gap", math.pi / 180.0),
 }
 MISSION_KEYS = ("name", "description", "frame", "waypoints", "time_limit_s", "tracker", "gaits", "disturbances")
+# Physical ranges of a mission (a value outside is refused with its key and value).
+MAX_WAYPOINTS = 1000
+MAX_COORDINATE_M = 1000.0       # |x|, |y| of a waypoint
+MAX_HEADING_DEG = 360.0         # |heading|
+MAX_TIME_LIMIT_S = 86400.0      # one day
 # Position and heading closer than this count as the same waypoint.
 DUPLICATE_TOL_M = 1e-3
 DUPLICATE_TOL_DEG = 1e-2
@@ -81,7 +85,7 @@ class Mission:
 
     def summary(self) -> str:
         p = self.tracker_params
-        lines = [f"mission {self.name!r}: {len(self.waypoints_deg)} waypoint(s)"
+        lines = [f"mission {_short(self.name)}: {len(self.waypoints_deg)} waypoint(s)"
                  + (f", time limit {self.time_limit_s:g} s" if self.time_limit_s else ", no time limit")]
         for i, (x, y, h) in enumerate(self.waypoints_deg):
             lines.append(f"  {i}: x {x:+.3f} m  y {y:+.3f} m  heading {h:+.1f} deg")
@@ -93,13 +97,22 @@ class Mission:
         return "\n".join(lines)
 
 
+def _short(v, limit: int = 80) -> str:
+    """repr(v), cut to `limit` characters: a problem message stays one readable line."""
+    text = repr(v)
+    return text if len(text) <= limit else text[:limit] + f"... ({len(text)} characters)"
+
+
 def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
 def load_yaml(path) -> Any:
-    with open(path, "r", encoding="utf-8") as f:
-        return yaml.safe_load(f)
+    """A YAML file through the package's bounded loader (safe_yaml); MissionError naming the file."""
+    try:
+        return load_yaml_file(path)
+    except YamlFileError as exc:
+        raise MissionError(str(path), [str(exc).removeprefix(f"{path}: ")]) from None
 
 
 def gait_library_names(path=None) -> Tuple[str, ...]:
@@ -136,14 +149,14 @@ def load_defaults(path=None, overrides: Optional[Dict[str, Any]] = None,
     path = Path(path) if path else CONFIG_DIR / "tracker.yaml"
     data = load_yaml(path)
     if not isinstance(data, dict):
-        raise MissionError(str(path), [f"expected a mapping, got {data!r}"])
+        raise MissionError(str(path), [f"expected a mapping, got {_short(data)}"])
     data = dict(data)
     data.setdefault("heading_offset_deg", 0.0)
     source = str(path)
     if overrides:
         problems = []
         if not isinstance(overrides, dict):
-            raise MissionError(overrides_source, [f"expected a mapping of tracker keys, got {overrides!r}"])
+            raise MissionError(overrides_source, [f"expected a mapping of tracker keys, got {_short(overrides)}"])
         section = dict(data.get("tracker") or {})
         for key, value in overrides.items():
             if key in TRACKER_KEYS:
@@ -153,7 +166,7 @@ def load_defaults(path=None, overrides: Optional[Dict[str, Any]] = None,
             elif key == "gaits" and isinstance(value, dict):
                 data["gaits"] = {**(data.get("gaits") or {}), **value}
             else:
-                problems.append(f"{key}: unknown key (value {value!r}); known: "
+                problems.append(f"{key}: unknown key (value {_short(value)}); known: "
                                 f"{', '.join(list(TRACKER_KEYS) + list(RUN_KEYS) + ['gaits'])}")
         if problems:
             raise MissionError(overrides_source, problems)
@@ -165,13 +178,13 @@ def load_defaults(path=None, overrides: Optional[Dict[str, Any]] = None,
     for key, kind in (("rate_hz", float), ("pose_timeout_s", float), ("yaw_filter_window", int)):
         v = data.get(key)
         if not _is_number(v) or not math.isfinite(v) or v <= 0 or (kind is int and int(v) != v):
-            problems.append(f"{key}: must be a positive {'integer' if kind is int else 'number'}, got {v!r}")
+            problems.append(f"{key}: must be a positive {'integer' if kind is int else 'number'}, got {_short(v)}")
     v = data.get("heading_offset_deg")
     if not _is_number(v) or not math.isfinite(v) or abs(v) > 180.0:
-        problems.append(f"heading_offset_deg: must be a number in [-180, 180], got {v!r}")
+        problems.append(f"heading_offset_deg: must be a number in [-180, 180], got {_short(v)}")
     gaits = data.get("gaits") or {}
     if not isinstance(gaits, dict):
-        problems.append(f"gaits: expected a mapping of tracker gait -> library gait, got {gaits!r}")
+        problems.append(f"gaits: expected a mapping of tracker gait -> library gait, got {_short(gaits)}")
         gaits = {}
     if problems:
         raise MissionError(source, problems)
@@ -186,10 +199,10 @@ def read_overrides(path, section: str = "tracker") -> Dict[str, Any]:
     """The ``section`` mapping of a YAML file (e.g. config/sim.yaml's ``tracker:``), {} when absent."""
     data = load_yaml(path) or {}
     if not isinstance(data, dict):
-        raise MissionError(str(path), [f"expected a mapping, got {data!r}"])
+        raise MissionError(str(path), [f"expected a mapping, got {_short(data)}"])
     value = data.get(section) or {}
     if not isinstance(value, dict):
-        raise MissionError(str(path), [f"{section}: expected a mapping of tracker keys, got {value!r}"])
+        raise MissionError(str(path), [f"{section}: expected a mapping of tracker keys, got {_short(value)}"])
     return dict(value)
 
 
@@ -198,19 +211,19 @@ def _tracker_params(section, base: Dict[str, Any], where: str):
     problems = []
     unknown = []
     if not isinstance(section, dict):
-        return params, [f"{where}: expected a mapping, got {section!r}"]
+        return params, [f"{where}: expected a mapping, got {_short(section)}"]
     for key, value in section.items():
         if key not in TRACKER_KEYS:
-            unknown.append(f"{where}.{key}: unknown key (value {value!r}); known: {', '.join(TRACKER_KEYS)}")
+            unknown.append(f"{where}.{key}: unknown key (value {_short(value)}); known: {', '.join(TRACKER_KEYS)}")
             continue
         name, factor = TRACKER_KEYS[key]
         if factor is None:
             if not isinstance(value, bool):
-                problems.append(f"{where}.{key}: must be true or false, got {value!r}")
+                problems.append(f"{where}.{key}: must be true or false, got {_short(value)}")
                 continue
             params[name] = value
         elif not _is_number(value) or not math.isfinite(value):
-            problems.append(f"{where}.{key}: must be a finite number, got {value!r}")
+            problems.append(f"{where}.{key}: must be a finite number, got {_short(value)}")
         else:
             params[name] = float(value) * factor
     if not problems:
@@ -233,33 +246,39 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
     library = tuple(gait_library) if gait_library is not None else gait_library_names()
     problems: List[str] = []
     if not isinstance(data, dict):
-        raise MissionError(source, [f"expected a mapping with a 'waypoints' list, got {data!r}"])
+        raise MissionError(source, [f"expected a mapping with a 'waypoints' list, got {_short(data)}"])
 
     for key in data:
         if key not in MISSION_KEYS:
-            problems.append(f"{key}: unknown key (value {data[key]!r}); known: {', '.join(MISSION_KEYS)}")
+            problems.append(f"{key}: unknown key (value {_short(data[key])}); known: {', '.join(MISSION_KEYS)}")
 
     waypoints: List[Tuple[float, float, float]] = []
     raw_wps = data.get("waypoints")
     if "waypoints" not in data:
         problems.append("waypoints: missing (a list of [x_m, y_m, heading_deg])")
     elif not isinstance(raw_wps, list):
-        problems.append(f"waypoints: expected a list of [x_m, y_m, heading_deg], got {raw_wps!r}")
+        problems.append(f"waypoints: expected a list of [x_m, y_m, heading_deg], got {_short(raw_wps)}")
     elif not raw_wps:
         problems.append("waypoints: the list is empty; at least one waypoint is needed")
+    elif len(raw_wps) > MAX_WAYPOINTS:
+        problems.append(f"waypoints: at most {MAX_WAYPOINTS} waypoints, got {len(raw_wps)}")
     else:
         for i, wp in enumerate(raw_wps):
             if not isinstance(wp, (list, tuple)) or len(wp) != 3:
-                problems.append(f"waypoints[{i}]: expected [x_m, y_m, heading_deg], got {wp!r}")
+                problems.append(f"waypoints[{i}]: expected [x_m, y_m, heading_deg], got {_short(wp)}")
                 waypoints.append(None)
                 continue
             ok = True
             for j, (label, v) in enumerate(zip(("x_m", "y_m", "heading_deg"), wp)):
                 if not _is_number(v):
-                    problems.append(f"waypoints[{i}][{j}] ({label}): expected a number, got {v!r}")
+                    problems.append(f"waypoints[{i}][{j}] ({label}): expected a number, got {_short(v)}")
                     ok = False
                 elif not math.isfinite(v):
-                    problems.append(f"waypoints[{i}][{j}] ({label}): must be finite, got {v!r}")
+                    problems.append(f"waypoints[{i}][{j}] ({label}): must be finite, got {_short(v)}")
+                    ok = False
+                elif abs(v) > (MAX_HEADING_DEG if j == 2 else MAX_COORDINATE_M):
+                    bound = MAX_HEADING_DEG if j == 2 else MAX_COORDINATE_M
+                    problems.append(f"waypoints[{i}][{j}] ({label}): must be within +-{bound:g}, got {_short(v)}")
                     ok = False
             waypoints.append(tuple(float(v) for v in wp) if ok else None)
         for i in range(1, len(waypoints)):
@@ -273,18 +292,20 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
 
     name = data.get("name", Path(source).stem if source else "mission")
     if not isinstance(name, str) or not name.strip():
-        problems.append(f"name: expected a non-empty string, got {name!r}")
+        problems.append(f"name: expected a non-empty string, got {_short(name)}")
     for key in ("description", "frame"):
         if key in data and not isinstance(data[key], str):
-            problems.append(f"{key}: expected a string, got {data[key]!r}")
+            problems.append(f"{key}: expected a string, got {_short(data[key])}")
 
     dist = data.get("disturbances")
     if dist is not None and (not isinstance(dist, list) or not all(isinstance(d, dict) for d in dist)):
-        problems.append(f"disturbances: expected a list of mappings (simulator pushes and twists), got {dist!r}")
+        problems.append(f"disturbances: expected a list of mappings (simulator pushes and twists), got {_short(dist)}")
 
     time_limit = data.get("time_limit_s")
-    if time_limit is not None and (not _is_number(time_limit) or not math.isfinite(time_limit) or time_limit <= 0):
-        problems.append(f"time_limit_s: must be a positive number of seconds, got {time_limit!r}")
+    if time_limit is not None and (not _is_number(time_limit) or not math.isfinite(time_limit) or time_limit <= 0
+                                   or time_limit > MAX_TIME_LIMIT_S):
+        problems.append(f"time_limit_s: must be a positive number of seconds up to {MAX_TIME_LIMIT_S:g}, "
+                        f"got {_short(time_limit)}")
 
     tracker, tracker_problems = _tracker_params(data.get("tracker") or {}, defaults["tracker"], "tracker")
     problems += tracker_problems
@@ -292,17 +313,17 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
     gaits = dict(defaults["gaits"])
     raw_gaits = data.get("gaits") or {}
     if not isinstance(raw_gaits, dict):
-        problems.append(f"gaits: expected a mapping of tracker gait -> library gait, got {raw_gaits!r}")
+        problems.append(f"gaits: expected a mapping of tracker gait -> library gait, got {_short(raw_gaits)}")
         raw_gaits = {}
     for role, gait in raw_gaits.items():
         if role not in TRACKER_GAITS:
-            problems.append(f"gaits.{role}: unknown tracker gait (value {gait!r}); known: {', '.join(TRACKER_GAITS)}")
+            problems.append(f"gaits.{role}: unknown tracker gait (value {_short(gait)}); known: {', '.join(TRACKER_GAITS)}")
         else:
             gaits[role] = gait
     for role, gait in gaits.items():
         if not isinstance(gait, str) or gait not in library:
             where = f"gaits.{role}" if role in raw_gaits else f"gaits.{role} (default)"
-            problems.append(f"{where}: unknown gait {gait!r}; the gait library has: {', '.join(library)}")
+            problems.append(f"{where}: unknown gait {_short(gait)}; the gait library has: {', '.join(library)}")
 
     if problems:
         raise MissionError(source, problems)
@@ -330,6 +351,4 @@ def load_mission(path, defaults=None, gait_library=None) -> Mission:
         data = load_yaml(p)
     except FileNotFoundError:
         raise MissionError(str(p), [f"file not found: {p}"]) from None
-    except yaml.YAMLError as exc:
-        raise MissionError(str(p), [f"not valid YAML: {exc}"]) from None
     return validate_mission(data, str(p), defaults, gait_library)

@@ -139,8 +139,10 @@ DRIVER_CONFIG_KEYS = tuple(k for k, v in vars(_core.DriverConfig).items() if isi
 def load_driver_config(path: str):
     """_core.DriverConfig from driver_node's YAML (config/driver.yaml): the controller's keys, the
     node's own (port, rates, frames) ignored; ValueError lists every problem."""
-    import yaml
-    raw = yaml.safe_load(Path(path).read_text()) or {}
+    from ..safe_yaml import load_yaml_file
+    raw = load_yaml_file(path) or {}
+    if not isinstance(raw, dict):
+        raise ValueError(f"{path}: expected a mapping of driver keys, got {type(raw).__name__}")
     return _core.DriverConfig(**{k: raw[k] for k in DRIVER_CONFIG_KEYS if k in raw})
 
 

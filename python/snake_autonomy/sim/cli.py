@@ -7,10 +7,12 @@
 `run` writes DIR/metrics.json (per waypoint: reached, time_s, final_distance_m, final_yaw_error_deg;
 rolled_over, limit_violations, sim_time_s, ...), the CSVs and figures of experiments.write_results,
 and with --feedback vio the evaluation of the simulated RTAB-Map in DIR/evaluation. Exit 0 when every
-waypoint was reached without roll-over or limit violation, 1 otherwise, 2 on a usage error.
+waypoint was reached without roll-over or limit violation, 1 otherwise and on bad input (a mission,
+config or option refused: one message), 2 on a command-line usage error.
 `experiment` runs one of the thesis's experiments (single, star, bidirectional, disturbance) over
 seeds and writes a summary table and figure per feedback; exit 0 when it meets the acceptance.
 """
+import math
 import sys
 from pathlib import Path
 
@@ -18,11 +20,28 @@ EXPERIMENT_NAMES = ("single", "star", "bidirectional", "disturbance")
 
 
 def _start(text):
+    from ..missions.mission import MAX_COORDINATE_M, MAX_HEADING_DEG
     try:
         x, y, h = (float(v) for v in text.split(","))
     except ValueError:
         raise ValueError(f"--start: expected x,y,heading_deg (e.g. 2.5,1.0,135), got {text!r}") from None
+    if not all(math.isfinite(v) for v in (x, y, h)) or max(abs(x), abs(y)) > MAX_COORDINATE_M \
+            or abs(h) > MAX_HEADING_DEG:
+        raise ValueError(f"--start: x and y within +-{MAX_COORDINATE_M:g} m and a heading within "
+                         f"+-{MAX_HEADING_DEG:g} deg, got {text!r}")
     return x, y, h
+
+
+def _check_options(args) -> None:
+    """Range checks of the numeric options (ValueError naming the option and its value)."""
+    from ..missions.mission import MAX_TIME_LIMIT_S
+    limit = getattr(args, "time_limit", None)
+    if limit is not None and not (math.isfinite(limit) and 0 < limit <= MAX_TIME_LIMIT_S):
+        raise ValueError(f"--time-limit: must be a number of seconds in (0, {MAX_TIME_LIMIT_S:g}], got {limit!r}")
+    if getattr(args, "seed", 0) < 0:
+        raise ValueError(f"--seed: must be >= 0, got {args.seed}")
+    if getattr(args, "jobs", 1) < 1:
+        raise ValueError(f"--jobs: must be >= 1, got {args.jobs}")
 
 
 def add_arguments(parser):
@@ -62,12 +81,13 @@ def main(args) -> int:
         print("snake_autonomy sim: give a command: run or experiment (--help)", file=sys.stderr)
         return 2
     try:
+        _check_options(args)
         if args.sim_command == "run":
             return _run(args)
         return _experiment(args)
-    except (ValueError, MissionError, FileNotFoundError) as exc:
+    except (ValueError, MissionError, OSError) as exc:
         print(f"snake_autonomy sim {args.sim_command}: {exc}", file=sys.stderr)
-        return 2
+        return 1
 
 
 def _run(args) -> int:

@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import List, Optional
 
 import numpy as np
-import yaml
+
+from ..safe_yaml import load_yaml_file
 
 
 @dataclass(frozen=True)
@@ -116,8 +117,7 @@ class SimConfig:
     @classmethod
     def from_yaml(cls, path) -> "SimConfig":
         path = Path(path)
-        with open(path) as f:
-            raw = yaml.safe_load(f) or {}
+        raw = load_yaml_file(path) or {}
         return cls.from_dict(raw, base_dir=path.parent)
 
     @classmethod

@@ -1,0 +1,128 @@
+"""Every `snake_autonomy` subcommand, as a process, on hostile input files: exit 1, the file or key
+named in one message, never a traceback (issue 10, point 6).
+
+Before the bounded loaders each of these cases ended in a traceback (UnicodeDecodeError,
+RecursionError, MemoryError after gigabytes, bad_alloc), was silently accepted (a duplicated key, a
+1e308 mass written as mass="inf") or exited 0 (an evaluation with rmse inf).
+"""
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+COBRA = (ROOT / "config" / "robots" / "cobra.yaml").read_text()
+MISSION = "name: m\nwaypoints:\n  - [1.0, 0.0, 0.0]\n"
+
+BINARY = bytes(range(256)) * 8
+UTF16 = MISSION.encode("utf-16")
+BILLION_LAUGHS = ("a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n"
+                  + "".join(f"{c}: &{c} [*{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}]\n"
+                            for p, c in zip("abcdefgh", "bcdefghi"))
+                  + "waypoints: *i\n").encode()
+DUPLICATE = (MISSION + "waypoints:\n  - [2.0, 0.0, 0.0]\n").encode()
+DEEP = ("waypoints: " + "[" * 20000 + "]" * 20000 + "\n").encode()
+HUGE_JOINTS = re.sub(r"num_joints: \d+", "num_joints: 1000000000", COBRA).encode()
+HUGE_MASS = re.sub(r"masses_kg: \[.*\]", "masses_kg: [" + ", ".join(["1e308"] * 13) + "]", COBRA).encode()
+TUM_1E308 = "".join(f"{1000 + 0.1 * k:.1f} {1e308 if k == 5 else k * 0.01} 0 0 0 0 0 1\n"
+                    for k in range(20)).encode()
+TUM_OK = "".join(f"{1000 + 0.1 * k:.1f} {k * 0.01} 0 0 0 0 0 1\n" for k in range(20)).encode()
+MISSION_INPUTS = {"binary": (BINARY, "not a text file"), "utf16": (UTF16, "not UTF-8 text"),
+                  "billion_laughs": (BILLION_LAUGHS, "anchor &a refused"),
+                  "duplicate_key": (DUPLICATE, "line 4: duplicate key 'waypoints' (first given on line 2)"),
+                  "deep_nesting": (DEEP, "nested deeper than 32 levels")}
+ROBOT_INPUTS = {"binary": (BINARY, "not a text file"), "utf16": (COBRA.encode("utf-16"), "not a text file"),
+                "huge_num_joints": (HUGE_JOINTS, "num_joints: must be an integer in 2..64, got 1000000000"),
+                "huge_mass": (HUGE_MASS, "masses_kg[0]: must be at most 100 kg, got 1e+308")}
+
+
+def run_cli(*args, timeout=120):
+    """`python3 -m snake_autonomy.cli ARGS` (the console entry's code) with a 2 GB address-space cap,
+    so that a loader without bounds fails fast instead of taking the machine's memory."""
+    def cap():
+        import resource
+        resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+    return subprocess.run([sys.executable, "-m", "snake_autonomy.cli", *map(str, args)], capture_output=True,
+                          text=True, timeout=timeout, preexec_fn=cap, env={**os.environ, "MPLBACKEND": "Agg"})
+
+
+def assert_refused(proc, *expected):
+    assert "Traceback" not in proc.stderr + proc.stdout, proc.stderr[-2000:]
+    assert proc.returncode == 1, (proc.returncode, proc.stdout[-500:], proc.stderr[-2000:])
+    for text in expected:
+        assert text in proc.stderr, (text, proc.stderr[-2000:])
+
+
+def write(tmp_path, name, data: bytes) -> Path:
+    path = tmp_path / name
+    path.write_bytes(data)
+    return path
+
+
+@pytest.mark.parametrize("case", sorted(MISSION_INPUTS))
+def test_mission_check(tmp_path, case):
+    data, message = MISSION_INPUTS[case]
+    f = write(tmp_path, f"{case}.yaml", data)
+    assert_refused(run_cli("mission", "check", f), str(f), message)
+
+
+@pytest.mark.parametrize("case", sorted(MISSION_INPUTS))
+def test_mission_check_tracker_defaults(tmp_path, case):
+    data, message = MISSION_INPUTS[case]
+    f = write(tmp_path, f"{case}_tracker.yaml", data)
+    assert_refused(run_cli("mission", "check", "star", "--defaults", f), str(f), message)
+
+
+@pytest.mark.parametrize("case", sorted(MISSION_INPUTS))
+def test_sim_run_mission(tmp_path, case):
+    data, message = MISSION_INPUTS[case]
+    f = write(tmp_path, f"{case}.yaml", data)
+    assert_refused(run_cli("sim", "run", "--mission", f, "--out", tmp_path / "out", "--no-plots"), str(f), message)
+
+
+@pytest.mark.parametrize("case", ["binary", "utf16", "duplicate_key"])
+def test_sim_run_sim_config(tmp_path, case):
+    data, message = MISSION_INPUTS[case]
+    if case == "duplicate_key":
+        data, message = b"physics:\n  timestep: 0.002\nphysics: {}\n", "line 3: duplicate key 'physics'"
+    f = write(tmp_path, f"{case}_sim.yaml", data)
+    assert_refused(run_cli("sim", "run", "--mission", "single_waypoint", "--sim-config", f, "--out",
+                           tmp_path / "out", "--no-plots"), str(f), message)
+
+
+@pytest.mark.parametrize("case", sorted(ROBOT_INPUTS))
+def test_urdf(tmp_path, case):
+    data, message = ROBOT_INPUTS[case]
+    f = write(tmp_path, f"{case}_robot.yaml", data)
+    proc = run_cli("urdf", f)
+    assert_refused(proc, str(f), message)
+    assert 'mass value="inf"' not in proc.stdout
+
+
+@pytest.mark.parametrize("case", sorted(ROBOT_INPUTS))
+def test_gait_robot(tmp_path, case):
+    data, message = ROBOT_INPUTS[case]
+    f = write(tmp_path, f"{case}_robot.yaml", data)
+    assert_refused(run_cli("gait", "--robot", f, "--duration", "0.1", "--out", tmp_path / "out"), str(f), message)
+
+
+def test_gait_library_out_of_range(tmp_path):
+    text = (ROOT / "config" / "gaits.yaml").read_text().replace("frequency_hz: 0.35", "frequency_hz: 1.0e+308", 1)
+    f = write(tmp_path, "gaits.yaml", text.encode())
+    assert_refused(run_cli("gait", "--gaits", f, "--duration", "0.1", "--out", tmp_path / "out"), str(f),
+                   "gaits.sidewind.frequency_hz: must be in 0..5 Hz, got 1e+308")
+
+
+def test_evaluate_a_1e308_row(tmp_path):
+    ref, est = write(tmp_path, "ref.txt", TUM_OK), write(tmp_path, "est.txt", TUM_1E308)
+    assert_refused(run_cli("evaluate", ref, est), str(est), "pose 5", "beyond +-100000 m")
+
+
+def test_evaluate_into_a_folder_that_cannot_be_created(tmp_path):
+    ref = write(tmp_path, "ref.txt", TUM_OK)
+    blocker = write(tmp_path, "file", b"x")
+    assert_refused(run_cli("evaluate", ref, ref, "--plots", blocker / "plots"), "--plots", str(blocker / "plots"))
+    assert_refused(run_cli("evaluate", ref, ref, "--json", blocker / "sub" / "out.json"), "--json")
