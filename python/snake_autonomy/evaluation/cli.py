@@ -90,6 +90,8 @@ def run(args) -> int:
     _check_output_paths(args)
     ref = load_trajectory(args.ref, args.ref_format, args.ref_topic, args.lost_covariance)
     est = load_trajectory(args.est, args.est_format, args.est_topic, args.lost_covariance)
+    for warning in ref.warnings + est.warnings:
+        print(f"snake_autonomy evaluate: warning: {warning}", file=sys.stderr)
     status = _status(args)
     result = evaluate(ref, est, options, status=status)
     if not args.quiet:

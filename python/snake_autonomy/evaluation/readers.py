@@ -33,6 +33,7 @@ class LoadedTrajectory:
     name: str
     loss_intervals: List[LossInterval] = field(default_factory=list)
     dropped_poses: int = 0
+    warnings: List[str] = field(default_factory=list)   # accepted oddities (repeated stamps)
 
 
 def guess_format(path: str) -> str:
@@ -71,8 +72,11 @@ def load_trajectory(path: str, fmt: Optional[str] = None, topic: Optional[str] =
         name = os.path.basename(path)
     if traj.num_poses == 0:
         raise EvaluationError(f"{path}: no poses in it")
-    check_rows(path if fmt != "bag" else name, traj.timestamps, traj.positions_xyz, traj.orientations_quat_wxyz)
-    return _drop_lost(traj, name, cov_lost)
+    warnings = check_rows(path if fmt != "bag" else name, traj.timestamps, traj.positions_xyz,
+                          traj.orientations_quat_wxyz)
+    loaded = _drop_lost(traj, name, cov_lost)
+    loaded.warnings = warnings
+    return loaded
 
 
 def trajectory_from_arrays(stamps_s, xyz, quat_xyzw, name: str = "trajectory",
@@ -93,12 +97,14 @@ def trajectory_from_arrays(stamps_s, xyz, quat_xyzw, name: str = "trajectory",
                               f"{stamps.shape}, {xyz.shape}, {quat.shape}")
     if n == 0:
         raise EvaluationError(f"{name}: no poses")
-    check_rows(name, stamps, xyz, quat)
+    warnings = check_rows(name, stamps, xyz, quat)
     traj = PoseTrajectory3D(xyz, np.roll(quat, 1, axis=1), stamps, name=name)
     lost = np.zeros(n, dtype=bool) if lost is None else np.asarray(lost, dtype=bool).reshape(-1)
     if lost.shape != (n,):
         raise EvaluationError(f"{name}: 'lost' needs {n} entries, got {lost.shape}")
-    return _drop_lost(traj, name, lost, kind="flagged")
+    loaded = _drop_lost(traj, name, lost, kind="flagged")
+    loaded.warnings = warnings
+    return loaded
 
 
 def _drop_lost(traj, name: str, cov_lost: np.ndarray, kind: str = "covariance") -> LoadedTrajectory:

@@ -8,9 +8,15 @@ Everything else that is not a pose is refused whole, with the input, row and val
 - a NaN or infinite stamp, position or quaternion component (not a marker: a broken writer);
 - a position component beyond ``MAX_POSITION_M`` (a 1e308 row would make every statistic inf);
 - a quaternion whose norm is off 1 by more than ``QUAT_NORM_TOLERANCE`` (and not zero);
-- stamps that decrease or repeat (association pairs the wrong poses): refused, not sorted, because a
+- stamps that decrease (association would pair the wrong poses): refused, not sorted, because a
   reordered input usually means two clocks or two sources mixed in one file.
+
+A stamp that repeats the previous one is kept, with a warning: evo keeps it too, and real reference
+data has them (TUM fr2_desk ground truth: 1, EuRoC V102 estimate: 4), so refusing or dropping them
+would change statistics that must equal evo's.
 """
+from typing import List
+
 import numpy as np
 
 from .errors import EvaluationError
@@ -32,8 +38,9 @@ def _row(name: str, k: int, stamps) -> str:
     return f"{name}: pose {k} (row {k + 1} of the poses, stamp {stamp!r})"
 
 
-def check_rows(name: str, stamps, xyz, quat) -> None:
-    """Raises EvaluationError for the first row that is neither a pose nor a loss marker (see above).
+def check_rows(name: str, stamps, xyz, quat) -> List[str]:
+    """Raises EvaluationError for the first row that is neither a pose nor a loss marker (see above);
+    returns the warnings (repeated stamps).
 
     ``quat`` in any component order (the norm and finiteness do not depend on it)."""
     stamps = np.asarray(stamps, dtype=float).reshape(-1)
@@ -63,9 +70,14 @@ def check_rows(name: str, stamps, xyz, quat) -> None:
                               f"(norm {norm[k]:.6g}, tolerance {QUAT_NORM_TOLERANCE:g}; a zero quaternion "
                               f"marks a tracking loss) ({len(bad)} such rows)")
     steps = np.diff(stamps)
-    bad = np.nonzero(steps <= 0)[0]
+    bad = np.nonzero(steps < 0)[0]
     if len(bad):
         k = int(bad[0]) + 1
-        what = "repeats" if steps[k - 1] == 0 else "goes back from"
-        raise EvaluationError(f"{_row(name, k, stamps)}: the stamp {what} the previous one {stamps[k - 1]!r} "
-                              f"(stamps must increase; {len(bad)} such rows)")
+        raise EvaluationError(f"{_row(name, k, stamps)}: the stamp goes back from the previous one "
+                              f"{stamps[k - 1]!r} (stamps must not decrease; {len(bad)} such rows)")
+    repeated = np.nonzero(steps == 0)[0]
+    if len(repeated):
+        k = int(repeated[0]) + 1
+        return [f"{_row(name, k, stamps)}: the stamp repeats the previous one ({len(repeated)} repeated "
+                "stamps, kept as evo keeps them)"]
+    return []
