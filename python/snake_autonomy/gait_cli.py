@@ -106,18 +106,31 @@ def main(args) -> int:
     if args.gait not in gaits:
         print(f"--gait: unknown gait '{args.gait}' (known: {', '.join(gaits.names)})", file=sys.stderr)
         return 1
-    for name in ("duration", "dt"):
+    for name, hi in (("duration", 3600.0), ("dt", 1.0)):
         value = getattr(args, name)
         if not (np.isfinite(value) and value > 0):
             print(f"--{name}: must be a positive number, got {value}", file=sys.stderr)
             return 1
+        if value > hi:
+            print(f"--{name}: must be at most {hi:g} s, got {value}", file=sys.stderr)
+            return 1
+    if args.duration / args.dt > 1e6:
+        print(f"--duration / --dt: at most 1e6 steps, got {args.duration / args.dt:.3g}", file=sys.stderr)
+        return 1
+    if not (np.isfinite(args.steer_deg) and abs(args.steer_deg) <= 90.0):
+        print(f"--steer-deg: must be within +-90, got {args.steer_deg}", file=sys.stderr)
+        return 1
+    out_dir = Path(args.out)
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        print(f"--out: cannot create the folder {out_dir}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
     try:
         result = run_open_loop(model, gaits, args.gait, args.duration, args.dt, np.radians(args.steer_deg))
     except ValueError as err:
         print(err, file=sys.stderr)
         return 1
-    out_dir = Path(args.out)
-    out_dir.mkdir(parents=True, exist_ok=True)
     with open(out_dir / f"gait_{args.gait}.csv", "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["t_s"] + [f"q{i + 1}_rad" for i in range(model.num_joints)]

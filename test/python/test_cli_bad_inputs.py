@@ -126,3 +126,19 @@ def test_evaluate_into_a_folder_that_cannot_be_created(tmp_path):
     blocker = write(tmp_path, "file", b"x")
     assert_refused(run_cli("evaluate", ref, ref, "--plots", blocker / "plots"), "--plots", str(blocker / "plots"))
     assert_refused(run_cli("evaluate", ref, ref, "--json", blocker / "sub" / "out.json"), "--json")
+
+
+@pytest.mark.parametrize("option,value,message", [
+    ("--duration", "1e9", "--duration: must be at most 3600 s, got 1000000000.0"),
+    ("--dt", "1e-9", "--duration / --dt: at most 1e6 steps"),
+    ("--steer-deg", "inf", "--steer-deg: must be within +-90, got inf"),
+])
+def test_gait_options_have_ranges(tmp_path, option, value, message):
+    assert_refused(run_cli("gait", option, value, "--out", tmp_path / "out"), message)
+
+
+def test_outputs_into_a_folder_that_cannot_be_created(tmp_path):
+    blocker = write(tmp_path, "file", b"x")
+    assert_refused(run_cli("gait", "--duration", "0.1", "--out", blocker / "out"), "--out", str(blocker / "out"))
+    assert_refused(run_cli("sim", "run", "--mission", "single_waypoint", "--time-limit", "inf", "--out",
+                           tmp_path / "o"), "--time-limit: must be a number of seconds in (0, 86400], got inf")

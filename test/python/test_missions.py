@@ -150,3 +150,30 @@ def test_cli_entry_point_exit_code(tmp_path):
     r = subprocess.run([sys.executable, "-m", "snake_autonomy.cli", "mission", "check", str(tmp_path / "nope.yaml")],
                        capture_output=True, text=True)
     assert r.returncode == 1 and "file not found" in r.stderr
+
+
+def test_sizes_and_physical_ranges(tmp_path):
+    """Finite but absurd values and oversized lists are refused with key and value (issue 10, point 6)."""
+    data = {"waypoints": [[1e308, 0, 0], [0, 1, 7200]], "time_limit_s": 1e12,
+            "tracker": {"d_th_m": 1e9, "psi_wp_deg": 1e6, "kp": 1e300}}
+    with pytest.raises(MissionError) as err:
+        validate_mission(data, "absurd.yaml")
+    text = str(err.value)
+    for expected in ("waypoints[0][0] (x_m): must be within +-1000, got 1e+308",
+                     "waypoints[1][2] (heading_deg): must be within +-360, got 7200",
+                     "time_limit_s: must be a positive number of seconds up to 86400, got 1000000000000.0",
+                     "tracker.d_th_m: must be within +-100, got 1000000000.0",
+                     "tracker.psi_wp_deg: must be within +-360, got 1000000.0",
+                     "tracker.kp: must be within +-1000, got 1e+300"):
+        assert expected in text, text
+    with pytest.raises(MissionError, match="waypoints: at most 1000 waypoints, got 1001"):
+        validate_mission({"waypoints": [[i * 0.01, 0, 0] for i in range(1001)]}, "long.yaml")
+    tracker = tmp_path / "tracker.yaml"
+    tracker.write_text("rate_hz: 1.0e+9\npose_timeout_s: 2.0\nyaw_filter_window: 5\n")
+    from snake_autonomy.missions import load_defaults
+    with pytest.raises(MissionError, match="rate_hz: must be at most 1000 Hz, got 1000000000.0"):
+        load_defaults(tracker)
+    huge = {"waypoints": [[0, 0, 0]], "description": ["x" * 10] * 100000, "colour": "r" * 10 ** 6}
+    with pytest.raises(MissionError) as err:
+        validate_mission(huge, "huge.yaml")
+    assert len(str(err.value)) < 1000      # values are cut short: the message stays readable

@@ -228,3 +228,12 @@ def test_workspace_and_tolerance_come_from_camera_yaml(root, tmp_path):
         load_gate_params(f)
     assert "lost_tracking.workspace_m: must be a positive number, got -1" in str(err.value)
     assert "lost_tracking.quaternion_tolerance: must be at most 0.5, got 2" in str(err.value)
+
+
+def test_calibration_values_have_ranges(tmp_path):
+    f = tmp_path / "cam.yaml"
+    f.write_text("camera_in_head: {translation_m: [1.0e+300, 0, 0], quaternion_xyzw: [0, 0, 1.0e+200, 1.0e+200]}\n")
+    with pytest.raises(ValueError) as err:
+        load_camera_calibration(f)
+    assert "translation_m: each within +-1 m of the head, got [1e+300, 0.0, 0.0]" in str(err.value)
+    assert "quaternion_xyzw: not a unit quaternion (norm 1.41421e+200)" in str(err.value)

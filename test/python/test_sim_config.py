@@ -40,3 +40,14 @@ def test_random_streams_are_named(root):
     params = SimConfig.from_yaml(root / "config" / "sim.yaml").draw(seed=5)
     assert params.rng("a").normal() == params.rng("a").normal()
     assert params.rng("a").normal() != params.rng("b").normal()
+
+
+def test_every_number_has_a_range(tmp_path):
+    """A finite but absurd value (1e308) is refused with its key, like NaN (issue 10, point 6)."""
+    from snake_autonomy.sim.config import SimConfig
+    f = tmp_path / "sim.yaml"
+    f.write_text("physics:\n  timestep_s: 1.0e+308\n  floor_friction: [0.5, .inf]\n")
+    with pytest.raises(ValueError) as err:
+        SimConfig.from_yaml(f)
+    assert "physics.timestep_s: must be finite and within +-1e+06, got 1e+308" in str(err.value)
+    assert "physics.floor_friction: must be finite and within +-1e+06, got inf" in str(err.value)

@@ -25,6 +25,7 @@ from ..safe_yaml import load_yaml_file
 from ..transforms import invert, make_transform, quat_to_matrix, rot_x, rpy_to_matrix, translation
 
 DEG = math.pi / 180.0
+MAX_CAMERA_OFFSET_M = 1.0   # the camera sits on the head: an offset beyond this is a typo
 
 
 def head_in_base(head_length_m: float) -> np.ndarray:
@@ -82,19 +83,27 @@ def load_camera_calibration(path) -> CameraCalibration:
         return [float(e) for e in v]
 
     t = vector("translation_m", 3)
+    if t is not None and max(abs(v) for v in t) > MAX_CAMERA_OFFSET_M:
+        problems.append(f"camera_in_head.translation_m: each within +-{MAX_CAMERA_OFFSET_M:g} m of the head, got {t}")
+        t = None
     R = None
     if "rpy_deg" in section and "quaternion_xyzw" in section:
         problems.append("camera_in_head: give rpy_deg or quaternion_xyzw, not both")
     elif "quaternion_xyzw" in section:
         q = vector("quaternion_xyzw", 4)
-        if q is not None:
+        if q is not None and math.hypot(*q) > 0 and abs(math.hypot(*q) - 1.0) > 0.01:
+            problems.append(f"camera_in_head.quaternion_xyzw: not a unit quaternion (norm {math.hypot(*q):.6g}), "
+                            f"got {q}")
+        elif q is not None:
             try:
                 R = quat_to_matrix(*q)
             except ValueError as exc:
                 problems.append(f"camera_in_head.quaternion_xyzw: {exc}")
     else:
         rpy = vector("rpy_deg", 3)
-        if rpy is not None:
+        if rpy is not None and max(abs(a) for a in rpy) > 360.0:
+            problems.append(f"camera_in_head.rpy_deg: each within +-360, got {rpy}")
+        elif rpy is not None:
             R = rpy_to_matrix(*(a * DEG for a in rpy))
     calibrated = data.get("calibrated", False)
     if not isinstance(calibrated, bool):

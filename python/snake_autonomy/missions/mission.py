@@ -43,6 +43,11 @@ TRACKER_KEYS = {
     "turn_exit_any_branch": ("turn_exit_any_branch", None),
     "far_blend_max_gap_deg": ("far_blend_max_gap", math.pi / 180.0),
 }
+#: Largest magnitude of a tracker key, in the file's units (metres, degrees, gain).
+TRACKER_BOUNDS = {"d_th_m": 100.0, "kp": 1000.0}
+MAX_TRACKER_DEG = 360.0
+#: Run keys of config/tracker.yaml: (largest value, unit).
+RUN_KEY_BOUNDS = {"rate_hz": (1000.0, "Hz"), "pose_timeout_s": (3600.0, "s"), "yaw_filter_window": (10000, "samples")}
 MISSION_KEYS = ("name", "description", "frame", "waypoints", "time_limit_s", "tracker", "gaits", "disturbances")
 # Physical ranges of a mission (a value outside is refused with its key and value).
 MAX_WAYPOINTS = 1000
@@ -179,6 +184,9 @@ def load_defaults(path=None, overrides: Optional[Dict[str, Any]] = None,
         v = data.get(key)
         if not _is_number(v) or not math.isfinite(v) or v <= 0 or (kind is int and int(v) != v):
             problems.append(f"{key}: must be a positive {'integer' if kind is int else 'number'}, got {_short(v)}")
+        elif v > RUN_KEY_BOUNDS[key][0]:
+            problems.append(f"{key}: must be at most {RUN_KEY_BOUNDS[key][0]:g} {RUN_KEY_BOUNDS[key][1]}, "
+                            f"got {_short(v)}")
     v = data.get("heading_offset_deg")
     if not _is_number(v) or not math.isfinite(v) or abs(v) > 180.0:
         problems.append(f"heading_offset_deg: must be a number in [-180, 180], got {_short(v)}")
@@ -224,6 +232,9 @@ def _tracker_params(section, base: Dict[str, Any], where: str):
             params[name] = value
         elif not _is_number(value) or not math.isfinite(value):
             problems.append(f"{where}.{key}: must be a finite number, got {_short(value)}")
+        elif abs(value) > TRACKER_BOUNDS.get(key, MAX_TRACKER_DEG):
+            problems.append(f"{where}.{key}: must be within +-{TRACKER_BOUNDS.get(key, MAX_TRACKER_DEG):g}, "
+                            f"got {_short(value)}")
         else:
             params[name] = float(value) * factor
     if not problems:

@@ -10,6 +10,7 @@ the seed and a fixed stream name (`SimParams.rng`), so adding a consumer never s
 The keys, their units and defaults are the dataclass fields below; config/sim.yaml documents them.
 """
 import dataclasses
+import math
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -264,7 +265,17 @@ def _show(value):
     return f"[{value.lo}, {value.hi}]" if isinstance(value, Range) else repr(value)
 
 
+# Every number of sim.yaml is finite and within +-MAX_VALUE (SI units: no simulated quantity comes
+# near it; a 1e308 friction or timestep is refused here with its key, before MuJoCo sees it).
+MAX_VALUE = 1e6
+
+
 def _parse_value(key, kind, value, errors):
+    numbers = value if isinstance(value, list) and kind is Range else [value]
+    for v in numbers:
+        if isinstance(v, (int, float)) and not isinstance(v, bool) and not (math.isfinite(v) and abs(v) <= MAX_VALUE):
+            errors.append(f"{key}: must be finite and within +-{MAX_VALUE:g}, got {v!r}")
+            return None
     if kind is Range:
         if isinstance(value, bool):
             errors.append(f"{key}: expected a number or [lo, hi], got {value!r}")
