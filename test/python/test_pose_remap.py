@@ -75,12 +75,19 @@ def test_bad_calibration_is_refused(tmp_path):
         PoseRemapper(np.diag([2.0, 1, 1, 1]), H)
     with pytest.raises(ValueError, match="head_length_m: must be a positive number, got 0"):
         PoseRemapper(np.eye(4), 0)
+    message = refused(load_camera_calibration, tmp_path,
+                      "camera_in_head: {translation_m: [0, 0], quaternion_xyzw: [0, 0, 0, 0]}")
+    assert "translation_m: expected 3 finite numbers, got [0, 0]" in message
+    assert "quaternion_xyzw: quaternion: must be finite and non-zero" in message
+
+
+def refused(loader, tmp_path, text: str) -> str:
+    """The ValueError message of loader on a camera.yaml holding text."""
     f = tmp_path / "cam.yaml"
-    f.write_text("camera_in_head: {translation_m: [0, 0], quaternion_xyzw: [0, 0, 0, 0]}\n")
+    f.write_text(text + "\n")
     with pytest.raises(ValueError) as err:
-        load_camera_calibration(f)
-    assert "translation_m: expected 3 finite numbers, got [0, 0]" in str(err.value)
-    assert "quaternion_xyzw: quaternion: must be finite and non-zero" in str(err.value)
+        loader(f)
+    return str(err.value)
 
 
 def test_provided_camera_config(root):
@@ -222,18 +229,13 @@ def test_a_non_finite_value_is_blamed_on_its_own_field(position, quat, cov, fiel
 def test_workspace_and_tolerance_come_from_camera_yaml(root, tmp_path):
     p = load_gate_params(root / "config" / "camera.yaml")
     assert (p.workspace_m, p.quaternion_tolerance) == (100.0, 0.01)
-    f = tmp_path / "cam.yaml"
-    f.write_text("lost_tracking: {workspace_m: -1, quaternion_tolerance: 2}\n")
-    with pytest.raises(ValueError) as err:
-        load_gate_params(f)
-    assert "lost_tracking.workspace_m: must be a positive number, got -1" in str(err.value)
-    assert "lost_tracking.quaternion_tolerance: must be at most 0.5, got 2" in str(err.value)
+    message = refused(load_gate_params, tmp_path, "lost_tracking: {workspace_m: -1, quaternion_tolerance: 2}")
+    assert "lost_tracking.workspace_m: must be a positive number, got -1" in message
+    assert "lost_tracking.quaternion_tolerance: must be at most 0.5, got 2" in message
 
 
 def test_calibration_values_have_ranges(tmp_path):
-    f = tmp_path / "cam.yaml"
-    f.write_text("camera_in_head: {translation_m: [1.0e+300, 0, 0], quaternion_xyzw: [0, 0, 1.0e+200, 1.0e+200]}\n")
-    with pytest.raises(ValueError) as err:
-        load_camera_calibration(f)
-    assert "translation_m: each within +-1 m of the head, got [1e+300, 0.0, 0.0]" in str(err.value)
-    assert "quaternion_xyzw: not a unit quaternion (norm 1.41421e+200)" in str(err.value)
+    message = refused(load_camera_calibration, tmp_path,
+                      "camera_in_head: {translation_m: [1.0e+300, 0, 0], quaternion_xyzw: [0, 0, 1.0e+200, 1.0e+200]}")
+    assert "translation_m: each within +-1 m of the head, got [1e+300, 0.0, 0.0]" in message
+    assert "quaternion_xyzw: not a unit quaternion (norm 1.41421e+200)" in message
