@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <system_error>
 
@@ -56,6 +57,34 @@ void dump_bounded(const YAML::Node& n, std::string* out, std::size_t budget, int
   }
 }
 
+std::string line_of(const YAML::Node& n) { return "line " + std::to_string(n.Mark().line + 1); }
+
+// Duplicate keys, size and depth of a parsed document (yaml-cpp keeps either of two equal keys
+// silently, and shares aliased nodes: counting visits bounds what the loaders will walk).
+void check_tree(const YAML::Node& n, const std::string& source, int depth, std::size_t* visits) {
+  if (++*visits > kMaxConfigNodes)
+    throw ConfigError(source + ": more than " + std::to_string(kMaxConfigNodes) +
+                      " values (aliases expanding?): not a configuration file");
+  if (depth > kMaxConfigDepth)
+    throw ConfigError(source + ": " + line_of(n) + ": nested deeper than " + std::to_string(kMaxConfigDepth) +
+                      " levels");
+  if (n.IsSequence()) {
+    for (const auto& item : n) check_tree(item, source, depth + 1, visits);
+  } else if (n.IsMap()) {
+    std::map<std::string, int> first_line;
+    for (const auto& kv : n) {
+      check_tree(kv.first, source, depth + 1, visits);
+      if (kv.first.IsScalar()) {
+        const auto [it, inserted] = first_line.emplace(kv.first.Scalar(), kv.first.Mark().line + 1);
+        if (!inserted)
+          throw ConfigError(source + ": " + line_of(kv.first) + ": duplicate key '" + kv.first.Scalar() +
+                            "' (first given on line " + std::to_string(it->second) + ")");
+      }
+      check_tree(kv.second, source, depth + 1, visits);
+    }
+  }
+}
+
 }  // namespace
 
 std::string read_config_file(const std::string& path, const std::string& what) {
@@ -84,6 +113,8 @@ YAML::Node load_config_yaml(const std::string& text, const std::string& source) 
     throw ConfigError(source + ": not valid YAML: " + ex.what());
   }
   if (!root.IsMap()) throw ConfigError(source + ": expected a mapping at the top level");
+  std::size_t visits = 0;
+  check_tree(root, source, 0, &visits);
   return root;
 }
 

@@ -80,19 +80,39 @@ TEST(ConfigBounds, LongListsAreRefusedUnread) {
   EXPECT_NE(w.find("servos.ids: at most 1024 values, got 2000"), std::string::npos) << w;
 }
 
-TEST(ConfigBounds, AliasedNodesInErrorsAreCutShort) {
-  // a "billion laughs" value (9^6 leaves through aliases): its error message stays one short line
+namespace {
+
+// Nested aliases: the last key (the names' last letter) expands to 9^names.size() leaves.
+std::string laughs(const std::string& names) {
   std::string text = "a: &a [x, x, x, x, x, x, x, x, x]\n";
-  const std::string names = "abcdef";
   for (std::size_t i = 1; i < names.size(); ++i) {
     const char p = names[i - 1], c = names[i];
     text += std::string(1, c) + ": &" + c + " [";
     for (int k = 0; k < 9; ++k) text += std::string(k ? ", " : "") + "*" + p;
     text += "]\n";
   }
-  text += "num_joints: *f\n";
-  const auto w = error_of(text);
-  EXPECT_NE(w.find("num_joints: expected an integer, got '[[[[[[x, x, x"), std::string::npos) << w;
+  return text;
+}
+
+}  // namespace
+
+TEST(ConfigBounds, ABillionLaughsIsRefusedUnwalked) {
+  const auto w = error_of(laughs("abcdefghi") + "num_joints: *i\n");  // 9^9 leaves
+  EXPECT_NE(w.find("robot.yaml: more than 65536 values (aliases expanding?)"), std::string::npos) << w;
+}
+
+TEST(ConfigBounds, DuplicateKeysAndDeepNestingAreRefused) {
+  auto w = error_of(cobra_text() + "num_joints: 12\n");
+  EXPECT_NE(w.find("robot.yaml: line "), std::string::npos) << w;
+  EXPECT_NE(w.find(": duplicate key 'num_joints' (first given on line 5)"), std::string::npos) << w;
+  w = error_of("name: x\nnum_joints: " + std::string(100, '[') + std::string(100, ']') + "\n");
+  EXPECT_NE(w.find("robot.yaml: line 2: nested deeper than 32 levels"), std::string::npos) << w;
+}
+
+TEST(ConfigBounds, AliasedNodesInErrorsAreCutShort) {
+  // an aliased value (9^4 leaves, under the node budget): its error message stays one short line
+  const auto w = error_of(laughs("abcd") + "num_joints: *d\n");
+  EXPECT_NE(w.find("num_joints: expected an integer, got '[[[[x, x, x"), std::string::npos) << w;
   EXPECT_LT(w.size(), 2000u) << w;
 }
 

@@ -36,7 +36,10 @@ MISSION_INPUTS = {"binary": (BINARY, "not a text file"), "utf16": (UTF16, "not U
                   "deep_nesting": (DEEP, "nested deeper than 32 levels")}
 ROBOT_INPUTS = {"binary": (BINARY, "not a text file"), "utf16": (COBRA.encode("utf-16"), "not a text file"),
                 "huge_num_joints": (HUGE_JOINTS, "num_joints: must be an integer in 2..64, got 1000000000"),
-                "huge_mass": (HUGE_MASS, "masses_kg[0]: must be at most 100 kg, got 1e+308")}
+                "huge_mass": (HUGE_MASS, "masses_kg[0]: must be at most 100 kg, got 1e+308"),
+                "billion_laughs": (BILLION_LAUGHS, "more than 65536 values (aliases expanding?)"),
+                "duplicate_key": ((COBRA + "num_joints: 12\n").encode(),
+                                  ": duplicate key 'num_joints' (first given on line 5)")}
 
 
 def run_cli(*args, timeout=120):

@@ -17,13 +17,18 @@ inline constexpr std::size_t kMaxConfigBytes = std::size_t{1} << 20;
 inline constexpr std::size_t kMaxConfigListLength = 1024;
 // Longest rendering of a value inside an error message (a huge or aliased node is cut short).
 inline constexpr std::size_t kMaxDumpChars = 120;
+// Most values (keys, scalars, lists, mappings; aliases counted each time they are used) and deepest
+// nesting of a configuration document: a "billion laughs" file is refused, not walked.
+inline constexpr std::size_t kMaxConfigNodes = 65536;
+inline constexpr int kMaxConfigDepth = 32;
 
 // The whole text of a configuration file; throws ConfigError "<path>: cannot open <what>",
 // "<path>: larger than 1048576 bytes" or "<path>: not a text file (NUL byte at offset N)".
 std::string read_config_file(const std::string& path, const std::string& what);
 
-// The YAML document of a configuration text; throws ConfigError "<source>: not valid YAML: ..." or
-// "<source>: expected a mapping at the top level".
+// The YAML document of a configuration text; throws ConfigError "<source>: not valid YAML: ...",
+// "<source>: expected a mapping at the top level", "<source>: line N: duplicate key 'k' (first given
+// on line M)", or when the document has more than kMaxConfigNodes values or kMaxConfigDepth levels.
 YAML::Node load_config_yaml(const std::string& text, const std::string& source);
 
 class ConfigReader {
