@@ -328,7 +328,8 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
         raw_gaits = {}
     for role, gait in raw_gaits.items():
         if role not in TRACKER_GAITS:
-            problems.append(f"gaits.{role}: unknown tracker gait (value {_short(gait)}); known: {', '.join(TRACKER_GAITS)}")
+            problems.append(f"gaits.{role}: unknown tracker gait (value {_short(gait)}); "
+                            f"known: {', '.join(TRACKER_GAITS)}")
         else:
             gaits[role] = gait
     for role, gait in gaits.items():
