@@ -79,18 +79,21 @@ class DriverHarness:
         rate = rospy.Rate(50)
         next_beat = time.monotonic()
         while not rospy.is_shutdown():
-            beat = self._beat
-            if beat is not None and time.monotonic() >= next_beat:
-                beat.header.stamp = rospy.Time.now()
-                self.gait_pub.publish(beat)
-                next_beat = time.monotonic() + self.HEARTBEAT_PERIOD_S
-            if self.pose_on:
-                p = PoseStamped()
-                p.header.stamp = rospy.Time.now()
-                p.header.frame_id = "odom"
-                p.pose.position.x = 1.0
-                p.pose.orientation.w = 1.0
-                self.pose_pub.publish(p)
+            try:
+                beat = self._beat
+                if beat is not None and time.monotonic() >= next_beat:
+                    beat.header.stamp = rospy.Time.now()
+                    self.gait_pub.publish(beat)
+                    next_beat = time.monotonic() + self.HEARTBEAT_PERIOD_S
+                if self.pose_on:
+                    p = PoseStamped()
+                    p.header.stamp = rospy.Time.now()
+                    p.header.frame_id = "odom"
+                    p.pose.position.x = 1.0
+                    p.pose.orientation.w = 1.0
+                    self.pose_pub.publish(p)
+            except rospy.ROSException:  # the test is shutting down: topics closed
+                return
             rate.sleep()
 
     # --- diagnostics ---

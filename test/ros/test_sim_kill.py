@@ -53,7 +53,7 @@ class SimKillTest(unittest.TestCase):
         return math.hypot(pts[-1][0] - pts[0][0], pts[-1][1] - pts[0][1]) if len(pts) > 1 else 0.0
 
     def test_killed_mission_node_stops_the_robot(self):
-        wait_for(lambda: self.com and self.value("gait") == "sidewind" and self.value("state") == "running", 90,
+        wait_for(lambda: self.com and self.value("gait") == "sidewind" and self.value("state") == "running", 120,
                  "the robot to sidewind")
         t_moving = time.monotonic()
         wait_for(lambda: self.travelled(t_moving) > 0.15, 20, "the robot to move 0.15 m")
