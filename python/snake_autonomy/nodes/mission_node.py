@@ -95,6 +95,10 @@ class MissionNode:
             rospy.logwarn(f"~rate_hz {self.rate_hz}: a command every {1.0 / self.rate_hz:.1f} s is too slow for the "
                           f"driver's command_timeout_s {lifetime} s; it will hold between commands")
 
+        # The process that launched this node (roslaunch): when it is gone (SIGKILL of roslaunch) this
+        # node is an orphan nobody can stop with Ctrl+C any more; it ends its mission and exits, and
+        # the driver holds when its command lifetime expires.
+        self.parent_pid = os.getppid()
         self.mission = None
         self.runner = None
         self.log = None
@@ -242,6 +246,12 @@ class MissionNode:
 
     # -- the control tick --------------------------------------------------------------------------------
     def on_tick(self, _event):
+        if os.getppid() != self.parent_pid:
+            why = f"the launching process (pid {self.parent_pid}) is gone"
+            rospy.logerr(f"{why}: ending the mission and exiting (the driver holds after its command_timeout_s)")
+            self.on_shutdown(why)
+            rospy.signal_shutdown(why)
+            return
         with self.lock:
             if self.runner is None:
                 return
