@@ -656,18 +656,8 @@ bool DriverController::set_base_pose(double t_s, const Eigen::Vector3d& position
   std::lock_guard<std::mutex> lock(pose_mutex_);
   if (why != PoseRefusal::kNone) {
     ++poses_refused_;
-    const Eigen::Vector4d& q = orientation.coeffs();
-    if (why == PoseRefusal::kOutsideWorkspace) {
-      std::snprintf(pending_pose_refusal_.data(), pending_pose_refusal_.size(), "%s %g m: position (%g, %g, %g)",
-                    to_string(why), config_.pose_workspace_m, position.x(), position.y(), position.z());
-    } else if (why == PoseRefusal::kQuaternionNotUnit) {
-      std::snprintf(pending_pose_refusal_.data(), pending_pose_refusal_.size(), "%s %g: (x, y, z, w) (%g, %g, %g, %g)",
-                    to_string(why), config_.quaternion_norm_tolerance, q.x(), q.y(), q.z(), q.w());
-    } else {
-      std::snprintf(pending_pose_refusal_.data(), pending_pose_refusal_.size(),
-                    "%s: t %g s, position (%g, %g, %g), (x, y, z, w) (%g, %g, %g, %g)", to_string(why), t_s,
-                    position.x(), position.y(), position.z(), q.x(), q.y(), q.z(), q.w());
-    }
+    describe_pose_refusal(why, t_s, position, orientation, config_.pose_workspace_m, config_.quaternion_norm_tolerance,
+                          pending_pose_refusal_.data(), pending_pose_refusal_.size());
     return false;
   }
   pending_p_ = position;

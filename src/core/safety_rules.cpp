@@ -1,6 +1,7 @@
 #include "snake_autonomy/core/safety_rules.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 namespace snake_autonomy::core {
 
@@ -40,6 +41,26 @@ PoseRefusal check_base_pose(double t_s, const Eigen::Vector3d& position, const E
   if (!(std::abs(norm - 1.0) <= quaternion_norm_tolerance)) return PoseRefusal::kQuaternionNotUnit;
   *unit = Eigen::Quaterniond(orientation.coeffs() / norm);
   return PoseRefusal::kNone;
+}
+
+void describe_pose_refusal(PoseRefusal refusal, double t_s, const Eigen::Vector3d& p, const Eigen::Quaterniond& q,
+                           double workspace_m, double quaternion_norm_tolerance, char* out, std::size_t size) noexcept {
+  switch (refusal) {
+    case PoseRefusal::kNone:
+      std::snprintf(out, size, "%s", "");
+      return;
+    case PoseRefusal::kOutsideWorkspace:
+      std::snprintf(out, size, "%s %g m: position (%g, %g, %g)", to_string(refusal), workspace_m, p.x(), p.y(), p.z());
+      return;
+    case PoseRefusal::kQuaternionNotUnit:
+      std::snprintf(out, size, "%s %g: (x, y, z, w) (%g, %g, %g, %g)", to_string(refusal), quaternion_norm_tolerance,
+                    q.x(), q.y(), q.z(), q.w());
+      return;
+    case PoseRefusal::kNotFinite:
+      std::snprintf(out, size, "%s: t %g s, position (%g, %g, %g), (x, y, z, w) (%g, %g, %g, %g)", to_string(refusal),
+                    t_s, p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w());
+      return;
+  }
 }
 
 }  // namespace snake_autonomy::core

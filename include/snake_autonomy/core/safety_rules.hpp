@@ -15,6 +15,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
+#include <cstddef>
 #include <cstdint>
 
 namespace snake_autonomy::core {
@@ -44,5 +45,10 @@ bool command_expired(double now_s, double last_command_s, double timeout_s) noex
 // Checks a base pose; on kNone `unit` holds the normalised orientation.
 PoseRefusal check_base_pose(double t_s, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation,
                             double workspace_m, double quaternion_norm_tolerance, Eigen::Quaterniond* unit) noexcept;
+
+// The refusal in words with the values that caused it (into out, at most size bytes; no allocation).
+void describe_pose_refusal(PoseRefusal refusal, double t_s, const Eigen::Vector3d& position,
+                           const Eigen::Quaterniond& orientation, double workspace_m, double quaternion_norm_tolerance,
+                           char* out, std::size_t size) noexcept;
 
 }  // namespace snake_autonomy::core
