@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
   dynamixel::SerialBus bus(sc);
   core::DriverConfig cfg;
   cfg.require_pose = false;
+  cfg.command_timeout_s = 0.0;  // one command for the whole run: no command lifetime
   cfg.fast_sync_read = fast;
   cfg.status_every_cycles = static_cast<int>(rate_hz);  // voltage/temperature once a second, as on the robot
   core::DriverController ctl(model, gaits, table, bus, cfg);

@@ -523,7 +523,8 @@ void bind_driver(py::module_& m) {
       .def(py::init([](bool fast_sync_read, int max_failed_cycles, int status_every_cycles, int return_delay_time_us,
                        const std::string& fault_action, const std::string& shutdown_action, bool torque_on_start,
                        double max_joint_velocity_rad_s, double max_frequency_hz, double max_step_s,
-                       int plausible_margin_ticks, double pose_timeout_s, bool require_pose) {
+                       int plausible_margin_ticks, double pose_timeout_s, bool require_pose, double command_timeout_s,
+                       double pose_workspace_m, double quaternion_norm_tolerance) {
              DriverConfig c;
              std::vector<std::string> errors;
              if (!parse_safe_action(fault_action, &c.fault_action))
@@ -541,6 +542,9 @@ void bind_driver(py::module_& m) {
              c.plausible_margin_ticks = plausible_margin_ticks;
              c.pose_timeout_s = pose_timeout_s;
              c.require_pose = require_pose;
+             c.command_timeout_s = command_timeout_s;
+             c.pose_workspace_m = pose_workspace_m;
+             c.quaternion_norm_tolerance = quaternion_norm_tolerance;
              for (const auto& e : c.validate()) errors.push_back(e);
              if (!errors.empty()) {
                std::string what = "driver configuration:";
@@ -561,6 +565,9 @@ void bind_driver(py::module_& m) {
            py::arg("max_step_s") = DriverConfig{}.max_step_s,
            py::arg("plausible_margin_ticks") = DriverConfig{}.plausible_margin_ticks,
            py::arg("pose_timeout_s") = DriverConfig{}.pose_timeout_s, py::arg("require_pose") = DriverConfig{}.require_pose,
+           py::arg("command_timeout_s") = DriverConfig{}.command_timeout_s,
+           py::arg("pose_workspace_m") = DriverConfig{}.pose_workspace_m,
+           py::arg("quaternion_norm_tolerance") = DriverConfig{}.quaternion_norm_tolerance,
            "The defaults with keyword overrides; ValueError lists every problem (DriverConfig::validate).")
       .def("validate", &DriverConfig::validate, "Every problem, naming key and value (empty when usable).")
       .def_readwrite("fast_sync_read", &DriverConfig::fast_sync_read)
@@ -578,7 +585,10 @@ void bind_driver(py::module_& m) {
       .def_readwrite("max_step_s", &DriverConfig::max_step_s)
       .def_readwrite("plausible_margin_ticks", &DriverConfig::plausible_margin_ticks)
       .def_readwrite("pose_timeout_s", &DriverConfig::pose_timeout_s)
-      .def_readwrite("require_pose", &DriverConfig::require_pose);
+      .def_readwrite("require_pose", &DriverConfig::require_pose)
+      .def_readwrite("command_timeout_s", &DriverConfig::command_timeout_s)
+      .def_readwrite("pose_workspace_m", &DriverConfig::pose_workspace_m)
+      .def_readwrite("quaternion_norm_tolerance", &DriverConfig::quaternion_norm_tolerance);
 
   py::module_ dm = m.attr("dynamixel").cast<py::module_>();
   using Fake = dx::FakeServoBus;
@@ -652,12 +662,18 @@ void bind_driver(py::module_& m) {
                                    Eigen::Quaterniond(orientation(3), orientation(0), orientation(1), orientation(2)));
           },
           py::arg("t_s"), py::arg("position"), py::arg("orientation"),
-          "base_link pose at t_s (the loop's clock), orientation as (x, y, z, w). False (ignored) when not finite.")
+          "base_link pose at t_s (the loop's clock), orientation as (x, y, z, w). False (ignored, counted) when not "
+          "finite, outside pose_workspace_m or not a unit quaternion within quaternion_norm_tolerance.")
       .def_property_readonly("state", [](const DriverController& d) { return std::string(to_string(d.state())); },
                              "'stopped', 'holding', 'running' or 'fault'")
       .def_property_readonly("fault_reason", [](const DriverController& d) { return std::string(d.fault_reason()); },
                              "the active fault ('' when none)")
       .def_property_readonly("commanded_gait", &DriverController::commanded_gait, "the gait of the last accepted command")
+      .def_property_readonly("hold_reason",
+                             [](const DriverController& d) {
+                               return std::string(d.state() == DriverState::kHolding ? to_string(d.hold_reason()) : "");
+                             },
+                             "why the driver holds ('' unless holding), e.g. the command lifetime expired")
       .def_property_readonly("last_refusal", &DriverController::last_refusal, "why the last refused command was refused")
       .def_property_readonly("commands_accepted", &DriverController::commands_accepted)
       .def_property_readonly("commands_refused", &DriverController::commands_refused)

@@ -120,13 +120,10 @@ void Cpg::set_parameters(const GaitParameters& p) {
   apply(p);
 }
 
-void Cpg::reset(const Eigen::VectorXd& phases, const Eigen::VectorXd& amplitudes, const Eigen::VectorXd& biases) {
-  if (phases.size() != n_ || amplitudes.size() != n_ || biases.size() != n_)
-    throw std::invalid_argument("Cpg::reset: phases, amplitudes and biases need " + std::to_string(n_) +
-                                " values each, got " + std::to_string(phases.size()) + ", " +
-                                std::to_string(amplitudes.size()) + ", " + std::to_string(biases.size()));
-  if (!phases.allFinite() || !amplitudes.allFinite() || !biases.allFinite())
-    throw std::invalid_argument("Cpg::reset: values must be finite");
+bool Cpg::restart(const Eigen::VectorXd& phases, const Eigen::VectorXd& amplitudes,
+                  const Eigen::VectorXd& biases) noexcept {
+  if (phases.size() != n_ || amplitudes.size() != n_ || biases.size() != n_) return false;
+  if (!phases.allFinite() || !amplitudes.allFinite() || !biases.allFinite()) return false;
   theta_ = phases;
   r_ = amplitudes;
   b_ = biases;
@@ -137,6 +134,20 @@ void Cpg::reset(const Eigen::VectorXd& phases, const Eigen::VectorXd& amplitudes
   lag_dot_.setZero();
   q_raw_ = r_.cwiseProduct(theta_.array().sin().matrix()) + b_;
   q_ = q_raw_.cwiseMax(lower_).cwiseMin(upper_);
+  return true;
+}
+
+void Cpg::reset(const Eigen::VectorXd& phases, const Eigen::VectorXd& amplitudes, const Eigen::VectorXd& biases) {
+  if (phases.size() != n_ || amplitudes.size() != n_ || biases.size() != n_)
+    throw std::invalid_argument("Cpg::reset: phases, amplitudes and biases need " + std::to_string(n_) +
+                                " values each, got " + std::to_string(phases.size()) + ", " +
+                                std::to_string(amplitudes.size()) + ", " + std::to_string(biases.size()));
+  if (!restart(phases, amplitudes, biases)) throw std::invalid_argument("Cpg::reset: values must be finite");
+}
+
+bool Cpg::state_finite() const noexcept {
+  return theta_.allFinite() && r_.allFinite() && r_dot_.allFinite() && b_.allFinite() && b_dot_.allFinite() &&
+         lag_.allFinite() && lag_dot_.allFinite() && q_.allFinite();
 }
 
 void Cpg::update_drive(const Eigen::VectorXd& lags) noexcept {

@@ -44,6 +44,12 @@ std::vector<std::string> DriverConfig::validate() const {
     bad("max_step_s", max_step_s, "is not in (0, 1] s");
   if (plausible_margin_ticks < 0) bad("plausible_margin_ticks", plausible_margin_ticks, "is negative");
   if (!(pose_timeout_s > 0.0) || !std::isfinite(pose_timeout_s)) bad("pose_timeout_s", pose_timeout_s, "is not a positive number");
+  if (!(command_timeout_s >= 0.0) || !std::isfinite(command_timeout_s) || command_timeout_s > 3600.0)
+    bad("command_timeout_s", command_timeout_s, "is not in [0, 3600] s (0: no command lifetime)");
+  if (!(pose_workspace_m > 0.0) || !std::isfinite(pose_workspace_m) || pose_workspace_m > 1e6)
+    bad("pose_workspace_m", pose_workspace_m, "is not in (0, 1e6] m");
+  if (!(quaternion_norm_tolerance > 0.0) || !(quaternion_norm_tolerance < 0.5))
+    bad("quaternion_norm_tolerance", quaternion_norm_tolerance, "is not in (0, 0.5)");
   return errors;
 }
 

@@ -271,7 +271,7 @@ void DriverController::start(double t_s) {
     throw ConfigError(what);
   }
   started_ = true;
-  t_s_ = t_s;
+  t_s_ = last_command_t_s_ = t_s;
   hold_here();
   goals_from_rad();
   if (!hw_errors.empty()) {
@@ -339,7 +339,10 @@ bool DriverController::shutdown() noexcept {
   hold_here();
   goals_from_rad();
   const bool ok = write_goals();
-  if (state() != DriverState::kFault) set_state(DriverState::kHolding);
+  if (state() != DriverState::kFault) {
+    hold_reason_ = HoldReason::kShutdown;
+    set_state(DriverState::kHolding);
+  }
   return ok;
 }
 
@@ -355,6 +358,8 @@ bool DriverController::update(double t_s, double dt_s) noexcept {
   take_request();
   take_gait();
   take_pose(t_s);
+  if (state() == DriverState::kRunning && command_expired(t_s, last_command_t_s_, config_.command_timeout_s))
+    hold_for(HoldReason::kCommandTimeout);
 
   const bool read_ok = read_feedback();
   if (config_.status_every_cycles > 0 && cycle_ % static_cast<std::uint64_t>(config_.status_every_cycles) == 0)
@@ -368,6 +373,7 @@ bool DriverController::update(double t_s, double dt_s) noexcept {
     apply_gait();
   }
 
+  if (state() == DriverState::kRunning) step_cpg(dt_s);
   bool write_ok = true;
   const DriverState s = state();
   if (s == DriverState::kRunning || s == DriverState::kHolding ||
@@ -495,9 +501,15 @@ void DriverController::check_hardware_errors() noexcept {
   enter_fault(m.data());
 }
 
+void DriverController::step_cpg(double dt_s) noexcept {
+  cpg_.step(dt_s);
+  if (!cpg_.state_finite())
+    enter_fault("CPG state not finite (an oscillator's phase, amplitude or bias is NaN or infinite): locomotion stopped");
+}
+
 void DriverController::compute_goals(double dt_s) noexcept {
   const bool running = state() == DriverState::kRunning;
-  const Eigen::VectorXd& target = running ? cpg_.step(dt_s) : hold_rad_;
+  const Eigen::VectorXd& target = running ? cpg_.output() : hold_rad_;
   const double max_move = config_.max_joint_velocity_rad_s * dt_s;
   for (int j = 0; j < n_; ++j) {
     const double t = std::isfinite(target[j]) ? target[j] : goal_rad_[j];
@@ -533,6 +545,12 @@ void DriverController::hold_here() noexcept {
   goal_rad_ = hold_rad_;
 }
 
+void DriverController::hold_for(HoldReason reason) noexcept {
+  hold_here();
+  hold_reason_ = reason;
+  set_state(DriverState::kHolding);
+}
+
 void DriverController::enter_fault(const char* reason) noexcept {
   if (state() == DriverState::kFault) return;
   copy_message(fault_reason_, reason);
@@ -554,13 +572,18 @@ void DriverController::apply_gait() noexcept {
   cpg_.apply(effective_);
 }
 
-void DriverController::start_locomotion() noexcept {
+bool DriverController::start_locomotion() noexcept {
   // Restart the oscillators at the held posture (amplitudes zero, biases = posture): the goals
   // continue from where the robot is and move to the gait through the CPG's smooth dynamics.
-  cpg_.reset(cpg_.phases(), zeros_, hold_rad_);
+  if (!cpg_.restart(cpg_.phases(), zeros_, hold_rad_)) {
+    enter_fault("CPG state not finite: the oscillators cannot restart from their phases; locomotion stopped");
+    return false;
+  }
   gated_ = config_.require_pose && !pose_fresh_;
   apply_gait();
+  hold_reason_ = HoldReason::kNone;
   set_state(DriverState::kRunning);
+  return true;
 }
 
 void DriverController::take_gait() noexcept {
@@ -573,9 +596,10 @@ void DriverController::take_gait() noexcept {
   }
   gait_mutex_.unlock();
   if (!pending) return;
+  last_command_t_s_ = t_s_;  // a repeated command is the caller's heartbeat: it refreshes the lifetime
   const DriverState s = state();
   if (s == DriverState::kHolding) {
-    start_locomotion();
+    if (!start_locomotion()) return;
   } else if (s == DriverState::kRunning) {
     apply_gait();
   } else {
@@ -626,14 +650,18 @@ std::string DriverController::commanded_gait() const {
 
 bool DriverController::set_base_pose(double t_s, const Eigen::Vector3d& position,
                                      const Eigen::Quaterniond& orientation) noexcept {
-  if (!std::isfinite(t_s) || !position.allFinite() || !orientation.coeffs().allFinite() ||
-      orientation.norm() < 1e-6) {
+  Eigen::Quaterniond unit = Eigen::Quaterniond::Identity();
+  const PoseRefusal why = check_base_pose(t_s, position, orientation, config_.pose_workspace_m,
+                                          config_.quaternion_norm_tolerance, &unit);
+  std::lock_guard<std::mutex> lock(pose_mutex_);
+  if (why != PoseRefusal::kNone) {
     ++poses_refused_;
+    describe_pose_refusal(why, t_s, position, orientation, config_.pose_workspace_m, config_.quaternion_norm_tolerance,
+                          pending_pose_refusal_.data(), pending_pose_refusal_.size());
     return false;
   }
-  std::lock_guard<std::mutex> lock(pose_mutex_);
   pending_p_ = position;
-  pending_q_ = orientation.normalized();
+  pending_q_ = unit;
   pending_pose_t_s_ = t_s;
   ++pose_seq_;
   return true;
@@ -648,6 +676,7 @@ void DriverController::take_pose(double t_s) noexcept {
       pose_t_s_ = pending_pose_t_s_;
       pose_received_ = true;
     }
+    pose_refusal_ = pending_pose_refusal_;
     pose_mutex_.unlock();
   }
   pose_fresh_ = pose_received_ && (t_s - pose_t_s_) <= config_.pose_timeout_s;
@@ -736,8 +765,7 @@ void DriverController::run_request(const PendingRequest& r) noexcept {
     }
     case DriverRequest::kHold: {
       if (s == DriverState::kRunning) {
-        hold_here();
-        set_state(DriverState::kHolding);
+        hold_for(HoldReason::kHoldRequest);
         finish_request(r.ticket, true, "holding the posture: send a gait command to move");
       } else if (s == DriverState::kHolding) {
         finish_request(r.ticket, true, "already holding");
@@ -844,6 +872,7 @@ bool DriverController::enable_torque(Message& why) noexcept {
   }
   consecutive_failed_ = 0;
   fault_reason_[0] = '\0';
+  hold_reason_ = HoldReason::kTorqueEnabled;
   set_state(DriverState::kHolding);
   return true;
 }
@@ -868,6 +897,9 @@ void DriverController::fill_snapshot(DriverSnapshot& out) const noexcept {
   out.pose_received = pose_received_;
   out.pose_fresh = pose_fresh_;
   out.locomotion_gated = out.state == DriverState::kRunning && gated_;
+  out.hold_reason = out.state == DriverState::kHolding ? hold_reason_ : HoldReason::kNone;
+  out.command_age_s = t_s_ - last_command_t_s_;
+  out.pose_refusal = pose_refusal_;
   out.position_rad = position_;
   out.velocity_rad_s = velocity_;
   out.effort_a = effort_;

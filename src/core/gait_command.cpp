@@ -6,9 +6,17 @@
 namespace snake_autonomy::core {
 namespace {
 
-// Checks one explicit vector: empty or n finite values; `limit` > 0 also bounds |value|.
-void check_vector(const char* field, const std::vector<double>& v, int n, double limit, const char* limit_what,
-                  std::vector<std::string>& errors) {
+// Bound of |phase| in a command (rad): accepted phases are wrapped to (−π, π]; beyond this a value
+// is not a phase anyone meant (and its difference to a neighbour may overflow).
+constexpr double kMaxPhaseRad = 1000.0;
+// Bound of |δ| (rad): beyond a half turn a steering value means nothing; within it the steering
+// clips δ to the robot's delta_limit.
+constexpr double kMaxDeltaRad = M_PI;
+
+// Checks one explicit vector: empty or n finite values within [lower_i, upper_i] (`what` names the
+// range in the message).
+void check_vector(const char* field, const std::vector<double>& v, int n, const std::vector<double>& lower,
+                  const std::vector<double>& upper, const std::string& what, std::vector<std::string>& errors) {
   if (v.empty()) return;
   if (static_cast<int>(v.size()) != n) {
     std::ostringstream s;
@@ -20,13 +28,20 @@ void check_vector(const char* field, const std::vector<double>& v, int n, double
     std::ostringstream s;
     if (!std::isfinite(v[i])) {
       s << field << "[" << i << "] (joint_" << i + 1 << "): " << v[i] << " is not a finite number";
-    } else if (limit > 0.0 && std::abs(v[i]) > limit) {
-      s << field << "[" << i << "] (joint_" << i + 1 << "): " << v[i] << " exceeds " << limit_what;
+    } else if (v[i] < lower[i] || v[i] > upper[i]) {
+      s << field << "[" << i << "] (joint_" << i + 1 << "): " << v[i] << " is outside [" << lower[i] << ", "
+        << upper[i] << "] " << what;
     } else {
       continue;
     }
     errors.push_back(s.str());
   }
+}
+
+// (−π, π]
+double wrap_pi(double a) {
+  const double w = std::remainder(a, 2.0 * M_PI);
+  return w <= -M_PI ? w + 2.0 * M_PI : w;
 }
 
 void assign(const std::vector<double>& v, Eigen::VectorXd& out) {
@@ -52,16 +67,26 @@ std::string GaitCommandResolver::resolve(const GaitCommandRequest& command, Gait
     for (const auto& g : gaits_.names()) known += (known.empty() ? "" : ", ") + g;
     errors.push_back("gait: unknown gait '" + command.gait + "' (known: " + known + ")");
   }
-  check_vector("amplitude", command.amplitude, n, 0.0, "", errors);
+  const std::vector<double> lo_phase(n, -kMaxPhaseRad), hi_phase(n, kMaxPhaseRad);
+  const std::vector<double> lo_omega(n, -max_omega_rad_s_), hi_omega(n, max_omega_rad_s_);
+  std::vector<double> lo_amp(n), hi_amp(n);
+  for (int i = 0; i < n; ++i) {
+    hi_amp[i] = model_.joint_upper_rad[i] - model_.joint_lower_rad[i];
+    lo_amp[i] = -hi_amp[i];
+  }
   std::ostringstream omega_limit;
-  omega_limit << max_omega_rad_s_ << " rad/s (max_frequency_hz " << max_omega_rad_s_ / (2.0 * M_PI) << ")";
-  check_vector("omega", command.omega, n, max_omega_rad_s_, omega_limit.str().c_str(), errors);
-  check_vector("phase", command.phase, n, 0.0, "", errors);
-  check_vector("bias", command.bias, n, 0.0, "", errors);
+  omega_limit << "rad/s (max_frequency_hz " << max_omega_rad_s_ / (2.0 * M_PI) << ")";
+  check_vector("amplitude", command.amplitude, n, lo_amp, hi_amp, "rad (|amplitude| at most the joint's range)",
+               errors);
+  check_vector("omega", command.omega, n, lo_omega, hi_omega, omega_limit.str(), errors);
+  check_vector("phase", command.phase, n, lo_phase, hi_phase, "rad (phases are wrapped to (-pi, pi])", errors);
+  check_vector("bias", command.bias, n, model_.joint_lower_rad, model_.joint_upper_rad, "rad (the joint limits)",
+               errors);
   if (command.steer) {
-    if (!std::isfinite(command.delta_rad)) {
+    if (!std::isfinite(command.delta_rad) || std::abs(command.delta_rad) > kMaxDeltaRad) {
       std::ostringstream s;
-      s << "delta: " << command.delta_rad << " is not a finite number";
+      s << "delta: " << command.delta_rad
+        << (std::isfinite(command.delta_rad) ? " is outside [-pi, pi] rad" : " is not a finite number");
       errors.push_back(s.str());
     }
     const std::string& base = named ? command.gait : base_name_;
@@ -78,6 +103,7 @@ std::string GaitCommandResolver::resolve(const GaitCommandRequest& command, Gait
   assign(command.amplitude, nominal.amplitude);
   assign(command.omega, nominal.omega);
   assign(command.phase, nominal.phase);
+  if (!command.phase.empty()) nominal.phase = nominal.phase.unaryExpr([](double a) { return wrap_pi(a); });
   assign(command.bias, nominal.bias);
   GaitParameters result = nominal;
   if (command.steer && !steering_.modify_amplitudes(nominal.amplitude, command.delta_rad, result.amplitude))

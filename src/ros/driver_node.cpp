@@ -244,6 +244,8 @@ class DriverNode {
       if (s.state == core::DriverState::kFault) {
         ROS_ERROR("driver: locomotion stopped (%s): %s", core::to_string(config_.controller.fault_action),
                   s.fault_reason.data());
+      } else if (s.hold_reason == core::HoldReason::kCommandTimeout) {
+        ROS_WARN("driver: %s", command_timeout_text().c_str());
       } else {
         ROS_INFO("driver: %s", core::to_string(s.state));
       }
@@ -266,6 +268,11 @@ class DriverNode {
                         1e3 / config_.loop.rate_hz);
       logged_overruns_ = published_.loop.overruns;
     }
+  }
+
+  std::string command_timeout_text() const {
+    return "holding: no gait command for " + fixed(config_.controller.command_timeout_s, 1) +
+           " s (command_timeout_s): send one on gait_command to resume";
   }
 
   void publish_diagnostics(const ros::Time& stamp) {
@@ -304,6 +311,9 @@ class DriverNode {
     } else if (s.state == core::DriverState::kStopped) {
       loco.level = DiagnosticStatus::WARN;
       loco.message = "torque off";
+    } else if (s.hold_reason == core::HoldReason::kCommandTimeout) {
+      loco.level = DiagnosticStatus::WARN;
+      loco.message = command_timeout_text();
     } else if (s.locomotion_gated) {
       loco.level = DiagnosticStatus::WARN;
       loco.message = s.pose_received ? "base pose stale: locomotion held" : "no base pose yet: locomotion held";
@@ -319,7 +329,10 @@ class DriverNode {
                    kv("commands_accepted", str(controller_.commands_accepted())),
                    kv("commands_refused", str(controller_.commands_refused())),
                    kv("commands_applied", str(s.commands_applied)), kv("last_refusal", controller_.last_refusal()),
-                   kv("poses_refused", str(s.poses_refused)),
+                   kv("poses_refused", str(s.poses_refused)), kv("last_pose_refusal", s.pose_refusal.data()),
+                   kv("hold_reason", core::to_string(s.hold_reason)),
+                   kv("command_age_s", fixed(s.command_age_s, 2)),
+                   kv("command_timeout_s", fixed(config_.controller.command_timeout_s, 2)),
                    kv("fault_action", core::to_string(config_.controller.fault_action))};
     array.status.push_back(loco);
 

@@ -135,6 +135,9 @@ DriverNodeConfig read_driver_params(const ros::NodeHandle& pnh, std::vector<std:
   r.get("plausible_margin_ticks", &k.plausible_margin_ticks);
   r.get("pose_timeout_s", &k.pose_timeout_s);
   r.get("require_pose", &k.require_pose);
+  r.get("command_timeout_s", &k.command_timeout_s);
+  r.get("pose_workspace_m", &k.pose_workspace_m);
+  r.get("quaternion_norm_tolerance", &k.quaternion_norm_tolerance);
   if (c.gaits_file.empty()) c.gaits_file = c.config_dir + "/gaits.yaml";
   for (const auto& e : c.validate()) errors.push_back(e);
   return c;

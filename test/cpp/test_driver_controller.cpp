@@ -10,14 +10,13 @@
 #include <thread>
 
 #include "snake_autonomy/core/driver_controller.hpp"
-#include "snake_autonomy/dynamixel/fake_servo_bus.hpp"
-#include "test_helpers.hpp"
+#include "driver_rig.hpp"
 
 using namespace snake_autonomy::core;
-using snake_autonomy::dynamixel::ControlTable;
 using snake_autonomy::dynamixel::FakeServoBus;
-using snake_autonomy::test::cobra;
-using snake_autonomy::test::source_path;
+using snake_autonomy::test::kDeg;
+using snake_autonomy::test::kDt;
+using snake_autonomy::test::Rig;
 
 // ---- allocation counter: counts operator new calls while g_count_allocations is set ----
 namespace {
@@ -37,59 +36,6 @@ void* operator new(std::size_t size) {
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
-namespace {
-
-constexpr double kDt = 0.01;
-constexpr double kDeg = M_PI / 180.0;
-
-struct Rig {
-  RobotModel model;
-  GaitLibrary gaits;
-  ControlTable table;
-  std::unique_ptr<FakeServoBus> bus;
-  std::unique_ptr<DriverController> ctl;
-  double t = 0.0;
-  bool feed_pose = true;
-
-  explicit Rig(DriverConfig config = DriverConfig{}, const std::function<void(RobotModel&)>& edit = {},
-               const std::function<void(FakeServoBus&)>& before_start = {})
-      : model(cobra()),
-        gaits(GaitLibrary::from_yaml_file(source_path("config/gaits.yaml"))),
-        table(ControlTable::from_yaml_file(source_path("config/dynamixel/xh540_w270.yaml"))) {
-    if (edit) edit(model);
-    std::vector<std::uint8_t> ids;
-    for (int id : model.servos.ids) ids.push_back(static_cast<std::uint8_t>(id));
-    bus = std::make_unique<FakeServoBus>(table, ids);
-    if (before_start) before_start(*bus);
-    ctl = std::make_unique<DriverController>(model, gaits, table, *bus, config);
-  }
-  void start() { ctl->start(t); }
-  bool step(int cycles = 1) {
-    bool ok = true;
-    for (int k = 0; k < cycles; ++k) {
-      t += kDt;
-      if (feed_pose) ctl->set_base_pose(t, Eigen::Vector3d(1.0, 2.0, 0.0), Eigen::Quaterniond::Identity());
-      ok = ctl->update(t, kDt) && ok;
-    }
-    return ok;
-  }
-  RequestResult request(DriverRequest r, std::uint8_t id = 0) {
-    const auto ticket = ctl->post(r, id);
-    step();
-    RequestResult out;
-    EXPECT_TRUE(ctl->take_result(ticket, &out));
-    return out;
-  }
-  std::string command(const std::string& gait) {
-    GaitCommandRequest c;
-    c.gait = gait;
-    return ctl->command_gait(c);
-  }
-  std::int64_t goal(int id) const { return bus->get(static_cast<std::uint8_t>(id), "goal_position"); }
-  std::int64_t torque(int id) const { return bus->get(static_cast<std::uint8_t>(id), "torque_enable"); }
-};
-
-}  // namespace
 
 TEST(DriverConfig, ValidateCollectsEveryProblem) {
   DriverConfig c;
@@ -209,6 +155,7 @@ TEST(DriverController, GaitCommandDrivesTheGoalsThroughTheCpg) {
   Rig rig;
   rig.start();
   EXPECT_EQ(rig.command("sidewind"), "");
+  rig.heartbeat = Rig::named("sidewind");
   rig.step(300);
   EXPECT_EQ(rig.ctl->state(), DriverState::kRunning);
   EXPECT_FALSE(rig.ctl->locomotion_gated());
@@ -226,7 +173,7 @@ TEST(DriverController, GaitCommandDrivesTheGoalsThroughTheCpg) {
   DriverSnapshot snap = rig.ctl->make_snapshot();
   rig.ctl->fill_snapshot(snap);
   EXPECT_STREQ(snap.gait.data(), "sidewind");
-  EXPECT_EQ(snap.commands_applied, 1u);
+  EXPECT_EQ(snap.commands_applied, 5u);  // the command and 4 heartbeats
   EXPECT_TRUE(snap.pose_fresh);
   // Kinematics ran from the base pose.
   EXPECT_NEAR(rig.ctl->kinematics().link_positions[0].x(), 1.0, 1e-12);
@@ -243,9 +190,10 @@ TEST(DriverController, GoalsNeverLeaveTheJointOrServoLimits) {
   rig.start();
   GaitCommandRequest c;
   c.gait = "sidewind";
-  c.amplitude.assign(11, 3.0);  // clamped to 70 deg by the CPG, then to the joint limits
-  c.bias.assign(11, 1.5);
+  c.amplitude.assign(11, 0.3);  // amplitude + bias beyond the upper limit (25 deg) half of the time
+  c.bias.assign(11, 0.43);
   ASSERT_EQ(rig.ctl->command_gait(c), "");
+  rig.heartbeat = c;
   const std::int64_t lo = 2048 - std::lround(20.0 / 360 * 4096), hi = 2048 + std::lround(25.0 / 360 * 4096);
   for (int k = 0; k < 600; ++k) {
     rig.step();
@@ -297,7 +245,7 @@ TEST(DriverController, RefusedCommandLeavesTheRunningGaitUntouched) {
     EXPECT_NE(why.find(part), std::string::npos) << part << " in:\n" << why;
   GaitCommandRequest fast;
   fast.omega.assign(11, 2 * M_PI * 5.0);
-  EXPECT_NE(rig.ctl->command_gait(fast).find("exceeds"), std::string::npos);
+  EXPECT_NE(rig.ctl->command_gait(fast).find("(max_frequency_hz 2)"), std::string::npos);
   GaitCommandRequest steer_turn;
   steer_turn.gait = "turn_left";
   steer_turn.steer = true;
@@ -337,6 +285,7 @@ TEST(DriverController, StalePoseHoldsLocomotionAndFreshPosesResumeIt) {
   rig.feed_pose = false;
   rig.start();
   ASSERT_EQ(rig.command("sidewind"), "");
+  rig.heartbeat = Rig::named("sidewind");  // the mission keeps commanding while the pose is stale
   rig.step(5);
   // No pose yet: identity for the kinematics, locomotion held.
   EXPECT_TRUE(rig.ctl->locomotion_gated());
@@ -614,6 +563,22 @@ TEST(DriverController, UpdateNeverAllocates) {
   rig.ctl->fill_snapshot(snap);
   g_count_allocations = false;
   EXPECT_EQ(rig.ctl->state(), DriverState::kFault);
+  EXPECT_EQ(g_allocations.load(), 0);
+  // The command lifetime expiring, and refused base poses (their reason formatted).
+  DriverConfig cfg;
+  cfg.command_timeout_s = 0.5;
+  Rig timed(cfg);
+  timed.start();
+  ASSERT_EQ(timed.command("sidewind"), "");
+  timed.step(2);
+  g_count_allocations = true;
+  timed.step(60);
+  timed.ctl->set_base_pose(timed.t, Eigen::Vector3d(1e300, 0, 0), Eigen::Quaterniond::Identity());
+  timed.ctl->set_base_pose(timed.t, Eigen::Vector3d::Zero(), Eigen::Quaterniond(1e200, 0, 0, 1e200));
+  timed.step(2);
+  timed.ctl->fill_snapshot(snap);
+  g_count_allocations = false;
+  EXPECT_EQ(timed.ctl->state(), DriverState::kHolding);
   EXPECT_EQ(g_allocations.load(), 0);
 }
 

@@ -89,7 +89,7 @@ def _controller(**config):
 
 
 def test_driver_controller_holds_on_stale_pose_and_keeps_goals_in_limits():
-    robot, bus, drv = _controller(pose_timeout_s=0.5)
+    robot, bus, drv = _controller(pose_timeout_s=0.5, command_timeout_s=0.0)  # one command for 6 s
     assert "torque is off" in drv.command_gait(gait="sidewind")      # refused before start
     drv.start(0.0)
     assert drv.state == "holding" and all(bus.get(i, "torque_enable") == 1 for i in robot.servo_ids)
@@ -133,6 +133,26 @@ def test_load_driver_config_takes_the_controllers_keys_of_driver_yaml(tmp_path):
     f.write_text("return_delay_time_us: 3\n")
     with pytest.raises(ValueError, match="return_delay_time_us: 3"):
         load_driver_config(str(f))
+
+
+def test_batch_driver_has_the_same_command_lifetime_as_driver_node(tmp_path):
+    """command_timeout_s comes from driver.yaml on the batch path too, and expires on the loop's
+    (simulated) clock: a running gait without commands holds, with the reason; the next resumes."""
+    assert load_driver_config(str(ROOT / "config" / "driver.yaml")).command_timeout_s == 3.0
+    with pytest.raises(ValueError, match="command_timeout_s: -1"):
+        _core.DriverConfig(command_timeout_s=-1.0)
+    robot, bus, drv = _controller(command_timeout_s=1.0, require_pose=False)
+    drv.start(0.0)
+    assert drv.command_gait(gait="sidewind") == ""
+    states = []
+    for k in range(1, 151):
+        drv.update(k * 0.01, 0.01)
+        states.append(drv.state)
+    assert states[99] == "running" and states[-1] == "holding"
+    assert "command_timeout_s" in drv.hold_reason
+    assert drv.command_gait(gait="sidewind") == ""
+    drv.update(1.51, 0.01)
+    assert drv.state == "running" and drv.hold_reason == ""
 
 
 def test_driver_controller_binding_config_faults_and_lifetime():

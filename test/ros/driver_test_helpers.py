@@ -27,8 +27,11 @@ def wait_for(cond, timeout, what):
 
 
 class DriverHarness:
-    """Publishes base poses (50 Hz while `pose_on`), listens to joint_states, com_pose and
-    /diagnostics, and talks to the mocked bus through its control socket."""
+    """Publishes base poses (50 Hz while `pose_on`), re-sends the last gait command every second as
+    the mission node does (the driver's command lifetime, command_timeout_s; stop_heartbeat() ends
+    it), listens to joint_states, com_pose and /diagnostics, and talks to the mocked bus through its
+    control socket."""
+    HEARTBEAT_PERIOD_S = 1.0
 
     def __init__(self, port):
         self.lock = threading.Lock()
@@ -37,6 +40,7 @@ class DriverHarness:
         self.joint_count = 0
         self.com_count = 0
         self.pose_on = True
+        self._beat = None         # the command re-sent every HEARTBEAT_PERIOD_S
         self.mock = wait_for(lambda: self._connect(port + ".ctl"), 20.0, "the mocked bus's control socket")
         self.gait_pub = rospy.Publisher("gait_command", GaitCommand, queue_size=10)
         self.pose_pub = rospy.Publisher("base_pose", PoseStamped, queue_size=10)
@@ -73,14 +77,23 @@ class DriverHarness:
 
     def _pose_loop(self):
         rate = rospy.Rate(50)
+        next_beat = time.monotonic()
         while not rospy.is_shutdown():
-            if self.pose_on:
-                p = PoseStamped()
-                p.header.stamp = rospy.Time.now()
-                p.header.frame_id = "odom"
-                p.pose.position.x = 1.0
-                p.pose.orientation.w = 1.0
-                self.pose_pub.publish(p)
+            try:
+                beat = self._beat
+                if beat is not None and time.monotonic() >= next_beat:
+                    beat.header.stamp = rospy.Time.now()
+                    self.gait_pub.publish(beat)
+                    next_beat = time.monotonic() + self.HEARTBEAT_PERIOD_S
+                if self.pose_on:
+                    p = PoseStamped()
+                    p.header.stamp = rospy.Time.now()
+                    p.header.frame_id = "odom"
+                    p.pose.position.x = 1.0
+                    p.pose.orientation.w = 1.0
+                    self.pose_pub.publish(p)
+            except rospy.ROSException:  # the test is shutting down: topics closed
+                return
             rate.sleep()
 
     # --- diagnostics ---
@@ -109,13 +122,20 @@ class DriverHarness:
         return self.value("snake_driver: locomotion", "state")
 
     # --- commands ---
-    def command(self, gait="", **vectors):
+    def command(self, gait="", heartbeat=True, **vectors):
+        """Publishes a gait command; heartbeat: re-send it every second from now on (a command the
+        driver refuses should pass heartbeat=False)."""
         msg = GaitCommand()
         msg.header.stamp = rospy.Time.now()
         msg.gait = gait
         for key, value in vectors.items():
             setattr(msg, key, value)
         self.gait_pub.publish(msg)
+        if heartbeat:
+            self._beat = msg
+
+    def stop_heartbeat(self):
+        self._beat = None
 
     # --- the mock ---
     def goals(self):

@@ -1,8 +1,13 @@
 #!/usr/bin/env python3
 """rostest: driver_node on the mocked servo bus: joint_states flow, a commanded gait reaches the
 mock's goal positions, a refused command leaves the gait running, a stale pose holds locomotion
-and fresh poses resume it, driver/hold freezes the goals."""
+and fresh poses resume it, driver/hold freezes the goals, and when the commanding process is
+killed the driver holds within its command lifetime (command_timeout_s)."""
 import math
+import os
+import signal
+import subprocess
+import time
 
 import rospy
 import rostest
@@ -33,9 +38,9 @@ class DriverGait(DriverTestCase):
     def test_2_refused_command_leaves_the_gait_running(self):
         h = self.h
         refused = int(h.value(LOCO, "commands_refused"))
-        h.command("sidewind", amplitude=[0.1, 0.2, 0.3])
-        h.command("no_such_gait")
-        h.command("sidewind", omega=[float("nan")] * 11)
+        h.command("sidewind", heartbeat=False, amplitude=[0.1, 0.2, 0.3])
+        h.command("no_such_gait", heartbeat=False)
+        h.command("sidewind", heartbeat=False, omega=[float("nan")] * 11)
         s = h.wait_diag(LOCO, lambda s: int(h.value(LOCO, "commands_refused")) >= refused + 3, 5.0,
                         "three refusals in the diagnostics")
         self.assertIn("omega[0] (joint_1): nan", h.value(LOCO, "last_refusal"))
@@ -59,10 +64,41 @@ class DriverGait(DriverTestCase):
 
     def test_4_hold_service_freezes_the_goals(self):
         h = self.h
+        h.stop_heartbeat()  # the next command would resume locomotion
         r = h.hold()
         self.assertTrue(r.success, r.message)
         h.wait_diag(LOCO, lambda s: s.message == "holding", 5.0, "holding")
         self.assertLessEqual(h.goal_span(2, 1.0), 0)
+
+    def test_5_killed_commander_holds_within_the_command_timeout(self):
+        """Issue 10 point 2: SIGKILL the node that commands the gait; the driver stops and holds
+        within command_timeout_s (+ one command period + a diagnostics period), says why, and the
+        mock's goals stop changing; the next command resumes."""
+        h = self.h
+        h.stop_heartbeat()
+        timeout_s = float(h.value(LOCO, "command_timeout_s"))
+        commander = subprocess.Popen(["rostopic", "pub", "-r", "1", "gait_command", "snake_autonomy/GaitCommand",
+                                      "{gait: sidewind}"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            h.wait_diag(LOCO, lambda s: s.message == "running", 10.0, "running on the commander's commands")
+            h.wait_moving(2, 600, 12.0)
+            # Running past the lifetime: the commander's repeats keep it alive.
+            self.assertGreater(h.goal_span(2, timeout_s + 0.5), 600)
+            self.assertEqual(h.state(), "running")
+        finally:
+            os.kill(commander.pid, signal.SIGKILL)
+            commander.wait()
+        killed = time.monotonic()
+        s = h.wait_diag(LOCO, lambda s: s.message.startswith("holding: no gait command"), timeout_s + 3.0,
+                        "the hold after the command lifetime")
+        elapsed = time.monotonic() - killed
+        self.assertLessEqual(elapsed, timeout_s + 1.0 + 0.5 + 0.5)  # lifetime + command period + diag period
+        self.assertIn("command_timeout_s", s.message)
+        self.assertEqual(h.value(LOCO, "state"), "holding")
+        self.assertLessEqual(h.goal_span(2, 1.0), 0)
+        h.command("sidewind")
+        h.wait_diag(LOCO, lambda s: s.message == "running", 5.0, "running again on the next command")
+        h.wait_moving(2, 600, 12.0)
 
 
 if __name__ == "__main__":

@@ -25,6 +25,8 @@
 
 namespace snake_autonomy::core {
 
+struct CpgTestAccess;  // tests only (test/cpp): corrupts the state to prove the driver's fault path
+
 // Per-joint gait targets: radians and rad/s, one value per joint.
 struct GaitParameters {
   Eigen::VectorXd amplitude;  // a_des
@@ -54,8 +56,15 @@ class Cpg {
   void set_parameters(const GaitParameters& p);
   const GaitParameters& targets() const { return targets_; }
 
-  // Sets the oscillator state directly (tests, restarts). Rates are zeroed.
+  // Sets the oscillator state directly (tests, restarts). Rates are zeroed. Returns false and
+  // changes nothing when a vector has the wrong length or a non-finite value (the loop's path).
+  bool restart(const Eigen::VectorXd& phases, const Eigen::VectorXd& amplitudes,
+               const Eigen::VectorXd& biases) noexcept;
+  // restart() or throw std::invalid_argument naming the problem (callers outside the loop).
   void reset(const Eigen::VectorXd& phases, const Eigen::VectorXd& amplitudes, const Eigen::VectorXd& biases);
+  // True when every state variable and the output are finite numbers. Every accepted input keeps
+  // them finite; the driver checks this each cycle and faults if it ever fails.
+  bool state_finite() const noexcept;
 
   // Advances by dt_s (> 0) and returns the joint angles, clamped to the joint limits.
   const Eigen::VectorXd& step(double dt_s) noexcept;
@@ -71,6 +80,7 @@ class Cpg {
   const Eigen::VectorXd& unclamped_output() const { return q_raw_; }
 
  private:
+  friend struct CpgTestAccess;
   void update_drive(const Eigen::VectorXd& lags) noexcept;
   void update_step_factors(double dt_s) noexcept;
 

@@ -34,12 +34,18 @@ struct DriverConfig {
   double max_joint_velocity_rad_s = 4.5;  // goal slew limit per joint (XH540-W270: 4.8 rad/s no load)
   double max_frequency_hz = 2.0;      // gait commands with |ω| / 2π above it are refused
   double max_step_s = 0.05;           // longer steps (after a stall) are integrated as this long
+  // Command lifetime: a running gait whose last command (a repeat counts: callers re-send theirs as
+  // a heartbeat) is older than this stops and holds the posture until the next command. Above the
+  // mission's 1 s control period with room for two lost commands; 0: no lifetime (bench use).
+  double command_timeout_s = 3.0;
   // Position readings further than this outside the servo's position limits are implausible
   // (garbage with a valid CRC): treated as a missed reply.
   int plausible_margin_ticks = 1024;
   // Base pose (ERRATA #7)
   double pose_timeout_s = 0.5;        // no pose for this long: stale, locomotion held until fresh poses return
   bool require_pose = true;           // false: gaits run without a base pose (robot on a stand, bench)
+  double pose_workspace_m = 1000.0;   // base poses with |x|, |y| or |z| beyond this are refused
+  double quaternion_norm_tolerance = 0.01;  // |norm - 1| beyond this is refused; within, normalised
 
   // Every problem, naming key and value; empty when usable.
   std::vector<std::string> validate() const;

@@ -9,7 +9,9 @@
 // States (DriverState):
 //   kStopped  torque off (at start when torque_on_start is false, or by request). No goals are written.
 //   kHolding  torque on, goals frozen at the posture the robot had when it stopped. The state after
-//             start, after recovery and after a hold request; a gait command starts locomotion.
+//             start, after recovery, after a hold request and when the running gait's last command
+//             is older than command_timeout_s (hold_reason() says which); a gait command (a repeat
+//             of the last one included) starts locomotion.
 //   kRunning  the CPG drives the goals. With a stale base pose (no pose for pose_timeout_s, or none
 //             yet; ERRATA #7) the CPG amplitudes go to zero (the waves decay, critically damped:
 //             locomotion stops, posture held) and the commanded gait resumes with fresh poses.
@@ -17,12 +19,14 @@
 //             implausible reply, or a failed write) or any hardware error: the fault action is applied
 //             (hold: goals frozen at the present positions; torque_off) and the reason kept. Leave it
 //             with request kEnableTorque (which checks every servo first) after rebooting a servo
-//             that reported a hardware error (kRebootServo).
+//             that reported a hardware error (kRebootServo). The CPG's state is checked every cycle:
+//             if it is ever not finite the supervisor faults ("CPG state not finite").
 // A failed cycle keeps the last good state of the servos that did not answer (flagged stale).
 //
 // Whatever the CPG or a command says, a goal is never outside the joint's limits (robot YAML) nor
 // the servo's own position limits (read at start), never moves faster than max_joint_velocity_rad_s,
-// and a non-finite value never becomes a command.
+// and a non-finite value never becomes a command. Inputs are range-checked before they reach the
+// loop: gait commands by GaitCommandResolver, base poses by check_base_pose (safety_rules.hpp).
 //
 // Threads: start(), update() and shutdown() run on one thread (the loop). command_gait(),
 // set_base_pose() and call() may be called from any other thread: they hand their data over through
@@ -46,6 +50,7 @@
 #include "snake_autonomy/core/gait_library.hpp"
 #include "snake_autonomy/core/kinematics.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
+#include "snake_autonomy/core/safety_rules.hpp"
 #include "snake_autonomy/dynamixel/control_table.hpp"
 #include "snake_autonomy/dynamixel/servo_bus.hpp"
 
@@ -94,6 +99,9 @@ struct DriverSnapshot {
   bool pose_received = false;   // a base pose arrived at least once
   bool pose_fresh = false;      // the latest pose is younger than pose_timeout_s
   bool locomotion_gated = false;  // running, but held for the stale pose
+  HoldReason hold_reason = HoldReason::kNone;  // why the driver holds (kNone unless kHolding)
+  double command_age_s = 0.0;   // since the last gait command reached the loop (repeats included)
+  Message pose_refusal{};       // why the latest refused base pose was refused ("" when none yet)
   Eigen::VectorXd position_rad, velocity_rad_s, effort_a, goal_rad;  // joint space
   std::vector<ServoDiagnostics> servos;
   // Kinematics from the latest base pose (identity before the first: for visualisation only).
@@ -144,8 +152,9 @@ class DriverController {
   // Resolves and hands over a gait command. Returns "" when accepted, else every reason (the
   // running gait is untouched). Refused as well while torque is off or in a fault.
   std::string command_gait(const GaitCommandRequest& command);
-  // A base pose received at t_s (the loop's clock). False (ignored, counted) when not finite or the
-  // quaternion has no length.
+  // A base pose received at t_s (the loop's clock). False (ignored, counted, the reason kept for the
+  // snapshot) when check_base_pose refuses it: not finite, outside pose_workspace_m, or a quaternion
+  // whose norm is not 1 within quaternion_norm_tolerance; accepted quaternions are normalised.
   bool set_base_pose(double t_s, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation) noexcept;
   // Posts a request that the loop runs at its next update(), and waits for its result up to
   // timeout_s (the loop must be running in another thread). `servo_id` is for kRebootServo.
@@ -173,12 +182,15 @@ class DriverController {
   bool pose_fresh() const noexcept { return pose_fresh_; }
   bool locomotion_gated() const noexcept { return gated_; }
   const char* fault_reason() const noexcept { return fault_reason_.data(); }
+  HoldReason hold_reason() const noexcept { return hold_reason_; }
 
   // Joint angle <-> servo ticks with the servo's direction and zero offset (no clamping).
   double ticks_to_joint_rad(int joint, std::int32_t ticks) const noexcept;
   bool joint_rad_to_ticks(int joint, double rad, std::int32_t* ticks) const noexcept;
 
  private:
+  friend struct DriverControllerTestAccess;  // tests only (test/cpp): reaches the CPG to corrupt it
+
   struct PendingRequest {
     std::uint64_t ticket = 0;  // 0: none
     DriverRequest type = DriverRequest::kHold;
@@ -192,6 +204,7 @@ class DriverController {
   bool read_feedback() noexcept;  // false: a servo had no usable reply or the bus failed
   void read_status() noexcept;
   void check_hardware_errors() noexcept;
+  void step_cpg(double dt_s) noexcept;  // faults when the CPG state is not finite
   void compute_goals(double dt_s) noexcept;
   bool write_goals() noexcept;
   bool write_torque(bool on) noexcept;
@@ -199,7 +212,8 @@ class DriverController {
 
   void enter_fault(const char* reason) noexcept;
   void hold_here() noexcept;  // hold posture = measured positions clamped to the limits
-  void start_locomotion() noexcept;
+  void hold_for(HoldReason reason) noexcept;  // hold_here() and kHolding, with the reason
+  bool start_locomotion() noexcept;  // false: the CPG could not restart (fault entered)
   void apply_gait() noexcept;  // nominal or gated targets into the CPG
   void finish_request(std::uint64_t ticket, bool success, const char* fmt, ...) noexcept
       __attribute__((format(printf, 4, 5)));
@@ -250,6 +264,8 @@ class DriverController {
   Cpg cpg_;
   GaitParameters nominal_, effective_;
   bool gated_ = false;
+  HoldReason hold_reason_ = HoldReason::kNone;
+  double last_command_t_s_ = 0.0;  // loop clock
 
   // Base pose and kinematics.
   Kinematics kinematics_;
@@ -272,6 +288,7 @@ class DriverController {
   double pending_pose_t_s_ = 0.0;
   std::uint64_t pose_seq_ = 0;
   std::atomic<std::uint64_t> poses_refused_{0};
+  Message pending_pose_refusal_{}, pose_refusal_{};  // under pose_mutex_ / the loop's copy
 
   std::mutex request_mutex_;
   PendingRequest pending_request_;

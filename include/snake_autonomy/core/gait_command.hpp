@@ -3,10 +3,15 @@
 //
 // Rules (msg/GaitCommand.msg): a named gait replaces the current gait; explicit vectors replace
 // the named (or current) gait's; every vector is empty (unchanged) or has one value per joint.
-// Refused, with every reason and nothing changed: an unknown gait, a vector of the wrong length,
-// a NaN or infinite value, |ω| beyond the configured frequency limit, steering of a gait that is not
-// steerable, a non-finite δ. Amplitudes beyond the limits are not refused: the steering clamp and
-// the CPG clamp them. The resolver remembers the nominal (unsteered) parameters of the last
+// Refused, with every reason (field, index, joint_N and value) and nothing changed: an unknown gait,
+// a vector of the wrong length, a NaN or infinite value, and values outside their physical range:
+//   amplitude  |a| > the joint's range (upper − lower); within it, the steering clamp and the CPG's
+//              amplitude_limit clamp it (amplitude + |bias| beyond the limits is cut by the goal clamp)
+//   omega      |ω| / 2π > max_frequency_hz
+//   phase      |φ| > 1000 rad; accepted phases are wrapped to (−π, π] (only differences matter)
+//   bias       outside the joint limits [lower, upper]
+//   delta      non-finite or |δ| > π (within, Steering clips it to the robot's delta_limit)
+// and steering of a gait that is not steerable. The resolver remembers the nominal (unsteered) parameters of the last
 // accepted command: steering applies to one command at a time, it does not accumulate.
 //
 // Not real-time: resolve() allocates. It runs in the caller's thread (a ROS callback), never in the

@@ -4,7 +4,9 @@ logic is missions.runner.MissionRunner, the log experiments.RunLog.
 Subscribes  com_pose (geometry_msgs/PoseStamped, the driver's CoM + virtual-chassis orientation),
             base_pose_status (diagnostic_msgs/DiagnosticStatus, the pose remapper; optional),
             and for the bag: base_pose, odom, bound_state, joint_states.
-Publishes   gait_command (snake_autonomy/GaitCommand), tracking_status (snake_autonomy/TrackingStatus),
+Publishes   gait_command (snake_autonomy/GaitCommand, every control step while a mission runs: the
+            repeat is the driver's heartbeat, its command_timeout_s holds the robot when it stops),
+            tracking_status (snake_autonomy/TrackingStatus),
             mission/waypoints (geometry_msgs/PoseArray, latched), mission/state (std_msgs/String, latched).
 Services    mission/load (snake_autonomy/LoadMission), mission/start, mission/abort (std_srvs/Trigger).
 Params      ~mission (file or provided name: loaded at start-up), ~auto_start (false), ~tracker_config
@@ -88,7 +90,15 @@ class MissionNode:
         if not (self.rate_hz > 0 and self.pose_timeout_s > 0 and self.yaw_window > 0):
             raise ValueError(f"~rate_hz ({self.rate_hz}), ~pose_timeout_s ({self.pose_timeout_s}) and "
                              f"~yaw_filter_window ({self.yaw_window}) must be positive")
+        lifetime = rospy.get_param("driver/command_timeout_s", None)
+        if lifetime and 1.0 / self.rate_hz >= 0.5 * float(lifetime):
+            rospy.logwarn(f"~rate_hz {self.rate_hz}: a command every {1.0 / self.rate_hz:.1f} s is too slow for the "
+                          f"driver's command_timeout_s {lifetime} s; it will hold between commands")
 
+        # The process that launched this node (roslaunch): when it is gone (SIGKILL of roslaunch) this
+        # node is an orphan nobody can stop with Ctrl+C any more; it ends its mission and exits, and
+        # the driver holds when its command lifetime expires.
+        self.parent_pid = os.getppid()
         self.mission = None
         self.runner = None
         self.log = None
@@ -236,6 +246,12 @@ class MissionNode:
 
     # -- the control tick --------------------------------------------------------------------------------
     def on_tick(self, _event):
+        if os.getppid() != self.parent_pid:
+            why = f"the launching process (pid {self.parent_pid}) is gone"
+            rospy.logerr(f"{why}: ending the mission and exiting (the driver holds after its command_timeout_s)")
+            self.on_shutdown(why)
+            rospy.signal_shutdown(why)
+            return
         with self.lock:
             if self.runner is None:
                 return

@@ -166,6 +166,10 @@ class SimNode:
     def shutdown(self):
         self._stop.set()
         self._thread.join(2.0)
+        # Ctrl+C of the launch stops every node at once: the driver's shutdown action (its final hold
+        # write, or torque off) needs the bus, so the bus is served until the driver stops talking.
+        if not self.sim.wait_bus_idle(quiet_s=0.3, timeout_s=5.0):
+            print("[sim] the servo bus was still busy 5 s after shutdown began: closing it", flush=True)
         self.sim.stop()
 
 

@@ -11,6 +11,7 @@ sensors, start pose, tracker calibration and disturbance triggers are the batch 
 """
 import math
 import threading
+import time
 from dataclasses import dataclass, field
 from typing import List, Optional, Tuple
 
@@ -91,6 +92,22 @@ class RealTimeSim:
 
     def stop(self):
         self.bus.stop()
+
+    def wait_bus_idle(self, quiet_s: float = 0.3, timeout_s: float = 5.0, clock=time.monotonic) -> bool:
+        """Keeps serving the bus until no packet arrived for quiet_s (the driver has stopped talking:
+        its final shutdown write is in) or timeout_s passed; True when it went quiet. Call before
+        stop() when everything shuts down at once (Ctrl+C of a launch): the driver's shutdown action
+        needs the bus."""
+        start = last_change = clock()
+        last = self.bus.stats()["packets"]
+        while clock() - start < timeout_s:
+            time.sleep(0.02)
+            now, packets = clock(), self.bus.stats()["packets"]
+            if packets != last:
+                last, last_change = packets, now
+            elif now - last_change >= quiet_s:
+                return True
+        return False
 
     # ---- inputs ----------------------------------------------------------------------------------
     def set_target(self, waypoint_index: int) -> None:
