@@ -47,6 +47,9 @@ def test_eq_3_31_fit_recovers_drift_gain_and_heading_offset():
     assert r.heading_offset_deg == pytest.approx(81.0 + 0.5 * 7.5, abs=1.0)
     assert r.rate_residual_std_deg_s < 0.05 and r.warnings               # 7.5 is outside [-2, 4]: extrapolated
     assert all(s.cycles == 6 for s in r.segments)
+    two = fit([synthetic_segment(d) for d in (0.0, 4.0)])                 # a line through two points:
+    assert two.delta_offset_deg == pytest.approx(7.5, abs=0.1)            # a value, but no scatter
+    assert math.isnan(two.rate_residual_std_deg_s) and math.isnan(two.delta_offset_std_deg)
 
 
 def test_fit_scatter_and_per_run_values_on_noisy_runs():

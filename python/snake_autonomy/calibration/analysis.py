@@ -23,7 +23,7 @@ from the drift fit's standard errors, and each run's own δ_offset when a run ha
 """
 import math
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -113,7 +113,7 @@ def turn_rate_deg_s(samples: np.ndarray, period_s: float) -> float:
     return float(np.polyfit(t - t[0], yaw, 1)[0] * DEG)
 
 
-def heading_offset_deg(samples: np.ndarray, period_s: float) -> (float, int):
+def heading_offset_deg(samples: np.ndarray, period_s: float) -> Tuple[float, int]:
     """Circular mean over whole cycles of (direction of the CoM's displacement over the cycle - the
     chassis yaw averaged over the cycle), degrees; and the number of cycles with travel."""
     t = samples[:, 0]
@@ -143,14 +143,14 @@ def segment_figures(seg: Segment) -> SegmentFigures:
 
 
 def _line(x: np.ndarray, y: np.ndarray):
-    """Least squares y = a + b x: (a, b, residual std, covariance of (a, b))."""
+    """Least squares y = a + b x: (a, b, residual std, covariance of (a, b)); the last two are NaN
+    with two points (a line through them says nothing of the scatter)."""
     A = np.column_stack([np.ones_like(x), x])
     coef, *_ = np.linalg.lstsq(A, y, rcond=None)
     resid = y - A @ coef
-    dof = max(1, len(x) - 2)
-    s2 = float(resid @ resid) / dof
+    s2 = float(resid @ resid) / (len(x) - 2) if len(x) > 2 else math.nan
     cov = s2 * np.linalg.inv(A.T @ A)
-    return float(coef[0]), float(coef[1]), math.sqrt(s2) if len(x) > 2 else 0.0, cov
+    return float(coef[0]), float(coef[1]), math.sqrt(s2), cov
 
 
 def _zero_crossing(figs: Sequence[SegmentFigures]) -> Optional[float]:
@@ -176,7 +176,7 @@ def fit(segments: Sequence[Segment], min_gain_deg_s_per_deg: float = 0.05) -> Ca
     delta_offset = -k_bias * drift                                   # eq. 3.31
     # delta method: d(-a/b) = -da/b + a db/b^2
     grad = np.array([-1.0 / gain, drift / gain ** 2])
-    delta_std = math.sqrt(max(0.0, float(grad @ cov @ grad)))
+    delta_std = math.sqrt(max(0.0, float(grad @ cov @ grad))) if len(figs) > 2 else math.nan
     warnings = []
     if not deltas.min() <= delta_offset <= deltas.max():
         warnings.append(f"delta_offset {delta_offset:+.2f} deg lies outside the measured deltas "
