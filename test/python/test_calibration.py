@@ -125,7 +125,7 @@ def test_sequence_runs_every_delta_resends_and_holds_at_the_end():
     assert fit(out.segments).delta_offset_deg == pytest.approx(7.5, abs=0.05)
 
 
-def test_sequence_holds_on_stale_pose_on_ctrl_c_and_never_moves_without_a_pose():
+def test_sequence_holds_on_stale_pose_on_ctrl_c_on_a_still_robot_and_never_moves_without_a_pose():
     stale = FakeRobot(stale_after_s=1.5 * 3 * PERIOD)                   # in the second delta
     out = run_plan(stale, plan(), log=lambda m: None)
     assert "stale pose" in out.stopped and len(out.segments) == 1
@@ -134,6 +134,10 @@ def test_sequence_holds_on_stale_pose_on_ctrl_c_and_never_moves_without_a_pose()
     out = run_plan(ctrl_c, plan(), log=lambda m: None)
     assert out.stopped == "interrupted (Ctrl-C)" and out.segments == []
     assert ctrl_c.log[-1][1] == "hold" and not ctrl_c.moving
+    stuck = FakeRobot()
+    stuck.command = lambda gait, steer, delta: stuck.log.append((round(stuck.t, 2), gait)) or ""   # never moves
+    out = run_plan(stuck, plan(), log=lambda m: None)
+    assert "did not move" in out.stopped and out.segments == [] and stuck.log[-1][1] == "hold"
     blind = FakeRobot(first_pose=False)
     out = run_plan(blind, plan(), start_timeout_s=0.01, log=lambda m: None)
     assert "no pose" in out.stopped and [c[1] for c in blind.log] == ["hold"]

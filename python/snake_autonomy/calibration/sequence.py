@@ -13,7 +13,7 @@ the simulated robot (sim_backend.SimRobot, lock-step) or the robot through ROS (
 Safety: nothing moves before a first pose arrived (within start_timeout_s). The gait command is
 re-sent every resend_s of pose time (the driver's command lifetime). The robot is commanded to hold
 (the driver's `hold` gait) at the end, when the pose goes stale (no pose for pose_timeout_s), when a
-command is refused, on Ctrl-C (KeyboardInterrupt) and on any error (a RuntimeError, the driver's
+command is refused, when the robot does not move (the driver not running: fault, torque off), on Ctrl-C (KeyboardInterrupt) and on any error (a RuntimeError, the driver's
 fault or a roll-over, ends the run like a stale pose; others propagate after the hold); the segments
 completed so far are kept. Time is the poses' own (simulated time, or the stamps of com_pose), so settling and recording
 windows mean the same on both back-ends.
@@ -37,6 +37,7 @@ class Plan:
     settle_cycles: float = 3.0           # after each new δ, not recorded
     record_cycles: int = 6               # recorded per δ
     resend_s: float = 0.5                # gait command heartbeat
+    min_travel_m_per_cycle: float = 0.02  # less over the recorded cycles: the robot is not moving
     run: str = ""                        # label of this run (seed, session)
 
     def check(self) -> None:
@@ -118,4 +119,9 @@ def _one_delta(robot, plan: Plan, delta_deg: float, pose_timeout_s: float, log):
         if t - t0 >= settle_s - 1e-9:
             samples.append(tuple(float(v) for v in pose[:4]))
         if t - t0 >= settle_s + record_s - 1e-9:
+            xy = np.array([s[1:3] for s in samples])
+            travel = float(np.hypot(*(xy[-1] - xy[0])))
+            if travel < plan.min_travel_m_per_cycle * plan.record_cycles:
+                return None, (f"the robot did not move at delta {delta_deg:+g} deg ({travel:.3f} m in "
+                              f"{plan.record_cycles} cycles): is the driver running (its state is on /diagnostics)?")
             return Segment(delta_deg, plan.period_s, np.array(samples), plan.run), ""
