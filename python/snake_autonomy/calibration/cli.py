@@ -57,6 +57,8 @@ def main(args) -> int:
     plans = ([Plan(deltas, period_s, args.gait, args.settle_cycles, args.cycles, run=f"seed {s}") for s in seeds]
              if args.sim else [Plan(deltas, period_s, args.gait, args.settle_cycles, args.cycles, run="robot")])
     segments, stopped = (_sim(args, plans, seeds) if args.sim else _ros(args, plans[0]))
+    if stopped:
+        print(f"warning: the run stopped early: {'; '.join(stopped)}", file=sys.stderr)
     try:
         result = fit(segments)
     except CalibrationError as exc:
@@ -76,8 +78,6 @@ def main(args) -> int:
           f"  roslaunch snake_autonomy mission.launch tracker_overrides:={path}\n"
           f"or merge into the tracker: section of config/sim.yaml (simulated robot) / config/tracker.yaml (robot):\n"
           f"  tracker:\n" + "".join(f"    {k}: {v}\n" for k, v in block.items()))
-    if stopped:
-        print(f"warning: the run stopped early: {'; '.join(stopped)}", file=sys.stderr)
     return 0
 
 
