@@ -98,10 +98,14 @@ def _sim(args, plans, seeds):
 
 
 def _ros(args, plan):
+    import rosgraph
     import rospy
 
     from .ros_backend import connect
     from .sequence import run_plan
+    if not rosgraph.is_master_online():
+        print("snake_autonomy calibrate: no ROS master (start the driver and the pose source first)", file=sys.stderr)
+        return [], ["no ROS master"]
     rospy.init_node("calibrate", anonymous=True, disable_signals=True)   # Ctrl-C: hold first, then exit
     try:
         robot = connect(args.command_topic, args.pose_topic)
