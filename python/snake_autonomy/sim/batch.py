@@ -6,8 +6,8 @@
 
 Every 10 ms of simulated time (the driver's 100 Hz):
 
-    plant.step_to(t) -> pose source (mocap 100 Hz | simulated RTAB-Map 30 Hz -> gate -> eq. 3.1)
-    -> DriverController.set_base_pose
+    world.step_to(t) (sim.world: plant, sensors, disturbances, monitor) -> pose source (mocap 100 Hz |
+    simulated RTAB-Map 30 Hz -> gate -> eq. 3.1) -> DriverController.set_base_pose
     -> servo states (MujocoServoBackend: ticks, velocity, current) into a FakeServoBus
     -> DriverController.update (the C++ driver's cycle: gait command, CPG + steering, stale-pose
        gating, slew limit, joint limits, faults, kinematics) -> goal ticks from the bus -> plant
@@ -16,57 +16,51 @@ Every 10 ms of simulated time (the driver's 100 Hz):
 and at the tracker's rate (config/tracker.yaml rate_hz, 1 Hz) MissionRunner.step -> gait command.
 The classes are the ROS path's: the mission node wraps MissionRunner, pose_remap_node the gate and
 remapper, driver_node the same DriverController (here through _core, over an in-process bus
-instead of the mocked one on a pty); the plant and sensors are the sim node's.
+instead of the mocked one on a pty); the world (plant, sensors, disturbances, roll-over and limit
+monitor, ground truth) is the one sim_node steps (sim.realtime). Only the clock (simulated time in
+lock-step) and the transport (an in-process bus) differ.
 
 Configuration of the simulated robot: config/sim.yaml (physics, sensors, and its `tracker:`
 section merged over config/tracker.yaml). The start pose is the tracker's view: the centre of mass
-of a straight body at (x, y), heading (direction of travel) in degrees.
-
-Also watched: roll-over (base_link tilted beyond monitor.rollover_tilt_deg ends the run), joint
-goals beyond the joint limits (Plant.limit_violations, must stay 0), pushes and twists of the
-mission file (sim.disturbances.DisturbanceTrigger) and whether the robot recovered from each.
+of a straight body at (x, y), heading (direction of travel) in degrees. A roll-over (SimWorld's
+monitor) ends the run.
 """
 import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 
 from snake_autonomy import _core
 
 from ..control.angles import wrap
-from ..missions import load_defaults, load_mission
 from ..missions.runner import MissionRunner
-from .config import SimConfig
-from .disturbances import parse_triggers
 from .feedback import make_feedback
 from .mujoco_servo_backend import MujocoServoBackend
 from .plant import Plant
+from .world import CONFIG, SimWorld, WorldSpec
 
-ROOT = Path(__file__).resolve().parents[3]
-CONFIG = ROOT / "config"
 DRIVER_RATE_HZ = 100.0
 TRAJECTORY_RATE_HZ = 10.0
 DEG = 180.0 / math.pi
 
 
 @dataclass
-class RunSpec:
+class RunSpec(WorldSpec):
+    """The world (sim.world.WorldSpec: seed, feedback, start, sim_config, robot, tracker_config,
+    randomize, scene_xml) plus the mission and the run's own settings."""
     mission: str = "single_waypoint"          # a file or a provided mission's name
-    seed: int = 0
-    feedback: str = "mocap"                   # mocap | vio
-    start: Tuple[float, float, float] = (0.0, 0.0, 0.0)   # CoM x_m, y_m, heading_deg
     time_limit_s: Optional[float] = None      # None: the mission's
-    sim_config: str = str(CONFIG / "sim.yaml")
-    robot: str = str(CONFIG / "robots" / "cobra.yaml")
     gaits: str = str(CONFIG / "gaits.yaml")
-    tracker_config: str = str(CONFIG / "tracker.yaml")
     driver_config: str = str(CONFIG / "driver.yaml")   # the DriverController's keys of driver_node's file
-    randomize: bool = True                    # per-seed physics (False: the ranges' midpoints)
     settle_s: float = 0.5                     # pose source running before the mission starts
     label: str = ""                           # free text for tables
+
+    def __post_init__(self):
+        if self.sensors is None:
+            self.sensors = (self.feedback,)   # the pose source's sensor only
 
 
 @dataclass
@@ -118,17 +112,6 @@ def evaluate_vio_samples(samples, out_dir, plots: bool = True) -> Dict[str, Any]
     stats = {k: float(v) for k, v in result.stats.items()}
     return {"ape_translation_m": stats, "loss_intervals": len(result.loss_intervals),
             "folder": str(Path(out_dir))}
-
-
-def start_base_pose(robot, kinematics, start_xy_heading: Sequence[float], heading_offset_rad: float):
-    """base_link (x, y, yaw) that puts a straight body's centre of mass at (x, y) with the tracker's
-    heading `heading_deg` (virtual chassis yaw = heading - offset)."""
-    x, y, heading_deg = (float(v) for v in start_xy_heading)
-    yaw = math.radians(heading_deg) - heading_offset_rad
-    q = np.array([0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)])
-    state = kinematics.compute(np.zeros(3), q, np.zeros(robot.num_joints))
-    com = np.asarray(state.com)
-    return x - com[0], y - com[1], yaw
 
 
 # The controller's keys: the properties the binding gives DriverConfig, so a key added to the
@@ -214,16 +197,10 @@ class BatchRun:
         self.spec = spec
         self.robot = robot or _core.RobotModel.from_yaml(spec.robot)
         self.library = library or _core.GaitLibrary.from_yaml(spec.gaits)
-        self.sim_config = SimConfig.from_yaml(spec.sim_config)
-        self.defaults = load_defaults(spec.tracker_config, self.sim_config.tracker,
-                                      overrides_source=f"{spec.sim_config} (tracker:)")
-        self.mission = load_mission(spec.mission, defaults=self.defaults, gait_library=self.library.names)
-        self.triggers = parse_triggers(self.mission.raw.get("disturbances"), len(self.mission.waypoints))
-        self.params = self.sim_config.draw(spec.seed, randomize=spec.randomize, num_joints=self.robot.num_joints)
-        self.heading_offset_rad = math.radians(self.defaults["heading_offset_deg"])
-        self.kinematics = _core.Kinematics(self.robot)
-        bx, by, byaw = start_base_pose(self.robot, self.kinematics, spec.start, self.heading_offset_rad)
-        self.plant = Plant(self.robot, self.params, start=(bx, by, byaw))
+        self.world = SimWorld(spec, robot=self.robot, gait_names=self.library.names)
+        w = self.world
+        self.sim_config, self.defaults, self.mission, self.params = w.config, w.defaults, w.mission, w.params
+        self.heading_offset_rad, self.plant = w.heading_offset_rad, w.plant
         self.driver = LockStepDriver(self.robot, self.library, self.plant, load_driver_config(spec.driver_config))
         self.feedback = make_feedback(spec.feedback, self.params, self.robot)
         self.runner = MissionRunner(self.mission, self.defaults["pose_timeout_s"], self.defaults["yaw_filter_window"],
@@ -232,21 +209,12 @@ class BatchRun:
         if self.time_limit_s is not None:
             self.runner.mission.time_limit_s = float(self.time_limit_s)
 
-    # ---- ground truth ----------------------------------------------------------------------------
-    def true_com_pose(self) -> Tuple[float, float, float]:
-        """The centre of mass and heading the driver would compute from a perfect base pose."""
-        p, q = self.plant.frame_pose("base_link")
-        s = self.kinematics.compute(p, q, self.plant.joint_positions_rad())
-        R = np.asarray(s.vc_rotation)
-        return float(s.com[0]), float(s.com[1]), wrap(math.atan2(R[1, 0], R[0, 0]) + self.heading_offset_rad)
-
     # ---- the run ---------------------------------------------------------------------------------
     def run(self, progress: bool = False) -> RunResult:
-        spec, plant, driver, runner, fb = self.spec, self.plant, self.driver, self.runner, self.feedback
+        spec, world, driver, runner, fb = self.spec, self.world, self.driver, self.runner, self.feedback
         dt = 1.0 / DRIVER_RATE_HZ
         tick_every = max(1, int(round(DRIVER_RATE_HZ / self.defaults["rate_hz"])))
         traj_every = max(1, int(round(DRIVER_RATE_HZ / TRAJECTORY_RATE_HZ)))
-        rollover_deg = self.sim_config.monitor.rollover_tilt_deg
         k_start = int(round(spec.settle_s * DRIVER_RATE_HZ))
         t_start = k_start * dt
         limit = self.time_limit_s if self.time_limit_s is not None else 3600.0
@@ -255,19 +223,16 @@ class BatchRun:
         dec: Dict[str, list] = {k: [] for k in (
             "t", "waypoint_index", "target_index", "reached", "distance", "yaw_error_abs", "yaw_error_rel",
             "yaw_error", "mode", "delta", "w", "gait", "pose_stale", "true_distance", "true_yaw_error_abs")}
-        pending = list(self.triggers)
-        fired: List[Dict[str, Any]] = []
         source_ok = None
-        rolled, max_tilt = False, 0.0
         wall0 = time.perf_counter()
         bar = _progress_bar(progress, limit, f"{self.mission.name} seed {spec.seed} {spec.feedback}")
         last_com = None
-        target = 0
         outcome = ""
+        world.start_mission(t_start)
         for k in range(1, k_last + 1):
             t = k * dt
-            plant.step_to(t)
-            pose = fb.poll(plant)
+            out = world.step_to(t)
+            pose = fb.pose(out)
             if pose is not None:
                 driver.set_base_pose(t, pose[1], pose[2])
             ok, detail = fb.status(t)
@@ -279,35 +244,20 @@ class BatchRun:
             if com is not None:
                 runner.on_pose(t, *com)
                 last_com = com
-            tilt = plant.base_tilt_deg()
-            max_tilt = max(max_tilt, tilt)
             if k % traj_every == 0:
-                xt, yt, ht = self.true_com_pose()
+                xt, yt, ht = world.true_com_pose()
                 x, y, h = last_com if last_com is not None else (math.nan,) * 3
                 for key, v in zip(traj, (t, x, y, wrap(h + self.heading_offset_rad) if last_com else math.nan,
-                                         xt, yt, ht, tilt)):
+                                         xt, yt, ht, out.tilt_deg)):
                     traj[key].append(v)
             if k == k_start:
                 runner.start(t)
-            if k >= k_start and pending and k % 10 == 0:
-                xt, yt, _ = self.true_com_pose()
-                wp = self.mission.waypoints[min(target, len(self.mission.waypoints) - 1)]
-                d_true = math.hypot(wp[0] - xt, wp[1] - yt)
-                for trig in list(pending):
-                    if trig.due(t - t_start, target, d_true):
-                        pending.remove(trig)
-                        plant.add_disturbance(trig.at(t + dt))
-                        fired.append({"description": trig.describe(), "t": t - t_start, "target_index": target,
-                                      "com_before": (xt, yt, self.true_com_pose()[2]), "_k": k})
-            if tilt > rollover_deg and not rolled:
-                rolled = True
-                runner.abort(f"rolled over: base_link tilted {tilt:.0f} deg (limit {rollover_deg:g} deg)")
+            if world.rolled_over:
+                runner.abort(f"rolled over: base_link tilted {out.tilt_deg:.0f} deg "
+                             f"(limit {world.rollover_tilt_deg:g} deg)")
                 self._record(dec, runner.final_decision(t))
                 outcome = runner.outcome
                 break
-            for f in fired:
-                if "com_after" not in f and k == f["_k"] + int(2.0 * DRIVER_RATE_HZ):
-                    f["com_after"] = self.true_com_pose()
             if k >= k_start and (k - k_start) % tick_every == 0:
                 decision = runner.step(t)
                 if decision is None:
@@ -316,10 +266,10 @@ class BatchRun:
                 if why:
                     raise RuntimeError(f"the driver refused the mission's command: {why}")
                 self._record(dec, decision)
-                target = runner.tracker.waypoint_index
+                world.set_target(runner.tracker.waypoint_index)
                 if bar is not None:
                     bar.update(tick_every * dt)
-                    bar.set_postfix_str(f"wp {min(target + 1, len(self.mission.waypoints))}/"
+                    bar.set_postfix_str(f"wp {min(world.target_index + 1, len(self.mission.waypoints))}/"
                                         f"{len(self.mission.waypoints)}", refresh=False)
                 if decision.finished:
                     outcome = runner.outcome
@@ -330,13 +280,13 @@ class BatchRun:
         if bar is not None:
             bar.close()
         wall = time.perf_counter() - wall0
-        return self._result(traj, dec, outcome or runner.outcome, fired, rolled, max_tilt, t_start, wall)
+        return self._result(traj, dec, outcome or runner.outcome, t_start, wall)
 
     def _record(self, dec, decision) -> None:
         s = decision.status
         cmd = decision.command
         target = cmd.target_index if cmd is not None else min(s["waypoint_index"], len(self.mission.waypoints) - 1)
-        xt, yt, ht = self.true_com_pose()
+        xt, yt, ht = self.world.true_com_pose()
         wx, wy, wh = self.mission.waypoints[target]
         for key, v in (("t", decision.t_s), ("waypoint_index", s["waypoint_index"]), ("target_index", target),
                        ("reached", bool(s["waypoint_reached"])), ("distance", s["distance"]),
@@ -346,28 +296,27 @@ class BatchRun:
                        ("true_distance", math.hypot(wx - xt, wy - yt)), ("true_yaw_error_abs", wrap(wh - ht))):
             dec[key].append(v)
 
-    def _result(self, traj, dec, outcome, fired, rolled, max_tilt, t_start, wall) -> RunResult:
-        spec = self.spec
+    def _result(self, traj, dec, outcome, t_start, wall) -> RunResult:
+        spec, world = self.spec, self.world
         reached_t = {}
         for t, idx, r in zip(dec["t"], dec["target_index"], dec["reached"]):
             if r and idx not in reached_t:
                 reached_t[idx] = t
         disturbances = []
-        for f in fired:
-            before, after = f["com_before"], f.get("com_after")
-            k_wp = f["target_index"]
-            t_reach = reached_t.get(k_wp)
-            entry = {"description": f["description"], "t_s": f["t"], "target_index": k_wp,
-                     "recovered": t_reach is not None and not rolled,
-                     "time_to_recover_s": (t_reach - t_start - f["t"]) if t_reach is not None else None}
+        for f in world.fired:
+            before, after = f.com_before, f.com_after
+            t_reach = reached_t.get(f.target_index)
+            entry = {"description": f.description, "t_s": f.mission_t_s, "target_index": f.target_index,
+                     "recovered": t_reach is not None and not world.rolled_over,
+                     "time_to_recover_s": (t_reach - t_start - f.mission_t_s) if t_reach is not None else None}
             if after is not None:
                 entry["com_displacement_2s_m"] = math.hypot(after[0] - before[0], after[1] - before[1])
                 entry["heading_change_2s_deg"] = wrap(after[2] - before[2]) * DEG
             disturbances.append(entry)
         sim_time = self.plant.time_s
         extra = {
-            "rolled_over": bool(rolled), "max_tilt_deg": float(max_tilt),
-            "limit_violations": int(self.plant.limit_violations), "cpg_outputs_clamped": int(self.driver.cpg_clamped),
+            "rolled_over": bool(world.rolled_over), "max_tilt_deg": float(world.max_tilt_deg),
+            "limit_violations": world.limit_violations, "cpg_outputs_clamped": int(self.driver.cpg_clamped),
             "sim_time_s": sim_time, "mission_time_s": sim_time - t_start, "wall_time_s": wall,
             "real_time_factor": sim_time / wall if wall > 0 else None,
             "disturbances": disturbances,
@@ -387,7 +336,7 @@ class BatchRun:
                 "tracker_config": self.defaults.get("source", ""), "rate_hz": self.defaults["rate_hz"],
                 "heading_offset_deg": self.defaults["heading_offset_deg"], "gaits": self.mission.gaits,
                 "sim_params": self.params.summary(), "sim_config": spec.sim_config,
-                "disturbance_triggers": [t.describe() for t in self.triggers]}
+                "disturbance_triggers": [t.describe() for t in self.world.triggers]}
         return RunResult(spec, list(self.mission.waypoints), {k: np.asarray(v) for k, v in traj.items()}, dec,
                          outcome, meta, extra, tracker,
                          vio_samples=list(self.feedback.samples) if spec.feedback == "vio" else [])
