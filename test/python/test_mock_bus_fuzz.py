@@ -3,47 +3,22 @@ damaged packets get a CRC error or silence, and a fixed-seed corpus of random an
 (every instruction; bit flips, truncation, insertion, length lies, stuffing breaks, garbage)
 never raises out of its dispatch, never needs the last-resort guard, and leaves it answering PING."""
 import logging
-import random
 import time
 
 import pytest
 
 from snake_autonomy._core import dynamixel as dx
-from snake_autonomy.sim.mock_servo_bus import MockServoBus
+from snake_autonomy.sim.mock_servo_bus import (CRC_ERROR, DATA_LENGTH_ERROR, DATA_RANGE_ERROR, INSTRUCTION_ERROR,
+                                                MockServoBus)
 from snake_autonomy.sim.servo_model import KinematicServoBackend
 
-IDS = list(range(1, 12))
-I = dx.instruction
-INSTRUCTIONS = [I.PING, I.READ, I.WRITE, I.REBOOT, I.SYNC_READ, I.SYNC_WRITE, I.FAST_SYNC_READ, I.STATUS]
-RESULT_FAIL, INSTRUCTION_ERROR, CRC_ERROR, DATA_RANGE_ERROR, DATA_LENGTH_ERROR = 1, 2, 3, 4, 5
+import bus_fuzz_corpus
+from bus_fuzz_corpus import IDS, I, answers_ping, statuses, u16
 
 
 @pytest.fixture
 def mock():
     return MockServoBus(KinematicServoBackend(IDS), IDS)
-
-
-def statuses(reply: bytes) -> list:
-    """Every status packet in `reply` as (id, error, data); fails unless `reply` is exactly that."""
-    out = []
-    while reply:
-        st, consumed, start, pid, inst, params = dx.parse_packet(reply)
-        assert st == dx.ParseStatus.OK and start == 0, f"{st} in reply {reply[:40].hex(' ')}"
-        assert inst == I.STATUS and len(params) >= 1
-        out.append((pid, params[0], params[1:]))
-        reply = reply[consumed:]
-    return out
-
-
-def u16(v: int) -> bytes:
-    return (v & 0xFFFF).to_bytes(2, "little")
-
-
-def answers_ping(mock, servo_id=3) -> bool:
-    """The PING is answered last; before it may come the CRC error of a damaged packet whose end
-    the mock could only judge when the PING's first bytes arrived."""
-    replies = [(p, e) for p, e, _ in statuses(mock.handle(dx.encode_packet(servo_id, I.PING)))]
-    return replies[-1:] == [(servo_id, 0)] and all(e == CRC_ERROR for _, e in replies[:-1])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -108,79 +83,19 @@ def test_guard_turns_an_unexpected_exception_into_a_counted_drop(mock, monkeypat
 
 
 # ---------------------------------------------------------------------------------------------
-# the fuzz
-def legal_packet(rng: random.Random) -> bytes:
-    inst = rng.choice(INSTRUCTIONS + [rng.randrange(256)])
-    pid = rng.choice(IDS + IDS + [dx.BROADCAST_ID, dx.BROADCAST_ID, 0, 200])
-    if inst in (I.SYNC_READ, I.SYNC_WRITE, I.FAST_SYNC_READ) and rng.random() < 0.9:
-        pid = dx.BROADCAST_ID  # as they are meant to be sent
-    address = rng.choice([rng.randrange(0, 150), rng.randrange(0, 1100), rng.randrange(65536)])
-    length = rng.choice([0, 1, 2, 4, 10, rng.randrange(0, 300), rng.randrange(65536)])
-    ids = bytes(rng.sample(IDS, rng.randint(1, 11)) if rng.random() < 0.8 else
-                [rng.randrange(256) for _ in range(rng.randint(0, 20))])
-    if inst == I.READ:
-        params = u16(address) + u16(length)
-    elif inst == I.WRITE:
-        params = u16(address) + bytes(rng.randrange(256) for _ in range(rng.choice([0, 1, 2, 4, rng.randrange(40)])))
-    elif inst in (I.SYNC_READ, I.FAST_SYNC_READ):
-        params = u16(address) + u16(length) + ids
-    elif inst == I.SYNC_WRITE:
-        length = rng.choice([1, 2, 4, rng.randrange(0, 12)])
-        params = u16(address) + u16(length) + b"".join(bytes([i]) + bytes(rng.randrange(256) for _ in range(length))
-                                                       for i in ids)
-    else:
-        params = bytes(rng.randrange(256) for _ in range(rng.choice([0, 0, 1, 3, rng.randrange(60)])))
-    if rng.random() < 0.1:
-        params = params[:rng.randrange(len(params) + 1)]  # too short for its instruction
-    return dx.encode_packet(pid, inst, params)
-
-
-def mutate(pkt: bytes, rng: random.Random) -> bytes:
-    b = bytearray(pkt)
-    kind = rng.randrange(6)
-    if kind == 0:
-        for _ in range(rng.randint(1, 3)):
-            b[rng.randrange(len(b))] ^= 1 << rng.randrange(8)
-    elif kind == 1:
-        if rng.random() < 0.5:
-            del b[rng.randrange(len(b))]
-        else:
-            del b[rng.randrange(1, len(b)):]
-    elif kind == 2:
-        for _ in range(rng.randint(1, 3)):
-            b.insert(rng.randrange(len(b) + 1), rng.randrange(256))
-    elif kind == 3:
-        b[5:7] = u16(rng.randrange(65536))
-        if rng.random() < 0.5:
-            b[-2:] = dx.crc16(bytes(b[:-2])).to_bytes(2, "little")
-    elif kind == 4:  # FF FF FD without its stuffed FD, under a valid CRC
-        at = rng.randrange(8, len(b) - 1)
-        b[at:at] = b"\xff\xff\xfd"
-        if at + 3 < len(b) - 2 and b[at + 3] == 0xFD:
-            b[at + 3] = 0x01
-        b[5:7] = u16(len(b) - 7)
-        b[-2:] = dx.crc16(bytes(b[:-2])).to_bytes(2, "little")
-    else:
-        b[0:0] = bytes(rng.choice([0x00, 0xFF, 0xFD, rng.randrange(256)]) for _ in range(rng.randint(1, 12)))
-    return bytes(b)
-
-
+# the fuzz (the long run: bench/fuzz_mock_bus)
 def test_fuzz_dispatch_fixed_seed_never_raises_and_keeps_answering(mock):
-    rng = random.Random(20261201)
-    n_inputs, replies, start = 4000, 0, time.monotonic()
-    for k in range(n_inputs):
-        pkt = legal_packet(rng)
-        data = pkt if rng.random() < 0.4 else mutate(pkt, rng)
-        # Delivered in one read or in small pieces, as a pty hands them over.
-        cut = sorted(rng.sample(range(1, len(data)), min(len(data) - 1, rng.randint(0, 3))))
-        reply = b"".join(mock.handle(data[a:b]) for a, b in zip([0] + cut, cut + [len(data)]))
-        for pid, err, _ in statuses(reply):  # a reply is whole status packets, or nothing
-            assert pid in IDS or pid == dx.BROADCAST_ID
-            replies += 1
-        if k % 10 == 0 or data != pkt:
-            assert answers_ping(mock, IDS[k % len(IDS)]), f"input {k} ({data[:40].hex(' ')}) left the mock deaf"
+    start = time.monotonic()
+    counts = bus_fuzz_corpus.run(mock, 4000, seed=20261201)
     stats = mock.stats()
     assert stats["dropped"] == 0  # the guard was never needed: every packet handled on purpose
-    assert replies > n_inputs // 4
-    print(f"mock dispatch fuzz: {n_inputs} inputs, {replies} status packets, {stats['bad_packets']} bad packets, "
-          f"0 exceptions, {time.monotonic() - start:.1f} s")
+    assert counts["status_packets"] > 1000 and stats["bad_packets"] > 1000
+    assert counts["crc_collisions"] <= 1
+    print(f"mock dispatch fuzz: {counts['inputs']} inputs, {counts['status_packets']} status packets, "
+          f"{stats['bad_packets']} bad packets, 0 exceptions, {time.monotonic() - start:.1f} s")
+
+
+def test_unstuff_binding_refuses_broken_stuffing():
+    assert dx.unstuff(b"\x55\xff\xff\xfd\xfd\x01") == b"\x55\xff\xff\xfd\x01"
+    with pytest.raises(ValueError, match="stuffed FD"):
+        dx.unstuff(b"\x55\xff\xff\xfd\x01")
