@@ -192,7 +192,7 @@ const char* to_string(ParseStatus status) noexcept {
 }
 
 ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t* scratch,
-                         std::size_t scratch_capacity, Packet* out) noexcept {
+                         std::size_t scratch_capacity, Packet* out, bool input_ended) noexcept {
   ParseResult r;
   // Hunt the header. A trailing FF, FF FF or FF FF FD may be the start of one: keep it.
   std::size_t s = 0;
@@ -249,7 +249,7 @@ ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t*
     static constexpr std::uint8_t kHeader[4] = {0xFF, 0xFF, 0xFD, 0x00};
     for (std::size_t k = s + kHeaderBytes; k < s + total; ++k) {
       const std::size_t avail = size - k < kHeaderBytes ? size - k : kHeaderBytes;
-      if (std::memcmp(in + k, kHeader, avail) != 0) continue;
+      if (std::memcmp(in + k, kHeader, avail) != 0 || (avail < kHeaderBytes && input_ended)) continue;
       if (avail == kHeaderBytes) {
         r.status = ParseStatus::kMalformed;
         r.consumed = k;

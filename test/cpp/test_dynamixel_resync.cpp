@@ -167,3 +167,31 @@ TEST(Resync, SyncReadKeepsTheNextServoAfterALostByteInSmallReads) {
   }
   EXPECT_EQ(runs, 4 * first.size());
 }
+
+// A damaged reply whose last byte is FF may be followed by the next header: the parser waits for
+// the next bytes; when none come (the reply deadline), it is judged a CRC error of its servo.
+TEST(Resync, BadCrcEndingInFfIsACrcErrorAtTheDeadline) {
+  Bytes bad = status(3, 0, {0xA6, 0x00, 0x00, 0x00});
+  bad.back() = 0xFF;  // a CRC high byte of FF that does not match
+  ASSERT_NE(dx::crc16(bad.data(), bad.size() - 2) >> 8, 0xFF);
+  std::uint8_t scratch[dx::kMaxPacketBytes];
+  dx::Packet p;
+  EXPECT_EQ(dx::parse_packet(bad.data(), bad.size(), scratch, sizeof scratch, &p).status, dx::ParseStatus::kIncomplete);
+  const dx::ParseResult r = dx::parse_packet(bad.data(), bad.size(), scratch, sizeof scratch, &p, true);
+  EXPECT_EQ(r.status, dx::ParseStatus::kBadCrc);
+  EXPECT_EQ(r.consumed, bad.size());
+  EXPECT_EQ(r.id, 3);
+  for (std::size_t chunk : {1u, 64u}) {
+    ChunkedTransport t;
+    t.chunk = chunk;
+    t.reply = bad;
+    dx::BusTiming timing;
+    timing.latency_s = 0.0;
+    dx::Protocol2Bus bus(t, timing);
+    std::uint8_t data[4] = {};
+    std::uint8_t error = 0;
+    EXPECT_EQ(bus.read(3, 132, 4, data, &error), dx::Status::kCrcError) << "chunk " << chunk;
+    EXPECT_EQ(bus.counters().crc_errors, 1u);
+    EXPECT_EQ(bus.counters().malformed, 0u);
+  }
+}

@@ -134,7 +134,8 @@ struct ParseResult {
 // CRC fails and the input ends on what may be the start of such a header, kIncomplete: the bytes
 // that decide have not arrived. So however the reads chunk the bytes, a packet following a damaged
 // one is never dropped with it. A valid CRC over broken stuffing is kMalformed (header consumed).
+// `input_ended`: no more bytes will come (a reply deadline passed): nothing is held back for them.
 ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t* scratch,
-                         std::size_t scratch_capacity, Packet* out) noexcept;
+                         std::size_t scratch_capacity, Packet* out, bool input_ended = false) noexcept;
 
 }  // namespace snake_autonomy::dynamixel
