@@ -57,7 +57,8 @@ int main(int argc, char** argv) {
       collisions += v.collisions;
       refused += rx.counts.bad_crc + rx.counts.malformed;
       if (v.lost && first_loss.empty()) {
-        first_loss = "stream " + std::to_string(i) + " chunking " + std::to_string(chunking) + ": " + fz::hex(stream, 200);
+        first_loss = "stream " + std::to_string(i) + " chunking " + std::to_string(chunking) + ": " +
+                     fz::hex(stream, 200);
       }
     }
   }
@@ -68,7 +69,8 @@ int main(int argc, char** argv) {
   std::printf("  crashes           0 (every input ran to the end)\n");
   std::printf("  valid packets     %zu embedded, %zu recovered exactly, %zu lost, %zu lost to CRC-16 collisions\n",
               expected, recovered, lost, collisions);
-  std::printf("  damaged pieces    %zu, refused as bad CRC or malformed %zu times over the 4 chunkings\n", damaged, refused);
+  std::printf("  damaged pieces    %zu, refused as bad CRC or malformed %zu times over the 4 chunkings\n", damaged,
+              refused);
   std::printf("  time              %.2f s (%.0f inputs/s)\n", s, static_cast<double>(inputs) / s);
   if (lost) {
     std::printf("  first loss        %s\n", first_loss.c_str());

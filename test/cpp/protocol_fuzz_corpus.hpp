@@ -201,7 +201,9 @@ class CorpusGenerator {
       case 0: {  // bit flips
         *kind = "bit_flip";
         const std::size_t flips = uniform(1, 3);
-        for (std::size_t i = 0; i < flips; ++i) b[uniform(0, b.size() - 1)] ^= static_cast<std::uint8_t>(1u << uniform(0, 7));
+        for (std::size_t i = 0; i < flips; ++i) {
+          b[uniform(0, b.size() - 1)] ^= static_cast<std::uint8_t>(1u << uniform(0, 7));
+        }
         break;
       }
       case 1:  // a lost byte, or lost bytes, or cut short

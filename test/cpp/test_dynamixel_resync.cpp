@@ -74,7 +74,8 @@ TEST(Parse, ValidCrcButBrokenStuffingIsMalformed) {
   for (const auto& b : bad) {
     EXPECT_EQ(parse_status(b), dx::ParseStatus::kMalformed) << fz::hex(b);
     // Followed by a valid packet, in every chunking: one malformed, the valid one recovered.
-    const std::vector<fz::Segment> segs = {{b, false, "stuffing_break"}, {status(2, 0, {0xA6, 0, 0, 0}), true, "valid"}};
+    const std::vector<fz::Segment> segs = {{b, false, "stuffing_break"},
+                                           {status(2, 0, {0xA6, 0, 0, 0}), true, "valid"}};
     std::mt19937_64 rng(1);
     for (const int chunking : kChunkings) {
       const fz::StreamReceiver rx = fz::receive_chunked(fz::concat(segs), chunking, rng);

@@ -272,8 +272,8 @@ class MockServoBus(PtyServing):
             ids = [i for i in params[4:] if i in self._servos]
             if inst == dx.instruction.SYNC_READ:
                 err = _read_error(address, length)
-                return b"".join(self._reply(self._servos[i], err, b"" if err else self._read(self._servos[i], address, length))
-                                for i in ids)
+                return b"".join(self._reply(s, err, b"" if err else self._read(s, address, length))
+                                for s in (self._servos[i] for i in ids))
             return self._fast_reply([self._servos[i] for i in ids], address, length)
         if inst == dx.instruction.WRITE and len(params) < 3:
             return b"" if broadcast else self._reply(self._servos[pid], DATA_LENGTH_ERROR, b"")
