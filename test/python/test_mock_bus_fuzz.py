@@ -1,15 +1,18 @@
 """The mocked servo bus never dies: every legal packet gets its answer or the servo's error status,
 damaged packets get a CRC error or silence, and a fixed-seed corpus of random and mutated packets
 (every instruction; bit flips, truncation, insertion, length lies, stuffing breaks, garbage)
-never raises out of its dispatch, never needs the last-resort guard, and leaves it answering PING."""
+never raises out of its dispatch, never needs the last-resort guard, and leaves it answering PING.
+Its control socket refuses bad commands without ending the serving loop."""
+import json
 import logging
+import socket
 import time
 
 import pytest
 
 from snake_autonomy._core import dynamixel as dx
 from snake_autonomy.sim.mock_servo_bus import (CRC_ERROR, DATA_LENGTH_ERROR, DATA_RANGE_ERROR, INSTRUCTION_ERROR,
-                                                MockServoBus)
+                                                MockBusClient, MockServoBus)
 from snake_autonomy.sim.servo_model import KinematicServoBackend
 
 import bus_fuzz_corpus
@@ -80,6 +83,36 @@ def test_guard_turns_an_unexpected_exception_into_a_counted_drop(mock, monkeypat
     assert any("ZeroDivisionError" in r.getMessage() and "READ" in r.getMessage() for r in caplog.records)
     monkeypatch.undo()
     assert answers_ping(mock)
+
+
+def test_control_commands_that_are_not_objects_are_refused_not_fatal(mock):
+    for line in ("[1, 2]", '"stats"', "3", "null", '{"cmd": ["stats"]}', '{"cmd": "inject", "kind": "corrupt_crc", '
+                 '"ids": [[1]]}', '{"cmd": "hardware_error", "id": 1, "bits": 1.5}', "{", "\udcff"):
+        reply = mock.control(line)
+        assert reply["ok"] is False and reply["error"], line
+    assert mock.control('{"cmd": "stats"}')["ok"]
+    assert answers_ping(mock)
+
+
+def test_control_socket_survives_garbage_and_vanishing_clients(tmp_path):
+    ctl = str(tmp_path / "bus.ctl")
+    mock = MockServoBus(KinematicServoBackend(IDS), IDS).start(str(tmp_path / "bus"), ctl)
+    try:
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as raw:
+            raw.settimeout(5.0)
+            raw.connect(ctl)
+            raw.sendall(b"\xff\xfe{\n3\n")  # not UTF-8, then not an object
+            buf = b""
+            while buf.count(b"\n") < 2:
+                chunk = raw.recv(4096)
+                assert chunk, "the mock closed the control socket"
+                buf += chunk
+            assert [json.loads(x)["ok"] for x in buf.splitlines()] == [False, False]
+            raw.sendall(b'{"cmd": "state"}\n')  # and goes away before the answer
+        with MockBusClient(ctl) as client:
+            assert client.call("stats")["dropped"] == 0
+    finally:
+        mock.stop()
 
 
 # ---------------------------------------------------------------------------------------------

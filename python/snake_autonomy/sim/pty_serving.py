@@ -151,22 +151,29 @@ class PtyServing:
         while b"\n" in buf:
             line, _, rest = bytes(buf).partition(b"\n")
             buf[:] = rest
-            conn.setblocking(True)
-            conn.sendall((json.dumps(self.control(line.decode())) + "\n").encode())
-            conn.setblocking(False)
+            try:
+                conn.setblocking(True)
+                conn.sendall((json.dumps(self.control(line.decode("utf-8", "replace"))) + "\n").encode())
+                conn.setblocking(False)
+            except OSError:
+                return False  # the client went away: close it, keep serving
         return True
 
     def control(self, line: str) -> dict:
         """Runs one control command (JSON text); returns {"ok": true, ...} or {"ok": false, "error": ...}."""
         try:
             cmd = json.loads(line)
+            if not isinstance(cmd, dict):
+                raise ValueError(f"{line.strip()[:80]!r} is not a JSON object")
             name = cmd.pop("cmd")
-            if name not in CONTROL_COMMANDS:
+            if not isinstance(name, str) or name not in CONTROL_COMMANDS:
                 raise ValueError(f"cmd: {name!r} is not one of {sorted(CONTROL_COMMANDS)}")
             result = CONTROL_COMMANDS[name](self, **cmd)
             return {"ok": True, "result": result}
         except (ValueError, TypeError, KeyError, RuntimeError) as exc:
             return {"ok": False, "error": f"{type(exc).__name__}: {exc}"}
+        except Exception as exc:  # noqa: BLE001 - a bad command must never end the serving loop
+            return {"ok": False, "error": f"unexpected {type(exc).__name__}: {exc}"}
 
     def start(self, link: str, control_path: str = None):
         """Embedded use: opens the pty at `link` and serves it from a thread."""
