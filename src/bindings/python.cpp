@@ -307,6 +307,7 @@ void bind_dynamixel(py::module_& parent) {
   m.attr("BROADCAST_ID") = dx::kBroadcastId;
   m.attr("ALERT_BIT") = dx::kAlertBit;
   m.attr("MAX_PACKET_BYTES") = dx::kMaxPacketBytes;
+  m.attr("STATUS_OVERHEAD") = dx::kStatusOverhead;
   m.attr("FEEDBACK_ADDRESS") = dx::kFeedbackAddress;
   m.attr("FEEDBACK_BYTES") = dx::kFeedbackBytes;
   py::module_ inst = m.def_submodule("instruction", "Instruction codes");
@@ -351,8 +352,9 @@ void bind_dynamixel(py::module_& parent) {
         const std::string s = from_bytes(data);
         std::vector<std::uint8_t> out(s.size() + 1);
         const std::size_t n = dx::unstuff(reinterpret_cast<const std::uint8_t*>(s.data()), s.size(), out.data(), out.size());
+        if (n == dx::kBadStuffing) throw py::value_error("data: FF FF FD not followed by its stuffed FD");
         return to_bytes(out.data(), n);
-      }, py::arg("data"), "Removes the FD that follows FF FF FD.");
+      }, py::arg("data"), "Removes the FD that follows FF FF FD; ValueError when one is missing.");
   m.def("encode_packet", [](std::uint8_t id, std::uint8_t instruction, const py::bytes& params) {
         const std::string s = from_bytes(params);
         std::vector<std::uint8_t> out(dx::kMaxPacketBytes);

@@ -70,7 +70,8 @@ std::size_t unstuff(const std::uint8_t* in, std::size_t size, std::uint8_t* out,
   std::size_t n = 0;
   bool just_completed = false;  // the last byte written completed FF FF FD in the output
   for (std::size_t i = 0; i < size; ++i) {
-    if (just_completed && in[i] == 0xFD) {  // the stuffed FD: drop it
+    if (just_completed) {  // the stuffed FD: drop it; anything else means a sender that did not stuff
+      if (in[i] != 0xFD) return kBadStuffing;
       just_completed = false;
       continue;
     }
@@ -79,7 +80,7 @@ std::size_t unstuff(const std::uint8_t* in, std::size_t size, std::uint8_t* out,
     // Judged on the un-stuffed output, exactly as the sender judged its input.
     just_completed = in[i] == 0xFD && n >= 3 && out[n - 2] == 0xFF && out[n - 3] == 0xFF;
   }
-  return n;
+  return just_completed ? kBadStuffing : n;  // FF FF FD ends the region without its FD
 }
 
 std::int32_t get_le(const std::uint8_t* p, std::size_t size, bool is_signed) noexcept {
@@ -191,7 +192,7 @@ const char* to_string(ParseStatus status) noexcept {
 }
 
 ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t* scratch,
-                         std::size_t scratch_capacity, Packet* out) noexcept {
+                         std::size_t scratch_capacity, Packet* out, bool input_ended) noexcept {
   ParseResult r;
   // Hunt the header. A trailing FF, FF FF or FF FF FD may be the start of one: keep it.
   std::size_t s = 0;
@@ -241,22 +242,35 @@ ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t*
   const std::uint16_t received = static_cast<std::uint16_t>(p[total - 2] | (p[total - 1] << 8));
   if (crc16(p, total - 2) != received) {
     // A header starting inside the span means this packet was truncated and the next one began
-    // early: report it as malformed and keep the next packet. Stuffing guarantees FF FF FD 00
-    // never occurs inside a packet; at the very end of the input FF FF FD must do.
+    // early: report it as malformed and keep the next packet (stuffing guarantees FF FF FD 00
+    // never occurs inside a packet). A header candidate may run past the span, and past the input:
+    // FF, FF FF or FF FF FD at the very end may be the start of the next packet arriving in small
+    // reads, so wait for the bytes that decide rather than drop the span and that start with it.
     static constexpr std::uint8_t kHeader[4] = {0xFF, 0xFF, 0xFD, 0x00};
     for (std::size_t k = s + kHeaderBytes; k < s + total; ++k) {
       const std::size_t avail = size - k < kHeaderBytes ? size - k : kHeaderBytes;
-      if (avail >= 3 && std::memcmp(in + k, kHeader, avail) == 0) {
+      if (std::memcmp(in + k, kHeader, avail) != 0 || (avail < kHeaderBytes && input_ended)) continue;
+      if (avail == kHeaderBytes) {
         r.status = ParseStatus::kMalformed;
         r.consumed = k;
-        return r;
+      } else {
+        r.status = ParseStatus::kIncomplete;
+        r.consumed = s;
       }
+      return r;
     }
     r.status = ParseStatus::kBadCrc;
     r.consumed = s + total;
     return r;
   }
   const std::size_t n = unstuff(p + kInstructionOffset, length - 2, scratch, scratch_capacity);
+  if (n == kBadStuffing) {
+    // A valid CRC over a region its sender did not stuff (FF FF FD without its FD): refused. Only
+    // the header is dropped, so that a packet starting inside the span is still found.
+    r.status = ParseStatus::kMalformed;
+    r.consumed = s + kHeaderBytes;
+    return r;
+  }
   if (n == kNoSpace || n == 0) {
     r.status = ParseStatus::kMalformed;
     r.consumed = s + total;

@@ -94,7 +94,19 @@ Protocol2Bus::Event Protocol2Bus::receive(SteadyTime deadline, Packet* packet, s
     }
     if (got == 0) {
       if (std::chrono::steady_clock::now() < deadline) continue;
-      // The deadline: a header received without the rest of its packet is a truncated reply.
+      // The deadline: nothing more will come. A damaged packet held back because its last bytes
+      // might have begun the next header is judged now (a CRC error, for the servo it names).
+      if (rx_size_ > 0) {
+        const ParseResult r = parse_packet(rx_.data(), rx_size_, scratch_.data(), scratch_.size(), packet, true);
+        if (r.status == ParseStatus::kBadCrc) {
+          std::memmove(rx_.data(), rx_.data() + r.consumed, rx_size_ - r.consumed);
+          rx_size_ -= r.consumed;
+          *id = r.id;
+          ++counters_.crc_errors;
+          return Event::kBadCrc;
+        }
+      }
+      // A header received without the rest of its packet is a truncated reply.
       const bool partial = rx_size_ >= kHeaderBytes && rx_[0] == 0xFF && rx_[1] == 0xFF && rx_[2] == 0xFD;
       *id = rx_size_ > 4 ? rx_[4] : 0xFF;
       rx_size_ = 0;

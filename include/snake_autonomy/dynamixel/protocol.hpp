@@ -61,7 +61,10 @@ std::uint16_t crc16(const std::uint8_t* data, std::size_t size, std::uint16_t cr
 // Returns the number of bytes written, or kNoSpace when `capacity` is too small.
 constexpr std::size_t kNoSpace = static_cast<std::size_t>(-1);
 std::size_t stuff(const std::uint8_t* in, std::size_t size, std::uint8_t* out, std::size_t capacity) noexcept;
-// The inverse: drops the FD that follows FF FF FD. Same return convention. `out` may equal `in`.
+// The inverse: drops the FD that follows FF FF FD. Same return convention, plus kBadStuffing when
+// an FF FF FD is not followed by its stuffed FD (the sender always adds one, even at the end of
+// the region). `out` may equal `in`.
+constexpr std::size_t kBadStuffing = static_cast<std::size_t>(-2);
 std::size_t unstuff(const std::uint8_t* in, std::size_t size, std::uint8_t* out, std::size_t capacity) noexcept;
 
 // Little-endian helpers (Dynamixel sends low byte first). Sizes 1, 2 or 4; `is_signed`
@@ -111,7 +114,8 @@ enum class ParseStatus : std::uint8_t {
   kOk,          // a packet with a valid CRC; drop `consumed` bytes
   kIncomplete,  // no complete packet yet; bytes before `consumed` are garbage and can be dropped
   kBadCrc,      // a whole packet whose CRC does not match; drop `consumed` bytes (the packet)
-  kMalformed,   // a header with an impossible length, or cut short by the next header (truncated)
+  kMalformed,   // a header with an impossible length, cut short by the next header (truncated), or
+                // a valid CRC over a region that breaks byte stuffing (FF FF FD not followed by FD)
 };
 const char* to_string(ParseStatus status) noexcept;
 
@@ -126,8 +130,12 @@ struct ParseResult {
 // pattern, is never taken for a header), checks LEN, the CRC, and un-stuffs INST + PARAMs into
 // `scratch` (needs LEN - 2 bytes). Stuffing guarantees FF FF FD 00 never occurs inside a packet,
 // so a header inside the span LEN announces (seen before the span is complete, or when its CRC
-// fails) means the first packet was truncated: kMalformed, consumed up to the next header.
+// fails) means the first packet was truncated: kMalformed, consumed up to the next header. When the
+// CRC fails and the input ends on what may be the start of such a header, kIncomplete: the bytes
+// that decide have not arrived. So however the reads chunk the bytes, a packet following a damaged
+// one is never dropped with it. A valid CRC over broken stuffing is kMalformed (header consumed).
+// `input_ended`: no more bytes will come (a reply deadline passed): nothing is held back for them.
 ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t* scratch,
-                         std::size_t scratch_capacity, Packet* out) noexcept;
+                         std::size_t scratch_capacity, Packet* out, bool input_ended = false) noexcept;
 
 }  // namespace snake_autonomy::dynamixel

@@ -16,26 +16,32 @@ Fault injection, switchable at run time, by the Python API (embedded) or by the 
   close_pty() / reopen_pty()           the pty closing (the symlink goes away) and coming back
   clear_faults(), stats(), reset_stats(), state()
 
+It never dies on what arrives: a legal packet gets its answer or the servo's error status (data
+length error for a wrong parameter count or a reply too long for one packet, data range error for
+a read beyond the control table, instruction error for an unknown instruction), a packet with a
+bad CRC addressed to one of its servos gets a CRC error status (silence when broadcast or not
+ours, or when its header is damaged), and any exception the dispatch did not foresee drops that one
+packet, counted in stats()["dropped"] and logged (a last resort: the fuzz tests require 0).
+
 Fast sync read replies: one status packet from ID 0xFE whose parameters are, per servo,
 ERR ID DATA CRC(2) (the last block's CRC is the packet's). The intermediate CRCs are the CRC of the
 un-stuffed packet so far; the whole packet is stuffed like any other.
 """
 import json
+import logging
 import math
-import os
-import selectors
-import socket
 import threading
 import time
-import tty
 from pathlib import Path
 
 from snake_autonomy._core import dynamixel as dx
+from snake_autonomy.sim.pty_serving import CONTROL_COMMANDS, MockBusClient, PtyServing  # noqa: F401 (API)
 from snake_autonomy.sim.servo_backend import ServoBackend
 
 ROOT = Path(__file__).resolve().parents[3]
 DEFAULT_TABLE = ROOT / "config" / "dynamixel" / "xh540_w270.yaml"
 MEMORY_BYTES = 1024
+LOG = logging.getLogger(__name__)
 FAULT_KINDS = ("corrupt_crc", "drop_reply", "truncate_reply", "garbage_before")
 INSTRUCTION_NAMES = {
     dx.instruction.PING: "PING", dx.instruction.READ: "READ", dx.instruction.WRITE: "WRITE",
@@ -43,7 +49,8 @@ INSTRUCTION_NAMES = {
     dx.instruction.SYNC_WRITE: "SYNC_WRITE", dx.instruction.FAST_SYNC_READ: "FAST_SYNC_READ",
 }
 # Servo error numbers (status packet error byte, bits 0-6).
-RESULT_FAIL, INSTRUCTION_ERROR, DATA_RANGE_ERROR, DATA_LENGTH_ERROR, DATA_LIMIT_ERROR, ACCESS_ERROR = 1, 2, 4, 5, 6, 7
+RESULT_FAIL, INSTRUCTION_ERROR, CRC_ERROR, DATA_RANGE_ERROR, DATA_LENGTH_ERROR, DATA_LIMIT_ERROR, ACCESS_ERROR = \
+    1, 2, 3, 4, 5, 6, 7
 
 
 def parse_ids(text: str) -> list:
@@ -88,8 +95,15 @@ def _unpack(data, signed: bool) -> int:
     return int.from_bytes(bytes(data), "little", signed=signed)
 
 
-class MockServoBus:
-    """The servos' protocol side; the physics is the ServoBackend's."""
+def _read_error(address: int, length: int) -> int:
+    """The servo error number of a read of `length` bytes at `address` (0: a legal read)."""
+    if length == 0:
+        return DATA_LENGTH_ERROR
+    return DATA_RANGE_ERROR if address + length > MEMORY_BYTES else 0
+
+
+class MockServoBus(PtyServing):
+    """The servos' protocol side; the physics is the ServoBackend's; the pty is PtyServing's."""
 
     def __init__(self, backend: ServoBackend, ids=None, control_table=None, clock=time.monotonic):
         self.table = control_table if isinstance(control_table, dx.ControlTable) else \
@@ -114,14 +128,7 @@ class MockServoBus:
         self._faults = []
         self._rx = bytearray()
         self.reset_stats()
-        # pty state
-        self._master = self._slave = None
-        self.link = None
-        self._wake_r, self._wake_w = os.pipe()
-        self._stop = threading.Event()
-        self._thread = None
-        self._control_path = None
-        self._control_sock = None
+        PtyServing.__init__(self)
 
     # ------------------------------------------------------------------------------------------
     # fault injection and inspection (thread-safe)
@@ -164,7 +171,7 @@ class MockServoBus:
 
     def reset_stats(self):
         with self._lock:
-            self._stats = {"packets": 0, "bad_packets": 0, "bytes_received": 0, "bytes_sent": 0,
+            self._stats = {"packets": 0, "bad_packets": 0, "dropped": 0, "bytes_received": 0, "bytes_sent": 0,
                            "replies": 0, "replies_damaged": 0, "rejected_writes": 0,
                            "instructions": {name: 0 for name in INSTRUCTION_NAMES.values()}}
             for s in self._servos.values():
@@ -198,6 +205,9 @@ class MockServoBus:
 
     # ------------------------------------------------------------------------------------------
     # protocol: bytes in, bytes out (usable without a pty)
+    def _clear_input(self):
+        self._rx.clear()
+
     def handle(self, data: bytes) -> bytes:
         """Feed received bytes; returns the bytes the servos send back."""
         out = bytearray()
@@ -211,12 +221,28 @@ class MockServoBus:
                     break
                 del self._rx[:consumed]
                 if status != dx.ParseStatus.OK:
-                    self._stats["bad_packets"] += 1  # a real servo stays silent on a bad packet
-                    continue
-                self._stats["packets"] += 1
-                out += self._dispatch(pid, inst, params)
+                    self._stats["bad_packets"] += 1
+                else:
+                    self._stats["packets"] += 1
+                out += self._answer(status, pid, inst, params)
             self._stats["bytes_sent"] += len(out)
         return bytes(out)
+
+    def _answer(self, status, pid, inst, params) -> bytes:
+        """The reply to one parsed packet. The last-resort guard: an exception nobody foresaw costs
+        this packet (no reply, counted as dropped, logged), never the bus."""
+        try:
+            if status == dx.ParseStatus.OK:
+                return self._dispatch(pid, inst, params)
+            if status == dx.ParseStatus.BAD_CRC and pid in self._servos:
+                return self._reply(self._servos[pid], CRC_ERROR, b"")  # the servo it names says so
+            return b""  # broadcast, not ours, or no trustworthy ID (malformed): silence
+        except Exception as exc:  # noqa: BLE001 - on purpose, see the docstring
+            self._stats["dropped"] += 1
+            name = INSTRUCTION_NAMES.get(inst, f"instruction {inst!r}")
+            LOG.error("mock servo bus: dropped %s to ID %s (%s parameter bytes %s): %s: %s", name, pid,
+                      len(params or b""), bytes(params or b"")[:16].hex(" "), type(exc).__name__, exc)
+            return b""
 
     def _dispatch(self, pid, inst, params) -> bytes:
         name = INSTRUCTION_NAMES.get(inst)
@@ -245,10 +271,13 @@ class MockServoBus:
             self._refresh()
             ids = [i for i in params[4:] if i in self._servos]
             if inst == dx.instruction.SYNC_READ:
-                return b"".join(self._reply(self._servos[i], 0, self._read(self._servos[i], address, length))
-                                for i in ids)
+                err = _read_error(address, length)
+                return b"".join(self._reply(s, err, b"" if err else self._read(s, address, length))
+                                for s in (self._servos[i] for i in ids))
             return self._fast_reply([self._servos[i] for i in ids], address, length)
-        if inst == dx.instruction.WRITE and len(params) >= 3:
+        if inst == dx.instruction.WRITE and len(params) < 3:
+            return b"" if broadcast else self._reply(self._servos[pid], DATA_LENGTH_ERROR, b"")
+        if inst == dx.instruction.WRITE:
             targets = list(self._servos.values()) if broadcast else [self._servos[pid]]
             for s in targets:
                 err = self._write(s, u16(0), params[2:])
@@ -258,10 +287,12 @@ class MockServoBus:
         if broadcast:
             return b""
         s = self._servos[pid]
-        if inst == dx.instruction.READ and len(params) == 4:
+        if inst == dx.instruction.READ:
+            if len(params) != 4:
+                return self._reply(s, DATA_LENGTH_ERROR, b"")
             address, length = u16(0), u16(2)
-            if address + length > MEMORY_BYTES:
-                return self._reply(s, DATA_RANGE_ERROR, b"")
+            if _read_error(address, length):
+                return self._reply(s, _read_error(address, length), b"")
             self._refresh()
             return self._reply(s, 0, self._read(s, address, length))
         if inst == dx.instruction.REBOOT:
@@ -376,241 +407,21 @@ class MockServoBus:
         servos = [s for s in servos if not s.silent]
         if not servos:
             return b""
+        self._stats["replies"] += 1
+        if dx.STATUS_OVERHEAD + len(servos) * (length + 4) > dx.MAX_PACKET_BYTES:  # as Protocol2Bus checks
+            # More than one packet can carry (before stuffing): the servos refuse it.
+            return self._damage(dx.encode_status(dx.BROADCAST_ID, DATA_LENGTH_ERROR, b""), [s.id for s in servos])
+        err = _read_error(address, length)
         # The un-stuffed packet: header, ID, LEN, INST, then ERR ID DATA CRC per servo.
         n_params = len(servos) * (length + 4) - 2
         raw = bytearray(b"\xff\xff\xfd\x00" + bytes([dx.BROADCAST_ID]) + (n_params + 3).to_bytes(2, "little") + b"\x55")
         for k, s in enumerate(servos):
             if k:
                 raw += dx.crc16(bytes(raw)).to_bytes(2, "little")
-            raw += bytes([self._alert(s), s.id]) + self._read(s, address, length)
-        self._stats["replies"] += 1
-        packet = dx.encode_status(dx.BROADCAST_ID, raw[8], bytes(raw[9:]))
+            data = bytes(length) if err else self._read(s, address, length)
+            raw += bytes([err | self._alert(s), s.id]) + data
+        try:
+            packet = dx.encode_status(dx.BROADCAST_ID, raw[8], bytes(raw[9:]))
+        except ValueError:  # it fitted before stuffing, not after
+            packet = dx.encode_status(dx.BROADCAST_ID, DATA_LENGTH_ERROR, b"")
         return self._damage(packet, [s.id for s in servos])
-
-    # ------------------------------------------------------------------------------------------
-    # the pty
-    def open_pty(self, link: str) -> str:
-        """Creates the pty and the symlink `link` to its slave; returns the slave's path."""
-        with self._lock:
-            self._close_pty_locked()
-            master, slave = os.openpty()
-            tty.setraw(slave)  # no echo or translation before a client configures the port
-            os.set_blocking(master, False)
-            path = os.ttyname(slave)
-            tmp = f"{link}.tmp{os.getpid()}"
-            if os.path.lexists(tmp):
-                os.unlink(tmp)
-            os.symlink(path, tmp)
-            os.replace(tmp, link)
-            # The slave stays open: reads on the master fail with EIO while no slave is open, and
-            # ROBOTIS's SDK closes and reopens the port when it sets the baud rate.
-            self._master, self._slave, self.link = master, slave, link
-            self._rx.clear()
-        self._wake()
-        return path
-
-    def close_pty(self):
-        """The pty closing: clients get EIO/hang-up; the symlink is removed."""
-        with self._lock:
-            self._close_pty_locked()
-        self._wake()
-
-    def reopen_pty(self) -> str:
-        if self.link is None:
-            raise RuntimeError("reopen_pty: the pty was never opened")
-        return self.open_pty(self.link)
-
-    def _close_pty_locked(self):
-        for fd in (self._master, self._slave):
-            if fd is not None:
-                os.close(fd)
-        self._master = self._slave = None
-        if self.link and os.path.islink(self.link):
-            os.unlink(self.link)
-
-    def _wake(self):
-        try:
-            os.write(self._wake_w, b"x")
-        except OSError:
-            pass
-
-    def listen_control(self, path: str):
-        """Serves the control socket at `path` (see CONTROL_COMMANDS) from the serving loop."""
-        if os.path.lexists(path):
-            os.unlink(path)
-        sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        sock.bind(path)
-        sock.listen(4)
-        sock.setblocking(False)
-        self._control_sock, self._control_path = sock, path
-        self._wake()
-
-    def serve_forever(self, on_ready=None):
-        """Serves packets (and the control socket) until stop(). on_ready() once it accepts packets."""
-        sel = selectors.DefaultSelector()
-        sel.register(self._wake_r, selectors.EVENT_READ, "wake")
-        registered_master = None
-        control_registered = False
-        clients = {}
-        ready_sent = False
-        try:
-            while not self._stop.is_set():
-                if self._master != registered_master:
-                    if registered_master is not None:
-                        sel.unregister(registered_master)
-                    registered_master = self._master
-                    if registered_master is not None:
-                        sel.register(registered_master, selectors.EVENT_READ, "pty")
-                if self._control_sock is not None and not control_registered:
-                    sel.register(self._control_sock, selectors.EVENT_READ, "listen")
-                    control_registered = True
-                if not ready_sent and registered_master is not None:
-                    ready_sent = True
-                    if on_ready:
-                        on_ready()
-                for key, _ in sel.select(timeout=0.5):
-                    if key.data == "wake":
-                        os.read(self._wake_r, 4096)
-                    elif key.data == "pty":
-                        self._serve_pty(key.fd)
-                    elif key.data == "listen":
-                        conn, _ = self._control_sock.accept()
-                        conn.setblocking(False)
-                        clients[conn] = bytearray()
-                        sel.register(conn, selectors.EVENT_READ, "client")
-                    elif key.data == "client":
-                        if not self._serve_control(key.fileobj, clients):
-                            sel.unregister(key.fileobj)
-                            key.fileobj.close()
-                            del clients[key.fileobj]
-        finally:
-            for conn in clients:
-                conn.close()
-            sel.close()
-
-    def _serve_pty(self, fd):
-        try:
-            data = os.read(fd, 4096)
-        except BlockingIOError:
-            return
-        except OSError:
-            return  # closed underneath us (close_pty)
-        reply = self.handle(data)
-        with self._lock:
-            if reply and self._master == fd:
-                try:
-                    os.write(fd, reply)
-                except OSError:
-                    pass  # nobody reads (full buffer): the bytes are lost, as on a wire
-
-    def _serve_control(self, conn, clients) -> bool:
-        try:
-            data = conn.recv(65536)
-        except OSError:
-            return False
-        if not data:
-            return False
-        buf = clients[conn]
-        buf += data
-        while b"\n" in buf:
-            line, _, rest = bytes(buf).partition(b"\n")
-            buf[:] = rest
-            conn.setblocking(True)
-            conn.sendall((json.dumps(self.control(line.decode())) + "\n").encode())
-            conn.setblocking(False)
-        return True
-
-    def control(self, line: str) -> dict:
-        """Runs one control command (JSON text); returns {"ok": true, ...} or {"ok": false, "error": ...}."""
-        try:
-            cmd = json.loads(line)
-            name = cmd.pop("cmd")
-            if name not in CONTROL_COMMANDS:
-                raise ValueError(f"cmd: {name!r} is not one of {sorted(CONTROL_COMMANDS)}")
-            result = CONTROL_COMMANDS[name](self, **cmd)
-            return {"ok": True, "result": result}
-        except (ValueError, TypeError, KeyError, RuntimeError) as exc:
-            return {"ok": False, "error": f"{type(exc).__name__}: {exc}"}
-
-    def start(self, link: str, control_path: str = None):
-        """Embedded use: opens the pty at `link` and serves it from a thread."""
-        self.open_pty(link)
-        if control_path:
-            self.listen_control(control_path)
-        ready = threading.Event()
-        self._stop.clear()
-        self._thread = threading.Thread(target=self.serve_forever, kwargs={"on_ready": ready.set},
-                                        name="mock_servo_bus", daemon=True)
-        self._thread.start()
-        if not ready.wait(5.0):
-            raise RuntimeError("mock servo bus did not start within 5 s")
-        return self
-
-    def request_stop(self):
-        """Makes serve_forever return (safe from a signal handler)."""
-        self._stop.set()
-        self._wake()
-
-    def stop(self):
-        self._stop.set()
-        self._wake()
-        if self._thread is not None:
-            self._thread.join(5.0)
-            self._thread = None
-        self.close_pty()
-        if self._control_sock is not None:
-            self._control_sock.close()
-            if self._control_path and os.path.lexists(self._control_path):
-                os.unlink(self._control_path)
-            self._control_sock = None
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.stop()
-
-
-CONTROL_COMMANDS = {
-    "stats": lambda bus: bus.stats(),
-    "reset_stats": lambda bus: bus.reset_stats(),
-    "state": lambda bus: bus.state(),
-    "inject": lambda bus, kind, ids=None, count=None: bus.inject(kind, ids, count),
-    "silence": lambda bus, id, silent=True: bus.set_silent(id, silent),  # noqa: A006
-    "hardware_error": lambda bus, id, bits: bus.set_hardware_error(id, bits),  # noqa: A006
-    "clear": lambda bus: bus.clear_faults(),
-    "close_pty": lambda bus: bus.close_pty(),
-    "reopen_pty": lambda bus: bus.reopen_pty(),
-}
-
-
-class MockBusClient:
-    """Talks to a running mock's control socket: MockBusClient(path).call("stats")."""
-
-    def __init__(self, path: str, timeout_s: float = 5.0):
-        self._sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        self._sock.settimeout(timeout_s)
-        self._sock.connect(path)
-        self._buf = b""
-
-    def call(self, cmd: str, **kwargs):
-        self._sock.sendall((json.dumps({"cmd": cmd, **kwargs}) + "\n").encode())
-        while b"\n" not in self._buf:
-            chunk = self._sock.recv(65536)
-            if not chunk:
-                raise ConnectionError("mock servo bus closed the control socket")
-            self._buf += chunk
-        line, _, self._buf = self._buf.partition(b"\n")
-        reply = json.loads(line)
-        if not reply["ok"]:
-            raise RuntimeError(reply["error"])
-        return reply["result"]
-
-    def close(self):
-        self._sock.close()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
