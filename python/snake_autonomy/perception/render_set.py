@@ -35,8 +35,9 @@ def random_world(rng: np.random.Generator, min_obstacles: int = 1, max_obstacles
 
 def render_scenes(robot, params, n: int, seed: int, intrinsics: Optional[CameraIntrinsics] = None,
                   mount: Optional[CameraMount] = None, pitch_jitter_deg: float = 3.0,
-                  plain: bool = False) -> Iterator[CameraFrame]:
-    """n frames of random scenes (plain: the default appearance instead of a random one)."""
+                  plain: bool = False, depth: bool = True) -> Iterator[CameraFrame]:
+    """n frames of random scenes (plain: the default appearance instead of a random one; depth:
+    render the depth image too)."""
     from ..sim.plant import Plant
     rng = np.random.default_rng(seed)
     mount = mount or CameraMount()
@@ -48,6 +49,6 @@ def render_scenes(robot, params, n: int, seed: int, intrinsics: Optional[CameraI
         rpy = np.asarray(mount.rpy_deg, float) + rng.uniform(-pitch_jitter_deg, pitch_jitter_deg, 3) * [1, 1, 0]
         cam = HeadCamera(plant.model, intrinsics, CameraMount(tuple(mount.translation_m), tuple(rpy)))
         try:
-            yield cam.render(plant.data, plant.frame_transform("base_link"))
+            yield cam.render(plant.data, plant.frame_transform("base_link"), depth=depth)
         finally:
             cam.close()

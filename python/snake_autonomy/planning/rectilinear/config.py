@@ -23,7 +23,8 @@ class NavConfigError(ValueError):
 @dataclass
 class ClassifierParams:
     block_px: int = 40
-    dct_coefficients: int = 6
+    dct_coefficients: int = 4
+    svm_c: float = 10.0
 
 
 @dataclass
