@@ -7,6 +7,10 @@
     snake_autonomy nav eval-perception [--model FILE] [--scenes N]
                                                     precision/recall and ms per frame of the depth
                                                     method (and the classifier) on held-out scenes
+    snake_autonomy nav run --world FILE [--robot R] [--perception depth|mono] [--seed N]
+                           [--time-limit S] [--classifier FILE] --out DIR
+                                                    the closed loop in batch (sim/nav_batch.py):
+                                                    DIR/metrics.json, topview.png, frames/
 """
 import json
 import sys
@@ -30,7 +34,14 @@ def add_arguments(parser):
     ev.add_argument("--model", metavar="FILE", help="a classifier model from train-classifier")
     ev.add_argument("--scenes", type=int, default=15)
     ev.add_argument("--seed", type=int, default=100000)
-    for p in (tr, ev):
+    run = sub.add_parser("run", help="the closed loop on the simulated robot in batch")
+    run.add_argument("--world", required=True, metavar="FILE")
+    run.add_argument("--perception", choices=("depth", "mono"), default="depth")
+    run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--time-limit", type=float, default=1200.0, metavar="S")
+    run.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono)")
+    run.add_argument("--out", required=True, metavar="DIR")
+    for p in (tr, ev, run):
         p.add_argument("--robot", default="cobra", help="robot name (config/robots/NAME.yaml) or YAML file")
         p.add_argument("--config", default=None, help="nav config (default config/nav.yaml)")
 
@@ -132,6 +143,20 @@ def main(args) -> int:
         frames = list(render_scenes(robot, params, args.scenes, args.seed, cfg.intrinsics, cfg.mount))
         _print(evaluate(cfg, robot, frames, clf))
         return 0
-    print("usage: snake_autonomy nav {check-world FILE...|train-classifier --out FILE|eval-perception}",
+    if args.nav_command == "run":
+        from ...sim.nav_batch import NavRun, NavRunSpec
+        from ...sim.world import WorldError, load_world
+        try:
+            world = load_world(args.world)
+        except WorldError as e:
+            print(str(e), file=sys.stderr)
+            return 1
+        result = NavRun(NavRunSpec(world, robot=args.robot, perception=args.perception, seed=args.seed,
+                                   time_limit_s=args.time_limit, classifier=args.classifier,
+                                   nav_config=args.config)).run()
+        result.write(args.out)
+        print(json.dumps(result.metrics))
+        return 0
+    print("usage: snake_autonomy nav {check-world FILE...|train-classifier --out FILE|eval-perception|run}",
           file=sys.stderr)
     return 2

@@ -7,11 +7,14 @@ The footprint at a pose is the segment across the head, width head_width_m (51 m
 sampled at `footprint_points` points (a line, as in the paper: the image is a homography of the
 floor, so only the footprint on the floor is hallucinated).
 
-Points nearer (ahead of the camera, along its heading on the floor) than where the image's bottom
-row meets the floor are hidden under the view and count as free: the robot is there or has just
-seen it. Points anywhere else outside the image (beside or beyond the field of view) are not known
+Points nearer (ahead of the camera, along its heading on the floor) than near_field_m are hidden
+from the view and count as free: the robot is there or saw that floor on its way. near_field_m is
+the larger of where the image's bottom row meets the floor and where the view becomes as wide as
+the head (a head wider than the view at its own front: COBRA's 90 mm at 5 cm up). Points anywhere else outside the image (beside or beyond the field of view) are not known
 to be free.
 """
+import math
+
 import cv2
 import numpy as np
 
@@ -32,7 +35,9 @@ class PerceptionCollisionChecker:
         fwd = T[:2, 2] / max(1e-9, np.linalg.norm(T[:2, 2]))
         self._cam_fwd = fwd
         ray = T[:3, :3] @ np.array([0.0, (intrinsics.height - 1 - intrinsics.cy) / intrinsics.fy, 1.0])
-        self.near_field_m = (float(-T[2, 3] / ray[2] * (ray[:2] @ fwd)) if ray[2] < 0 else 0.0)
+        bottom = float(-T[2, 3] / ray[2] * (ray[:2] @ fwd)) if ray[2] < 0 else 0.0
+        half_fov = math.atan2(min(intrinsics.cx, intrinsics.width - intrinsics.cx), intrinsics.fx)
+        self.near_field_m = max(bottom, 0.5 * head_width_m / math.tan(half_fov))
         self.offsets = np.linspace(-0.5 * head_width_m, 0.5 * head_width_m, footprint_points)
 
     def footprint_points(self, poses: np.ndarray) -> np.ndarray:

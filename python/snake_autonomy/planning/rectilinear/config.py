@@ -9,6 +9,7 @@ import yaml
 from ...perception.depth_traversability import DepthTraversabilityParams
 from ...sim.camera import CameraIntrinsics, CameraMount
 from .follower import FollowerParams
+from .gait import RectilinearGait
 from .sampler import SamplerParams
 
 NAV_YAML = Path(__file__).resolve().parents[4] / "config" / "nav.yaml"
@@ -36,6 +37,7 @@ class NavConfig:
     follower: FollowerParams
     classifier: ClassifierParams
     replan_period_s: float = 10.0
+    gait: RectilinearGait = RectilinearGait()
 
     @classmethod
     def from_yaml(cls, path=None) -> "NavConfig":
@@ -46,7 +48,7 @@ class NavConfig:
     @classmethod
     def from_dict(cls, data: Dict[str, Any], source: str = "nav.yaml") -> "NavConfig":
         problems: List[str] = []
-        known = ("camera", "depth_traversability", "sampler", "follower", "classifier")
+        known = ("camera", "depth_traversability", "sampler", "follower", "classifier", "gait")
         for key in data:
             if key not in known:
                 problems.append(f"{key}: unknown section; known: {', '.join(known)}")
@@ -75,12 +77,16 @@ class NavConfig:
         sampler = _section(SamplerParams, data.get("sampler"), "sampler", problems)
         follower = _section(FollowerParams, follower_d, "follower", problems)
         classifier = _section(ClassifierParams, data.get("classifier"), "classifier", problems)
+        gait = _section(RectilinearGait, data.get("gait"), "gait", problems)
+        for key in ("amplitude_m", "wavelength_m", "frequency_hz"):
+            if not getattr(gait, key) > 0:
+                problems.append(f"gait.{key}: must be > 0, got {getattr(gait, key)}")
         for name, obj in (("sampler", sampler), ("follower", follower)):
             if obj is not None:
                 problems += [f"{name}.{p}" for p in obj.validate()]
         if problems:
             raise NavConfigError(source, problems)
-        return cls(intr, mount, depth, sampler, follower, classifier, float(replan))
+        return cls(intr, mount, depth, sampler, follower, classifier, float(replan), gait)
 
 
 def _vec3(v) -> bool:

@@ -30,11 +30,14 @@ class FollowerParams:
     kappa_max_per_m: float = 4.0          # body curvature range of the gait
     lookahead_m: float = 0.06             # delta of the paper
     k_heading: float = 0.5                # omega_fb per rad of heading error to the target (1/s)
-    turn_in_place_rad_s: float = 0.2      # turn rate asked for when no arc is free
+    turn_in_place_rad_s: float = 0.2      # turn rate the unicycle prediction assumes when turning
+    kappa_turn_per_m: float = 3.0         # curvature commanded to turn in place (the gait's forward
+                                          # speed is near zero there: bench/nav_gait)
 
     def validate(self) -> List[str]:
         p = []
-        for key in ("speed_m_s", "kappa_max_per_m", "lookahead_m", "turn_in_place_rad_s"):
+        for key in ("speed_m_s", "kappa_max_per_m", "lookahead_m", "turn_in_place_rad_s",
+                    "kappa_turn_per_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
         if self.omega_per_kappa == 0 or not math.isfinite(self.omega_per_kappa):
@@ -98,7 +101,7 @@ class RecedingHorizonFollower:
         p = self.params
         if self.mode == TURN_IN_PLACE:
             self._v, self._omega = 0.0, self.turn_direction * p.turn_in_place_rad_s
-            return Command(TURN_IN_PLACE, 0.0, reason="no collision-free arc: stopped, turning in place "
+            return Command(TURN_IN_PLACE, self.turn_direction * p.kappa_turn_per_m, reason="no collision-free arc: stopped, turning in place "
                            + ("left" if self.turn_direction > 0 else "right"))
         if self.mode != FOLLOW or self.path is None or self.pose is None:
             self._v, self._omega = 0.0, 0.0
