@@ -127,7 +127,8 @@ def overlay(rgb: np.ndarray, ground: np.ndarray, selection, checker) -> np.ndarr
                 continue
             free = a.s_m[j + 1] <= a.free_m + 1e-9
             colour = (0, 255, 0) if i == selection.chosen and free else ((255, 255, 0) if free else (255, 0, 0))
-            p0, p1 = tuple(int(v) for v in np.clip(uv[j], -1e4, 1e4)), tuple(int(v) for v in np.clip(uv[j + 1], -1e4, 1e4))
+            p0 = tuple(int(v) for v in np.clip(uv[j], -1e4, 1e4))
+            p1 = tuple(int(v) for v in np.clip(uv[j + 1], -1e4, 1e4))
             cv2.line(img, p0, p1, colour, 2)
     return img
 

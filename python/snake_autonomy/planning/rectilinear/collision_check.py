@@ -10,8 +10,8 @@ floor, so only the footprint on the floor is hallucinated).
 Points nearer (ahead of the camera, along its heading on the floor) than near_field_m are hidden
 from the view and count as free: the robot is there or saw that floor on its way. near_field_m is
 the larger of where the image's bottom row meets the floor and where the view becomes as wide as
-the head (a head wider than the view at its own front: COBRA's 90 mm at 5 cm up). Points anywhere else outside the image (beside or beyond the field of view) are not known
-to be free.
+the head (a head wider than the view at its own front: COBRA's 90 mm at 5 cm up). Points anywhere
+else outside the image (beside or beyond the field of view) are not known to be free.
 """
 import math
 

@@ -101,8 +101,9 @@ class RecedingHorizonFollower:
         p = self.params
         if self.mode == TURN_IN_PLACE:
             self._v, self._omega = 0.0, self.turn_direction * p.turn_in_place_rad_s
-            return Command(TURN_IN_PLACE, self.turn_direction * p.kappa_turn_per_m, reason="no collision-free arc: stopped, turning in place "
-                           + ("left" if self.turn_direction > 0 else "right"))
+            side = "left" if self.turn_direction > 0 else "right"
+            return Command(TURN_IN_PLACE, self.turn_direction * p.kappa_turn_per_m,
+                           reason=f"no collision-free arc: stopped, turning in place {side}")
         if self.mode != FOLLOW or self.path is None or self.pose is None:
             self._v, self._omega = 0.0, 0.0
             return Command(IDLE, 0.0, reason="no path")
