@@ -74,6 +74,14 @@ def test_scene_obstacles_are_named_and_collisions_counted_per_episode(cobra_yaml
     assert mon.update(plant.data) == 0            # same episode: not counted again
     assert mon.collisions == first
     assert mon.min_clearance_m == 0.0
+    # a flicker (apart for less than gap_s) is the same episode; apart for longer, a new one
+    pairs = set(mon._touching)
+    mon._touching = set()
+    mon._last_seen = {p: plant.data.time - 0.1 for p in pairs}
+    assert mon.update(plant.data) == 0
+    mon._touching = set()
+    mon._last_seen = {p: plant.data.time - 0.5 for p in pairs}
+    assert mon.update(plant.data) == len(pairs)
 
 
 def _config(name):
