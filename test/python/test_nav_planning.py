@@ -128,3 +128,11 @@ def test_follower_feedback_steers_back_to_the_path_and_maps_omega_to_kappa():
     before = f.pose
     f.update(6.0)
     assert f.pose[0] > before[0] + 0.09
+
+
+def test_margin_shortens_every_free_prefix():
+    mask = drawn_mask(discs=[(0.5, 0.06, 0.12)])
+    plain = sampler().select(mask)
+    kept = sampler(margin_m=0.1).select(mask)
+    for a, b in zip(plain.arcs, kept.arcs):
+        assert b.free_m == pytest.approx(max(0.0, a.free_m - 0.1))

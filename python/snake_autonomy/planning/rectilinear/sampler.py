@@ -2,7 +2,9 @@
 (n odd: the straight one plus as many left as right, path curvatures evenly within +-c_max), each
 checked in perception space; the longest collision-free prefix wins, then the least curvature.
 
-An arc whose free prefix is shorter than min_free_m is not a candidate; when none is, the result
+An arc's free length is its collision-free prefix less margin_m (the head's front beyond base_link
+plus a safety distance: the follower runs on past a path's end until the next replan). An arc whose
+free length is shorter than min_free_m is not a candidate; when none is, the result
 says so (no_free_arc) and the caller stops and turns in place.
 
 Optional goal bias (not in the paper, off by default): arcs whose free length is within
@@ -26,6 +28,7 @@ class SamplerParams:
     horizon_m: float = 1.2                # length of each candidate arc
     spacing_m: float = 0.02               # poses along an arc
     min_free_m: float = 0.15              # shorter free prefixes: no candidate
+    margin_m: float = 0.0                 # taken off every free prefix
     goal_tie_m: float = 0.0               # > 0: the goal bias above
 
     def validate(self) -> List[str]:
@@ -35,8 +38,9 @@ class SamplerParams:
         for key in ("max_curvature_per_m", "horizon_m", "spacing_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
-        if self.min_free_m < 0 or self.goal_tie_m < 0:
-            p.append(f"min_free_m, goal_tie_m: must be >= 0, got {self.min_free_m}, {self.goal_tie_m}")
+        if self.min_free_m < 0 or self.goal_tie_m < 0 or self.margin_m < 0:
+            p.append(f"min_free_m, goal_tie_m, margin_m: must be >= 0, got {self.min_free_m}, "
+                     f"{self.goal_tie_m}, {self.margin_m}")
         return p
 
 
@@ -86,7 +90,7 @@ class TrajectorySampler:
         free_all = self.checker.pose_free(self._all, ground)
         arcs = []
         for (c, poses, s), free in zip(self._arcs, np.split(free_all, self._splits)):
-            arcs.append(Arc(c, poses, s, prefix_length(free, s)))
+            arcs.append(Arc(c, poses, s, max(0.0, prefix_length(free, s) - p.margin_m)))
         cands = [i for i, a in enumerate(arcs) if a.free_m >= p.min_free_m and a.free_m > 0]
         if not cands:
             return Selection(arcs, None)
