@@ -19,6 +19,8 @@ SUBCOMMANDS = {
     "sim": ("snake_autonomy.sim.cli", "run missions on the simulated robot (no ROS)"),
     "evaluate": ("snake_autonomy.evaluation.cli", "evaluate a state estimate against ground truth"),
     "urdf": ("snake_autonomy.urdf_cli", "print the URDF generated from a robot description"),
+    "nav": ("snake_autonomy.planning.rectilinear.cli",
+            "navigation among obstacles (rectilinear gait, head camera): classifier, perception"),
     "report": ("snake_autonomy.experiments.cli", "rebuild a run's results folder from its bag"),
     "calibrate": ("snake_autonomy.calibration.cli",
                   "steering offset (eq. 3.31) and heading offset, on the simulated robot or through ROS"),

@@ -91,6 +91,16 @@ class MonitorConfig:
 
 
 @dataclass
+class ScalesConfig:
+    """Ventral scales (frictional anisotropy), applied by sim/scales.py's ScaledPlant only."""
+    enabled: bool = False
+    forward_friction: float = 0.7       # Coulomb coefficient, link sliding towards its head end
+    backward_friction: float = 1.5      # sliding towards its tail end
+    lateral_friction: float = 1.2       # sliding sideways
+    regularisation_m_s: float = 0.02    # friction ramps up over this speed (no stick-slip chatter)
+
+
+@dataclass
 class DisturbanceConfig:
     time_s: float
     link: str                                    # a body: base_link (head segment), link_1 ...
@@ -100,7 +110,7 @@ class DisturbanceConfig:
 
 
 _SECTIONS = {"physics": PhysicsConfig, "servo": ServoConfig, "mocap": MocapConfig,
-             "vio": VioConfig, "monitor": MonitorConfig}
+             "vio": VioConfig, "monitor": MonitorConfig, "scales": ScalesConfig}
 
 
 @dataclass
@@ -110,6 +120,7 @@ class SimConfig:
     mocap: MocapConfig = field(default_factory=MocapConfig)
     vio: VioConfig = field(default_factory=VioConfig)
     monitor: MonitorConfig = field(default_factory=MonitorConfig)
+    scales: ScalesConfig = field(default_factory=ScalesConfig)
     disturbances: List[DisturbanceConfig] = field(default_factory=list)
     # config/tracker.yaml keys overridden for the simulated robot (snake_autonomy.missions.load_defaults)
     tracker: dict = field(default_factory=dict)
@@ -182,6 +193,8 @@ class SimConfig:
                         f"({p.timestep_s}), got {s.setpoint_period_s}")
         if not 0 < self.monitor.rollover_tilt_deg <= 180:
             errs.append(f"monitor.rollover_tilt_deg: must be in (0, 180], got {self.monitor.rollover_tilt_deg}")
+        for key in ("forward_friction", "backward_friction", "lateral_friction", "regularisation_m_s"):
+            positive(f"scales.{key}", getattr(self.scales, key))
         positive("mocap.rate_hz", m.rate_hz)
         non_negative("mocap.position_noise_m", m.position_noise_m)
         non_negative("mocap.rotation_noise_rad", m.rotation_noise_rad)

@@ -49,8 +49,10 @@ def _f(x: float) -> str:
     return f"{float(x):.17g}"
 
 
-def build_mjcf(robot, params: SimParams, scene_xml: str = "") -> str:
+def build_mjcf(robot, params: SimParams, scene_xml: str = "", assets_xml: str = "") -> str:
     """MJCF text of `robot` (a _core.RobotModel) with the physics of `params`.
+
+    assets_xml: children of an <asset> element (textures, materials) that scene_xml refers to.
 
     scene_xml: MJCF elements (bodies, geoms, cameras) placed in the worldbody beside the floor:
     obstacles, pipes, the things a planner's world holds. Their geoms should set contype and
@@ -78,6 +80,7 @@ def build_mjcf(robot, params: SimParams, scene_xml: str = "") -> str:
         f'  <option timestep="{_f(phys.timestep_s)}" integrator="{phys.integrator}" '
         f'cone="{phys.cone}" iterations="{int(phys.solver_iterations)}" gravity="0 0 -9.81"/>',
         '  <size memory="4M"/>',
+        *(['  <asset>', assets_xml.rstrip("\n"), '  </asset>'] if assets_xml else []),
         '  <default>',
         f'    <joint armature="{_f(servo.armature_kg_m2)}" '
         f'damping="{_f(servo.damping_nm_s_per_rad)}" '

@@ -35,16 +35,18 @@ LIMIT_TOLERANCE_RAD = 0.002
 
 class Plant:
     def __init__(self, robot, params: SimParams, start=(0.0, 0.0, 0.0),
-                 q0_rad: Optional[Sequence[float]] = None, disturbances=None, scene_xml: str = ""):
+                 q0_rad: Optional[Sequence[float]] = None, disturbances=None, scene_xml: str = "",
+                 assets_xml: str = ""):
         """robot: a _core.RobotModel; start: (x_m, y_m, heading_rad) of base_link on the floor.
 
         disturbances: Disturbance items (or None for those of params.config).
-        scene_xml: MJCF elements added to the world (obstacles, pipes; see build_mjcf)."""
+        scene_xml: MJCF elements added to the world (obstacles, pipes; see build_mjcf);
+        assets_xml: the textures and materials they use."""
         self.robot = robot
         self.params = params
         self.num_joints = robot.num_joints
         self.frame_names = list(robot.frame_names)
-        self.mjcf = build_mjcf(robot, params, scene_xml)
+        self.mjcf = build_mjcf(robot, params, scene_xml, assets_xml)
         self.model = mujoco.MjModel.from_xml_string(self.mjcf)
         self.data = mujoco.MjData(self.model)
         self.dt_s = float(self.model.opt.timestep)

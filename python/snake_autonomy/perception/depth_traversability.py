@@ -1,0 +1,112 @@
+"""Traversability from a depth image (the D435i that COBRA carries): ground-plane fit + height.
+
+1. The depth image's points (optical frame, subsampled) are fitted with a plane by RANSAC, seeded
+   with the points of the image's lower part, where the floor is expected; the plane is refined by
+   least squares on its inliers. A plane that is not roughly where the mount puts the floor (its
+   height from the camera, its normal) is refused, and the mount's floor plane is used instead.
+2. A pixel is ground when its depth is valid and matches the depth at which its ray meets the
+   plane within depth_tolerance (relative). A relative test, not a height threshold: the camera of a
+   snake sits a few centimetres above the floor, so the bottom 2 cm of an obstacle at distance D
+   hide the floor out to 1.8 D from a camera 4.6 cm up; a 5 % depth tolerance bounds that error to
+   5 % of the distance (heights under 5 % of the camera's). The traversable region is grown from the
+   bottom of the image (perception/ground_region.py).
+"""
+from dataclasses import dataclass
+from typing import Optional, Tuple
+
+import numpy as np
+
+from .ground_region import traversable
+
+
+@dataclass
+class DepthTraversabilityParams:
+    depth_tolerance: float = 0.05      # |depth / depth of the plane along the ray - 1| below: ground
+    max_range_m: float = 4.0           # beyond (or no depth): not ground
+    stride_px: int = 4                 # subsampling of the fit
+    ransac_iterations: int = 60
+    inlier_m: float = 0.003
+    block_px: int = 8                  # cells of the grown region
+    min_fraction: float = 0.5
+    max_plane_tilt_deg: float = 20.0   # fitted normal vs the mount's expected normal
+    max_height_error_m: float = 0.05   # fitted camera height vs the mount's
+
+
+def plane_from_mount(T_ground_camera: np.ndarray) -> Tuple[np.ndarray, float]:
+    """The floor z = 0 of the ground frame in the optical frame: (n, d) with n.p + d = height."""
+    R, t = T_ground_camera[:3, :3], T_ground_camera[:3, 3]
+    n = R.T @ np.array([0.0, 0.0, 1.0])        # ground's up axis in the camera frame
+    return n, float(t[2])                       # height of a camera-frame point p: n.p + t_z
+
+
+def fit_ground_plane(points: np.ndarray, params: DepthTraversabilityParams,
+                     rng: np.random.Generator) -> Optional[Tuple[np.ndarray, float, int]]:
+    """RANSAC plane through (N, 3) points: (n, d, inliers) with n.p + d = 0 on the plane, n
+    oriented towards the camera (d > 0); None when fewer than 3 points."""
+    if len(points) < 3:
+        return None
+    best, best_count = None, -1
+    for _ in range(params.ransac_iterations):
+        a, b, c = points[rng.choice(len(points), 3, replace=False)]
+        n = np.cross(b - a, c - a)
+        norm = np.linalg.norm(n)
+        if norm < 1e-9:
+            continue
+        n /= norm
+        d = -float(n @ a)
+        count = int(np.count_nonzero(np.abs(points @ n + d) < params.inlier_m))
+        if count > best_count:
+            best, best_count = (n, d), count
+    if best is None:
+        return None
+    n, d = best
+    inl = points[np.abs(points @ n + d) < params.inlier_m]
+    centroid = inl.mean(axis=0)
+    _, _, vt = np.linalg.svd(inl - centroid, full_matrices=False)
+    n = vt[2]
+    d = -float(n @ centroid)
+    if d < 0:
+        n, d = -n, -d
+    return n, d, len(inl)
+
+
+class DepthTraversability:
+    """Depth image -> binary traversability image, with the plane it used."""
+
+    def __init__(self, intrinsics, T_ground_camera: np.ndarray,
+                 params: Optional[DepthTraversabilityParams] = None, seed: int = 0):
+        self.k = intrinsics
+        self.params = params or DepthTraversabilityParams()
+        self.prior_n, self.prior_d = plane_from_mount(T_ground_camera)
+        self.rng = np.random.default_rng(seed)
+        v, u = np.mgrid[0:self.k.height, 0:self.k.width]
+        self._rays = np.dstack([(u - self.k.cx) / self.k.fx, (v - self.k.cy) / self.k.fy,
+                                np.ones(u.shape)]).astype(np.float32)
+        self.last_plane: Tuple[np.ndarray, float] = (self.prior_n, self.prior_d)
+        self.last_plane_fitted = False
+
+    def ground_mask(self, depth_m: np.ndarray) -> np.ndarray:
+        """Per pixel: valid depth and within the height threshold of the ground plane."""
+        p = self.params
+        z = np.asarray(depth_m, float)
+        valid = (z > 0) & (z < p.max_range_m)
+        s = p.stride_px
+        lower = slice(self.k.height // 3, None, s)
+        pts = (self._rays[lower, ::s] * z[lower, ::s, None])[valid[lower, ::s]]
+        n, d = self.prior_n, self.prior_d
+        self.last_plane_fitted = False
+        fit = fit_ground_plane(pts, p, self.rng)
+        if fit is not None:
+            fn, fd, _ = fit
+            tilt = np.degrees(np.arccos(np.clip(fn @ self.prior_n, -1.0, 1.0)))
+            if tilt <= p.max_plane_tilt_deg and abs(fd - self.prior_d) <= p.max_height_error_m:
+                n, d, self.last_plane_fitted = fn, fd, True
+        self.last_plane = (n, d)
+        # depth at which each ray meets the plane (n.(z ray) + d = 0); rays above the horizon: none
+        dot = self._rays @ n.astype(np.float32)
+        hits = dot < -1e-6
+        expected = np.where(hits, -d / np.where(hits, dot, -1.0), 0.0)
+        return valid & hits & (np.abs(z - expected) < p.depth_tolerance * expected)
+
+    def __call__(self, depth_m: np.ndarray) -> np.ndarray:
+        return traversable(self.ground_mask(depth_m), self.params.block_px, self.params.min_fraction)

@@ -1,0 +1,1 @@
+"""snake_autonomy.planning: planners (rectilinear perception-space navigation, issue 13)."""

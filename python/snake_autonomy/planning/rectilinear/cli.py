@@ -1,0 +1,162 @@
+"""`snake_autonomy nav ...`: the navigation system of issue 13 (Chang et al.).
+
+    snake_autonomy nav check-world FILE...          validate world files (every problem listed)
+    snake_autonomy nav train-classifier --out FILE  render a labelled training set, train the
+                                                    monocular block classifier, write FILE (joblib)
+                                                    and FILE.json (held-out figures, both methods)
+    snake_autonomy nav eval-perception [--model FILE] [--scenes N]
+                                                    precision/recall and ms per frame of the depth
+                                                    method (and the classifier) on held-out scenes
+    snake_autonomy nav run --world FILE [--robot R] [--perception depth|mono] [--seed N]
+                           [--time-limit S] [--classifier FILE] --out DIR
+                                                    the closed loop in batch (sim/nav_batch.py):
+                                                    DIR/metrics.json, topview.png, frames/
+"""
+import json
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[4]
+ROBOTS = ROOT / "config" / "robots"
+
+
+def add_arguments(parser):
+    sub = parser.add_subparsers(dest="nav_command", metavar="ACTION")
+    chk = sub.add_parser("check-world", help="validate world files; list every problem")
+    chk.add_argument("files", nargs="+", metavar="FILE")
+    tr = sub.add_parser("train-classifier", help="render a training set and train the block classifier")
+    tr.add_argument("--out", required=True, metavar="FILE", help="model file to write (joblib)")
+    tr.add_argument("--scenes", type=int, default=60, help="training scenes (one frame each)")
+    tr.add_argument("--test-scenes", type=int, default=15, help="held-out scenes for the figures")
+    tr.add_argument("--seed", type=int, default=0, help="training scenes' seed; held-out: seed + 100000")
+    ev = sub.add_parser("eval-perception", help="depth (and classifier) traversability on held-out scenes")
+    ev.add_argument("--model", metavar="FILE", help="a classifier model from train-classifier")
+    ev.add_argument("--scenes", type=int, default=15)
+    ev.add_argument("--seed", type=int, default=100000)
+    run = sub.add_parser("run", help="the closed loop on the simulated robot in batch")
+    run.add_argument("--world", required=True, metavar="FILE")
+    run.add_argument("--perception", choices=("depth", "mono"), default="depth")
+    run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--time-limit", type=float, default=1200.0, metavar="S")
+    run.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono)")
+    run.add_argument("--out", required=True, metavar="DIR")
+    for p in (tr, ev, run):
+        p.add_argument("--robot", default="cobra", help="robot name (config/robots/NAME.yaml) or YAML file")
+        p.add_argument("--config", default=None, help="nav config (default config/nav.yaml)")
+
+
+def robot_yaml(name: str) -> Path:
+    p = Path(name)
+    return p if p.suffix in (".yaml", ".yml") else ROBOTS / f"{name}.yaml"
+
+
+def _setup(args):
+    from ... import _core
+    from ...sim.config import SimConfig
+    from .config import NavConfig
+    cfg = NavConfig.from_yaml(args.config)
+    robot = _core.RobotModel.from_yaml(str(robot_yaml(args.robot)))
+    params = SimConfig.from_yaml(str(ROOT / "config" / "sim.yaml")).draw(seed=0)
+    return cfg, robot, params
+
+
+def evaluate(cfg, robot, frames, classifier=None) -> dict:
+    """Precision/recall (pixels of the grown region vs the segmentation's, grown the same way)
+    and ms per frame, per method, over the frames."""
+    import numpy as np
+    from ...perception.depth_traversability import DepthTraversability
+    from ...perception.ground_region import precision_recall, traversable
+    from .config import T_ground_camera
+    methods = {}
+    dt = DepthTraversability(cfg.intrinsics, T_ground_camera(cfg.mount, robot.link_radius_m + 0.001), cfg.depth)
+    methods["depth"] = (lambda f: dt(f.depth_m), cfg.depth.block_px)
+    if classifier is not None:
+        methods["mono"] = (lambda f: classifier.traversable(f.rgb), classifier.block_px)
+    out = {}
+    for name, (fn, block) in methods.items():
+        ps, rs, ms = [], [], []
+        for f in frames:
+            t = time.perf_counter()
+            pred = fn(f)
+            ms.append(1000.0 * (time.perf_counter() - t))
+            p, r = precision_recall(pred, traversable(f.ground_truth_ground(), block))
+            ps.append(p)
+            rs.append(r)
+        out[name] = {"precision": float(np.mean(ps)), "recall": float(np.mean(rs)),
+                     "precision_min": float(np.min(ps)), "recall_min": float(np.min(rs)),
+                     "ms_per_frame_median": float(np.median(ms)), "frames": len(frames),
+                     "truth_block_px": block}
+    return out
+
+
+def _print(results: dict) -> None:
+    for name, r in results.items():
+        print(f"  {name:5s}: precision {r['precision']:.3f} (min {r['precision_min']:.3f}), recall "
+              f"{r['recall']:.3f} (min {r['recall_min']:.3f}), {r['ms_per_frame_median']:.1f} ms/frame "
+              f"median, {r['frames']} held-out frames")
+
+
+def main(args) -> int:
+    if args.nav_command == "check-world":
+        from ...sim.world_file import WorldError, load_world
+        bad = 0
+        for f in args.files:
+            try:
+                w = load_world(f)
+                print(f"{f}: ok: start {list(w.start)}, goal {list(w.goal)} r {w.goal_radius_m} m, "
+                      f"{len(w.obstacles)} obstacle(s), floor {w.floor_texture}")
+            except WorldError as e:
+                print(str(e), file=sys.stderr)
+                bad += 1
+        return 1 if bad else 0
+    if args.nav_command == "train-classifier":
+        from ...perception.block_classifier import BlockClassifier
+        from ...perception.render_set import render_scenes
+        cfg, robot, params = _setup(args)
+        t0 = time.perf_counter()
+        train = [(f.rgb, f.ground_truth_ground()) for f in render_scenes(
+            robot, params, args.scenes, args.seed, cfg.intrinsics, cfg.mount, depth=False)]
+        t1 = time.perf_counter()
+        clf = BlockClassifier.train(train, cfg.classifier.block_px, cfg.classifier.dct_coefficients,
+                                    cfg.classifier.svm_c)
+        t2 = time.perf_counter()
+        clf.save(args.out)
+        test = list(render_scenes(robot, params, args.test_scenes, args.seed + 100000, cfg.intrinsics, cfg.mount))
+        results = evaluate(cfg, robot, test, clf)
+        summary = {"model": str(args.out), "robot": robot.name, "training_scenes": args.scenes,
+                   "seed": args.seed, "render_s": t1 - t0, "train_s": t2 - t1,
+                   "block_px": clf.block_px, "dct_coefficients": clf.k, "svm_c": cfg.classifier.svm_c,
+                   "held_out": results}
+        Path(str(args.out) + ".json").write_text(json.dumps(summary, indent=2) + "\n")
+        print(f"trained on {args.scenes} rendered scenes ({t1 - t0:.0f} s rendering, {t2 - t1:.1f} s "
+              f"training): {args.out}")
+        _print(results)
+        return 0
+    if args.nav_command == "eval-perception":
+        from ...perception.render_set import render_scenes
+        cfg, robot, params = _setup(args)
+        clf = None
+        if args.model:
+            from ...perception.block_classifier import BlockClassifier
+            clf = BlockClassifier.load(args.model)
+        frames = list(render_scenes(robot, params, args.scenes, args.seed, cfg.intrinsics, cfg.mount))
+        _print(evaluate(cfg, robot, frames, clf))
+        return 0
+    if args.nav_command == "run":
+        from ...sim.nav_batch import NavRun, NavRunSpec
+        from ...sim.world_file import WorldError, load_world
+        try:
+            world = load_world(args.world)
+        except WorldError as e:
+            print(str(e), file=sys.stderr)
+            return 1
+        result = NavRun(NavRunSpec(world, robot=args.robot, perception=args.perception, seed=args.seed,
+                                   time_limit_s=args.time_limit, classifier=args.classifier,
+                                   nav_config=args.config)).run()
+        result.write(args.out)
+        print(json.dumps(result.metrics))
+        return 0
+    print("usage: snake_autonomy nav {check-world FILE...|train-classifier --out FILE|eval-perception|run}",
+          file=sys.stderr)
+    return 2

@@ -1,0 +1,131 @@
+"""config/nav.yaml: camera, traversability, sampler and follower parameters, every problem listed."""
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any, Dict, List
+
+import numpy as np
+
+from ...safe_yaml import load_yaml_file
+from ...perception.depth_traversability import DepthTraversabilityParams
+from ...sim.camera import CameraIntrinsics, CameraMount
+from .follower import FollowerParams
+from .gait import RectilinearGait
+from .sampler import SamplerParams
+
+NAV_YAML = Path(__file__).resolve().parents[4] / "config" / "nav.yaml"
+
+
+class NavConfigError(ValueError):
+    def __init__(self, source: str, problems: List[str]):
+        self.problems = list(problems)
+        super().__init__(f"{source}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
+
+
+@dataclass
+class ClassifierParams:
+    block_px: int = 40
+    dct_coefficients: int = 4
+    svm_c: float = 10.0
+
+
+@dataclass
+class NavConfig:
+    intrinsics: CameraIntrinsics
+    mount: CameraMount
+    depth: DepthTraversabilityParams
+    sampler: SamplerParams
+    follower: FollowerParams
+    classifier: ClassifierParams
+    replan_period_s: float = 10.0
+    gait: RectilinearGait = RectilinearGait()
+
+    @classmethod
+    def from_yaml(cls, path=None) -> "NavConfig":
+        path = Path(path) if path else NAV_YAML
+        return cls.from_dict(load_yaml_file(path) or {}, str(path))
+
+    @classmethod
+    def from_dict(cls, data: Dict[str, Any], source: str = "nav.yaml") -> "NavConfig":
+        problems: List[str] = []
+        known = ("camera", "depth_traversability", "sampler", "follower", "classifier", "gait")
+        for key in data:
+            if key not in known:
+                problems.append(f"{key}: unknown section; known: {', '.join(known)}")
+        cam = data.get("camera") or {}
+        intr = CameraIntrinsics.d435i_like()
+        try:
+            if "intrinsics" in cam:
+                intr = CameraIntrinsics.from_dict(cam["intrinsics"])
+        except ValueError as e:
+            problems.append(str(e))
+        mount_d = cam.get("mount") or {}
+        mount = CameraMount()
+        t, rpy = mount_d.get("translation_m", mount.translation_m), mount_d.get("rpy_deg", mount.rpy_deg)
+        if not _vec3(t):
+            problems.append(f"camera.mount.translation_m: expected 3 numbers, got {t!r}")
+        if not _vec3(rpy):
+            problems.append(f"camera.mount.rpy_deg: expected 3 numbers, got {rpy!r}")
+        if _vec3(t) and _vec3(rpy):
+            mount = CameraMount(tuple(float(x) for x in t), tuple(float(x) for x in rpy))
+        follower_d = dict(data.get("follower") or {})
+        replan = follower_d.pop("replan_period_s", 10.0)
+        if not isinstance(replan, (int, float)) or replan <= 0:
+            problems.append(f"follower.replan_period_s: must be > 0, got {replan!r}")
+        depth = _section(DepthTraversabilityParams, data.get("depth_traversability"), "depth_traversability",
+                         problems)
+        sampler = _section(SamplerParams, data.get("sampler"), "sampler", problems)
+        follower = _section(FollowerParams, follower_d, "follower", problems)
+        classifier = _section(ClassifierParams, data.get("classifier"), "classifier", problems)
+        gait = _section(RectilinearGait, data.get("gait"), "gait", problems)
+        for key in ("amplitude_m", "wavelength_m", "frequency_hz"):
+            if not getattr(gait, key) > 0:
+                problems.append(f"gait.{key}: must be > 0, got {getattr(gait, key)}")
+        for name, obj in (("sampler", sampler), ("follower", follower)):
+            if obj is not None:
+                problems += [f"{name}.{p}" for p in obj.validate()]
+        if problems:
+            raise NavConfigError(source, problems)
+        return cls(intr, mount, depth, sampler, follower, classifier, float(replan), gait)
+
+
+def _vec3(v) -> bool:
+    return isinstance(v, (list, tuple)) and len(v) == 3 and all(
+        isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x) for x in v)
+
+
+def _section(cls, d, name: str, problems: List[str]):
+    d = d or {}
+    if not isinstance(d, dict):
+        problems.append(f"{name}: expected a mapping, got {d!r}")
+        return cls()
+    types = {f.name: f.type for f in fields(cls)}
+    kwargs = {}
+    for key, value in d.items():
+        if key not in types:
+            problems.append(f"{name}.{key}: unknown key (value {value!r}); known: {', '.join(types)}")
+        elif not isinstance(value, (int, float)) or isinstance(value, bool):
+            problems.append(f"{name}.{key}: must be a number, got {value!r}")
+        else:
+            default = getattr(cls(), key)
+            if isinstance(default, int) and not isinstance(default, bool) and value != int(value):
+                problems.append(f"{name}.{key}: must be an integer, got {value!r}")
+            kwargs[key] = type(default)(value)
+    return cls(**kwargs)
+
+
+def head_width_m(robot_yaml) -> float:
+    """The head's footprint width: `head_width_m` of the robot YAML, else the capsule's diameter."""
+    data = load_yaml_file(robot_yaml) or {}
+    if "head_width_m" in data:
+        w = data["head_width_m"]
+        if not isinstance(w, (int, float)) or isinstance(w, bool) or not w > 0:
+            raise NavConfigError(str(robot_yaml), [f"head_width_m: must be a number > 0, got {w!r}"])
+        return float(w)
+    return 2.0 * float(data["link_radius_m"])
+
+
+def T_ground_camera(mount: CameraMount, base_height_m: float) -> np.ndarray:
+    """The optical frame in the ground frame (under base_link, level): base_link base_height_m up."""
+    t = np.eye(4)
+    t[2, 3] = base_height_m
+    return t @ mount.T_base_optical()

@@ -1,0 +1,128 @@
+"""Receding-horizon following of the chosen arc (Chang et al. IV).
+
+Between replans the follower tracks the planned path (world-frame poses): the target is the
+furthest path point within lookahead_m (delta = 60 mm in the paper) of the current pose; the turn
+rate is omega = omega_ff + omega_fb, omega_ff = v c (the arc's path curvature c) and omega_fb =
+k_heading * (bearing to the target - heading); omega becomes the body curvature kappa through the
+inverse of the gait map's linear fit omega(kappa) = omega_per_kappa * kappa + omega_offset, clipped
+to the gait's range. Without a fresh pose estimate the pose is predicted with the unicycle model
+from the last command.
+
+No free arc: the follower stops forward motion and turns in place (mode TURN_IN_PLACE, towards
+`turn_direction`), and says so in the command's reason.
+"""
+import math
+from dataclasses import dataclass
+from typing import List, Optional
+
+import numpy as np
+
+from .unicycle import predict, wrap
+
+FOLLOW, TURN_IN_PLACE, IDLE = "follow", "turn_in_place", "idle"
+
+
+@dataclass
+class FollowerParams:
+    speed_m_s: float = 0.02               # the gait's forward speed (gait map)
+    omega_per_kappa: float = 0.05         # d omega / d kappa (rad/s per 1/m), gait map fit
+    omega_offset_rad_s: float = 0.0       # omega at kappa = 0 (drift), gait map fit
+    kappa_max_per_m: float = 4.0          # body curvature range of the gait
+    lookahead_m: float = 0.06             # delta of the paper
+    k_heading: float = 0.5                # omega_fb per rad of heading error to the target (1/s)
+    turn_in_place_rad_s: float = 0.2      # turn rate the unicycle prediction assumes when turning
+    kappa_turn_per_m: float = 3.0         # curvature commanded to turn in place (the gait's forward
+                                          # speed is near zero there: bench/nav_gait)
+
+    def validate(self) -> List[str]:
+        p = []
+        for key in ("speed_m_s", "kappa_max_per_m", "lookahead_m", "turn_in_place_rad_s",
+                    "kappa_turn_per_m"):
+            if not getattr(self, key) > 0:
+                p.append(f"{key}: must be > 0, got {getattr(self, key)}")
+        if self.omega_per_kappa == 0 or not math.isfinite(self.omega_per_kappa):
+            p.append(f"omega_per_kappa: must be finite and non-zero, got {self.omega_per_kappa}")
+        if self.k_heading < 0:
+            p.append(f"k_heading: must be >= 0, got {self.k_heading}")
+        return p
+
+    def kappa(self, omega_rad_s: float) -> float:
+        """The inverse gait map, clipped to the gait's range."""
+        k = (omega_rad_s - self.omega_offset_rad_s) / self.omega_per_kappa
+        return max(-self.kappa_max_per_m, min(self.kappa_max_per_m, k))
+
+    def omega(self, kappa_per_m: float) -> float:
+        return self.omega_per_kappa * kappa_per_m + self.omega_offset_rad_s
+
+
+@dataclass
+class Command:
+    mode: str
+    kappa_per_m: float = 0.0
+    omega_ff_rad_s: float = 0.0
+    omega_fb_rad_s: float = 0.0
+    target: Optional[tuple] = None
+    reason: str = ""
+
+
+class RecedingHorizonFollower:
+    def __init__(self, params: Optional[FollowerParams] = None):
+        self.params = params or FollowerParams()
+        problems = self.params.validate()
+        if problems:
+            raise ValueError("follower: " + "; ".join(problems))
+        self.path: Optional[np.ndarray] = None
+        self.path_curvature = 0.0
+        self.mode = IDLE
+        self.turn_direction = 1.0
+        self.pose = None
+        self._t = None
+        self._omega = 0.0
+        self._v = 0.0
+
+    def set_path(self, path_world: np.ndarray, curvature_per_m: float) -> None:
+        self.path = np.asarray(path_world, float)
+        self.path_curvature = float(curvature_per_m)
+        self.mode = FOLLOW
+
+    def stop_and_turn(self, direction: float) -> None:
+        """No free arc: turn in place towards direction (+1 left / CCW, -1 right)."""
+        self.path = None
+        self.mode = TURN_IN_PLACE
+        self.turn_direction = 1.0 if direction >= 0 else -1.0
+
+    def update(self, t_s: float, pose=None) -> Command:
+        """pose: a fresh (x, y, theta) estimate, or None to predict from the last command."""
+        if pose is not None:
+            self.pose = tuple(pose)
+        elif self.pose is not None and self._t is not None:
+            self.pose = predict(self.pose, self._v, self._omega, t_s - self._t)
+        self._t = t_s
+        p = self.params
+        if self.mode == TURN_IN_PLACE:
+            self._v, self._omega = 0.0, self.turn_direction * p.turn_in_place_rad_s
+            side = "left" if self.turn_direction > 0 else "right"
+            return Command(TURN_IN_PLACE, self.turn_direction * p.kappa_turn_per_m,
+                           reason=f"no collision-free arc: stopped, turning in place {side}")
+        if self.mode != FOLLOW or self.path is None or self.pose is None:
+            self._v, self._omega = 0.0, 0.0
+            return Command(IDLE, 0.0, reason="no path")
+        target = self.target(self.pose)
+        omega_ff = p.speed_m_s * self.path_curvature
+        x, y, th = self.pose
+        bearing = math.atan2(target[1] - y, target[0] - x)
+        dist = math.hypot(target[0] - x, target[1] - y)
+        at_end = math.hypot(self.path[-1, 0] - x, self.path[-1, 1] - y) <= p.lookahead_m
+        # past the path's end (until the next replan): feedforward only, never turn back to it
+        omega_fb = p.k_heading * wrap(bearing - th) if dist > 1e-3 and not at_end else 0.0
+        kappa = p.kappa(omega_ff + omega_fb)
+        self._v, self._omega = p.speed_m_s, p.omega(kappa)
+        return Command(FOLLOW, kappa, omega_ff, omega_fb, tuple(target))
+
+    def target(self, pose) -> np.ndarray:
+        """The furthest path point (in path order) within lookahead_m of pose; if none is, the
+        path point nearest to the pose."""
+        d = np.hypot(self.path[:, 0] - pose[0], self.path[:, 1] - pose[1])
+        within = np.nonzero(d <= self.params.lookahead_m)[0]
+        i = int(within.max()) if len(within) else int(np.argmin(d))
+        return self.path[i, :2]

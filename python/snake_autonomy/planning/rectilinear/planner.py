@@ -1,0 +1,86 @@
+"""One replan of the perception-space planner (Chang et al. III-IV), ROS-free: a traversability
+image, the camera's pose in the ground frame and the robot's pose -> the chosen arc as a world path,
+handed to the receding-horizon follower (or stop and turn in place when no arc is free).
+
+The ground frame of a replan: the robot's pose on the floor (base_link projected, heading = yaw of
+base_link's x axis). Both the simulator's batch loop and a planner node call `replan` and then
+`follower.update` at the control rate.
+"""
+import math
+from dataclasses import dataclass
+from typing import Optional, Tuple
+
+import numpy as np
+
+from .collision_check import PerceptionCollisionChecker
+from .follower import Command, RecedingHorizonFollower
+from .sampler import Selection, TrajectorySampler
+
+
+def ground_frame(T_world_base: np.ndarray) -> Tuple[float, float, float]:
+    """(x, y, heading) of base_link on the floor."""
+    T = np.asarray(T_world_base, float)
+    return float(T[0, 3]), float(T[1, 3]), math.atan2(T[1, 0], T[0, 0])
+
+
+def T_world_ground(pose) -> np.ndarray:
+    x, y, th = pose
+    T = np.eye(4)
+    T[:2, :2] = [[math.cos(th), -math.sin(th)], [math.sin(th), math.cos(th)]]
+    T[:2, 3] = (x, y)
+    return T
+
+
+def to_world(poses: np.ndarray, pose) -> np.ndarray:
+    """(N, 3) poses in the ground frame of `pose` -> world."""
+    x, y, th = pose
+    c, s = math.cos(th), math.sin(th)
+    p = np.asarray(poses, float)
+    return np.column_stack([x + c * p[:, 0] - s * p[:, 1], y + s * p[:, 0] + c * p[:, 1], th + p[:, 2]])
+
+
+@dataclass
+class Replan:
+    t_s: float
+    pose: Tuple[float, float, float]
+    selection: Selection
+    path_world: Optional[np.ndarray]      # the chosen arc's free prefix, world frame
+    reason: str = ""
+
+
+class NavPlanner:
+    def __init__(self, intrinsics, head_width_m: float, sampler_params, follower: RecedingHorizonFollower):
+        self.intrinsics = intrinsics
+        self.head_width_m = head_width_m
+        self.sampler_params = sampler_params
+        self.follower = follower
+        self._turning = None
+
+    def replan(self, t_s: float, ground_image: np.ndarray, T_ground_camera: np.ndarray, pose,
+               goal_xy=None) -> Replan:
+        checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera, self.head_width_m)
+        sampler = TrajectorySampler(checker, self.sampler_params)
+        goal_g = None
+        if goal_xy is not None:
+            g = np.linalg.inv(T_world_ground(pose)) @ np.array([goal_xy[0], goal_xy[1], 0.0, 1.0])
+            goal_g = (float(g[0]), float(g[1]))
+        sel = sampler.select(ground_image, goal_g)
+        if sel.no_free_arc:
+            # keep turning the same way as at the previous replan (no dithering); else towards the
+            # side whose arcs see more free floor, ties towards the goal
+            if self._turning is None:
+                left = sum(a.free_m for a in sel.arcs if a.curvature_per_m > 0)
+                right = sum(a.free_m for a in sel.arcs if a.curvature_per_m < 0)
+                goal_left = goal_g is None or goal_g[1] >= 0
+                self._turning = 1.0 if left > right or (left == right and goal_left) else -1.0
+            self.follower.stop_and_turn(self._turning)
+            return Replan(t_s, tuple(pose), sel, None, "no collision-free arc: stop and turn in place")
+        self._turning = None
+        arc = sel.arc
+        keep = arc.s_m <= arc.free_m + 1e-9
+        path = to_world(arc.poses[keep], pose)
+        self.follower.set_path(path, arc.curvature_per_m)
+        return Replan(t_s, tuple(pose), sel, path, f"arc c {arc.curvature_per_m:+.2f}/m, free {arc.free_m:.2f} m")
+
+    def command(self, t_s: float, pose=None) -> Command:
+        return self.follower.update(t_s, pose)

@@ -1,0 +1,109 @@
+"""Trajectory sampling and selection (Chang et al. III): n unicycle arcs from the current pose
+(n odd: the straight one plus as many left as right, path curvatures evenly within +-c_max), each
+checked in perception space; the longest collision-free prefix wins, then the least curvature.
+
+An arc's free length is its collision-free prefix less margin_m (the head's front beyond base_link
+plus a safety distance: the follower runs on past a path's end until the next replan). An arc whose
+free length is shorter than min_free_m is not a candidate; when none is, the result
+says so (no_free_arc) and the caller stops and turns in place.
+
+Optional goal bias (not in the paper, off by default): arcs whose free length is within
+goal_tie_m of the longest count as equally long, and among them the one ending closest in heading
+to the goal is taken before curvature decides.
+"""
+import math
+from dataclasses import dataclass, field
+from typing import List, Optional, Tuple
+
+import numpy as np
+
+from .collision_check import PerceptionCollisionChecker, prefix_length
+from .unicycle import arc_poses, wrap
+
+
+@dataclass
+class SamplerParams:
+    num_arcs: int = 5
+    max_curvature_per_m: float = 2.0      # path curvature c = omega / v (from the gait map's range)
+    horizon_m: float = 1.2                # length of each candidate arc
+    spacing_m: float = 0.02               # poses along an arc
+    min_free_m: float = 0.15              # shorter free prefixes: no candidate
+    margin_m: float = 0.0                 # taken off every free prefix
+    goal_tie_m: float = 0.0               # > 0: the goal bias above
+
+    def validate(self) -> List[str]:
+        p = []
+        if self.num_arcs < 1 or self.num_arcs % 2 == 0:
+            p.append(f"num_arcs: must be odd and >= 1, got {self.num_arcs}")
+        for key in ("max_curvature_per_m", "horizon_m", "spacing_m"):
+            if not getattr(self, key) > 0:
+                p.append(f"{key}: must be > 0, got {getattr(self, key)}")
+        if self.min_free_m < 0 or self.goal_tie_m < 0 or self.margin_m < 0:
+            p.append(f"min_free_m, goal_tie_m, margin_m: must be >= 0, got {self.min_free_m}, "
+                     f"{self.goal_tie_m}, {self.margin_m}")
+        return p
+
+
+@dataclass
+class Arc:
+    curvature_per_m: float
+    poses: np.ndarray          # (N, 3) in the ground frame of the planning pose
+    s_m: np.ndarray            # (N,) arc length of each pose
+    free_m: float = 0.0        # collision-free prefix
+
+
+@dataclass
+class Selection:
+    arcs: List[Arc] = field(default_factory=list)
+    chosen: Optional[int] = None          # index into arcs; None: no free arc
+
+    @property
+    def no_free_arc(self) -> bool:
+        return self.chosen is None
+
+    @property
+    def arc(self) -> Optional[Arc]:
+        return None if self.chosen is None else self.arcs[self.chosen]
+
+
+class TrajectorySampler:
+    def __init__(self, checker: PerceptionCollisionChecker, params: Optional[SamplerParams] = None):
+        self.checker = checker
+        self.params = params or SamplerParams()
+        problems = self.params.validate()
+        if problems:
+            raise ValueError("sampler: " + "; ".join(problems))
+        p = self.params
+        half = p.num_arcs // 2
+        self.curvatures = (np.linspace(-p.max_curvature_per_m, p.max_curvature_per_m, p.num_arcs)
+                           if half else np.zeros(1))
+        self._arcs = []
+        for c in self.curvatures:
+            poses = arc_poses(float(c), p.horizon_m, p.spacing_m)
+            self._arcs.append((float(c), poses, np.linspace(0.0, p.horizon_m, len(poses))))
+        self._all = np.vstack([a[1] for a in self._arcs])
+        self._splits = np.cumsum([len(a[1]) for a in self._arcs])[:-1]
+
+    def select(self, ground: np.ndarray, goal_in_ground: Optional[Tuple[float, float]] = None) -> Selection:
+        """Check every arc against the traversability image `ground` (True = ground) and choose."""
+        p = self.params
+        free_all = self.checker.pose_free(self._all, ground)
+        arcs = []
+        for (c, poses, s), free in zip(self._arcs, np.split(free_all, self._splits)):
+            arcs.append(Arc(c, poses, s, max(0.0, prefix_length(free, s) - p.margin_m)))
+        cands = [i for i, a in enumerate(arcs) if a.free_m >= p.min_free_m and a.free_m > 0]
+        if not cands:
+            return Selection(arcs, None)
+        longest = max(arcs[i].free_m for i in cands)
+        tie = max(p.goal_tie_m, 0.5 * p.spacing_m)
+        best = [i for i in cands if arcs[i].free_m >= longest - tie]
+
+        def key(i):
+            a = arcs[i]
+            goal_err = 0.0
+            if goal_in_ground is not None and p.goal_tie_m > 0:
+                end = a.poses[np.searchsorted(a.s_m, a.free_m, side="right") - 1]
+                goal_err = abs(wrap(math.atan2(goal_in_ground[1] - end[1], goal_in_ground[0] - end[0])
+                                    - end[2]))
+            return (round(goal_err, 3), abs(a.curvature_per_m))
+        return Selection(arcs, min(best, key=key))

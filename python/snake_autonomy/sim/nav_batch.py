@@ -1,0 +1,235 @@
+"""The navigation experiment in batch (issue 13), ROS-free: a world file, the plant with its
+obstacles, the head camera, traversability (depth or the monocular classifier), the perception-space
+planner and the receding-horizon follower, closed through the rectilinear gait's Python reference.
+
+    run = NavRun(NavRunSpec(world=load_world(FILE), robot="cobra", perception="depth", seed=0))
+    result = run.run()
+    result.write(out_dir)      # metrics.json (the issue's contract), topview.png, frames/*.png
+
+Pose source: the plant's ground truth of base_link (the head's front, where the camera looks and
+the arcs start; the simulated VIO's place, not wired here yet). The head's yaw answers a change of
+kappa at once (the lateral joints bend the body behind it: about L/2 = 0.75 rad per 1/m on COBRA),
+so the heading feedback gain must stay well below 1 / (L/2) in kappa per rad: with the paper-like
+0.5 1/s (38 /m per rad) the follower oscillated bang-bang and rolled COBRA over within 3 s
+(config/nav.yaml k_heading). The body's average axis (chord) is no better a heading for planning:
+at kappa 1/m it points up to 43 deg away from the camera's 27.5 deg half field of view.
+The camera's pose in the planning frame is the true one at the frame (the head bobs with the gait).
+kappa is updated every command_period_s and slewed at kappa_slew_per_m_s (the body reshapes over a
+gait cycle; an instant 0.5 rad jump of every lateral joint whips the body).
+Joint targets: gait.joint_angles(t, kappa) every control period (100 Hz) straight to the plant: the
+driver's path (C++ gait library, `curvature` steering law, issue 11) replaces this when it lands.
+"""
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import List, Optional
+
+import numpy as np
+
+from .camera import HeadCamera
+from .collisions import CollisionMonitor
+from .config import SimConfig
+from .scales import ScaledPlant
+from .scene import build_scene
+from .world_file import World
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+@dataclass
+class NavRunSpec:
+    world: World
+    robot: str = "cobra"                  # config/robots/NAME.yaml or a YAML path
+    perception: str = "depth"             # depth | mono
+    seed: int = 0
+    time_limit_s: float = 1200.0
+    classifier: Optional[str] = None      # model file (mono)
+    nav_config: Optional[str] = None      # default config/nav.yaml
+    sim_config: Optional[str] = None      # default config/sim.yaml
+    control_period_s: float = 0.01
+    ramp_s: float = 2.0
+    command_period_s: float = 0.5
+    kappa_slew_per_m_s: float = 1.0
+    keep_frames: bool = True
+
+
+@dataclass
+class NavResult:
+    metrics: dict
+    trajectory: np.ndarray                            # (N, 3) t, x, y of base_link
+    replans: list = field(default_factory=list)       # planner.Replan
+    frames: List[np.ndarray] = field(default_factory=list)   # overlays at each replan
+    world: Optional[World] = None
+
+    def write(self, out_dir) -> None:
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "metrics.json").write_text(json.dumps(self.metrics, indent=2) + "\n")
+        np.savetxt(out / "trajectory.csv", self.trajectory, delimiter=",", header="t_s,x_m,y_m", comments="")
+        if self.frames:
+            import cv2
+            (out / "frames").mkdir(exist_ok=True)
+            for i, img in enumerate(self.frames):
+                cv2.imwrite(str(out / "frames" / f"replan_{i:03d}.png"), cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
+        self._topview(out / "topview.png")
+
+    def _topview(self, path) -> None:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from matplotlib.patches import Circle, Polygon
+        fig, ax = plt.subplots(figsize=(8, 6))
+        w = self.world
+        for ob in w.obstacles:
+            if ob.kind == "cylinder":
+                ax.add_patch(Circle((ob.x_m, ob.y_m), ob.radius_m, color="0.4"))
+            else:
+                c, s = math.cos(math.radians(ob.yaw_deg)), math.sin(math.radians(ob.yaw_deg))
+                hx, hy = 0.5 * ob.size_m[0], 0.5 * ob.size_m[1]
+                corners = [(ob.x_m + c * x - s * y, ob.y_m + s * x + c * y)
+                           for x, y in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]
+                ax.add_patch(Polygon(corners, color="0.4"))
+        ax.add_patch(Circle(w.goal, w.goal_radius_m, fill=False, color="g", lw=2))
+        ax.plot(self.trajectory[:, 1], self.trajectory[:, 2], "b-", lw=1.5, label="base_link")
+        for r in self.replans:
+            ax.plot(r.pose[0], r.pose[1], "k.", ms=4)
+            if r.path_world is not None:
+                ax.plot(r.path_world[:, 0], r.path_world[:, 1], "-", color="orange", lw=0.8)
+            else:
+                ax.plot(r.pose[0], r.pose[1], "rx", ms=8)
+        m = self.metrics
+        ax.set_title(f"goal {'reached' if m['goal_reached'] else 'NOT reached'} in {m['time_s']:.0f} s, "
+                     f"{m['collisions']} collision(s), {m['replans']} replans, {m['stops_no_free_arc']} stops")
+        ax.set_aspect("equal")
+        ax.autoscale_view()
+        ax.legend(loc="best")
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+
+
+def overlay(rgb: np.ndarray, ground: np.ndarray, selection, checker) -> np.ndarray:
+    """The camera image with the non-traversable part tinted red and the arcs drawn (chosen: green,
+    free parts of the others: yellow, blocked parts: red)."""
+    import cv2
+    img = rgb.copy()
+    img[~ground] = (0.5 * img[~ground] + [127, 0, 0]).astype(np.uint8)
+    for i, a in enumerate(selection.arcs):
+        pts = a.poses[:, :2]
+        flat = np.column_stack([pts, np.zeros(len(pts))])
+        z = flat @ checker._R[2] + checker._t[2]
+        uv, _ = cv2.projectPoints(flat, checker.rvec, checker.tvec, checker.K, checker.dist)
+        uv = uv.reshape(-1, 2)
+        for j in range(len(uv) - 1):
+            if z[j] <= 0.01 or z[j + 1] <= 0.01:
+                continue
+            free = a.s_m[j + 1] <= a.free_m + 1e-9
+            colour = (0, 255, 0) if i == selection.chosen and free else ((255, 255, 0) if free else (255, 0, 0))
+            p0 = tuple(int(v) for v in np.clip(uv[j], -1e4, 1e4))
+            p1 = tuple(int(v) for v in np.clip(uv[j + 1], -1e4, 1e4))
+            cv2.line(img, p0, p1, colour, 2)
+    return img
+
+
+class NavRun:
+    def __init__(self, spec: NavRunSpec):
+        from .. import _core
+        from ..planning.rectilinear.cli import robot_yaml
+        from ..planning.rectilinear.config import NavConfig, head_width_m
+        from ..planning.rectilinear.follower import RecedingHorizonFollower
+        from ..planning.rectilinear.planner import NavPlanner
+        self.spec = spec
+        self.cfg = NavConfig.from_yaml(spec.nav_config)
+        ry = robot_yaml(spec.robot)
+        self.robot = _core.RobotModel.from_yaml(str(ry))
+        sim_cfg = SimConfig.from_yaml(spec.sim_config or str(ROOT / "config" / "sim.yaml"))
+        self.params = sim_cfg.draw(seed=spec.seed, num_joints=self.robot.num_joints)
+        scene = build_scene(spec.world)
+        self.plant = ScaledPlant(self.robot, self.params, spec.world.start_rad,
+                                 scene_xml=scene.scene_xml, assets_xml=scene.assets_xml)
+        self.camera = HeadCamera(self.plant.model, self.cfg.intrinsics, self.cfg.mount)
+        self.collisions = CollisionMonitor(self.plant.model)
+        self.planner = NavPlanner(self.cfg.intrinsics, head_width_m(ry), self.cfg.sampler,
+                                  RecedingHorizonFollower(self.cfg.follower))
+        self.rollover_deg = sim_cfg.monitor.rollover_tilt_deg
+        if spec.perception == "depth":
+            from ..perception.depth_traversability import DepthTraversability
+            from ..planning.rectilinear.config import T_ground_camera
+            self._depth = DepthTraversability(self.cfg.intrinsics,
+                                              T_ground_camera(self.cfg.mount, self.robot.link_radius_m),
+                                              self.cfg.depth, seed=spec.seed)
+            self.perceive = lambda f: self._depth(f.depth_m)
+        elif spec.perception == "mono":
+            from ..perception.block_classifier import BlockClassifier
+            if not spec.classifier:
+                raise ValueError("perception mono needs a classifier model (snake_autonomy nav "
+                                 "train-classifier --out FILE; then --classifier FILE)")
+            clf = BlockClassifier.load(spec.classifier)
+            self.perceive = lambda f: clf.traversable(f.rgb)
+        else:
+            raise ValueError(f"perception: expected depth or mono, got {spec.perception!r}")
+
+    def run(self) -> NavResult:
+        from ..planning.rectilinear.collision_check import PerceptionCollisionChecker
+        from ..planning.rectilinear.planner import T_world_ground, ground_frame
+        spec, plant, gait, world = self.spec, self.plant, self.cfg.gait, self.spec.world
+        dt = spec.control_period_s
+        t, kappa = 0.0, 0.0
+        traj, replans, frames = [], [], []
+        next_replan, next_sample = spec.ramp_s, 0.0
+        path_len, last_xy, reached, rolled = 0.0, None, False, False
+        kappa_goal, next_command = 0.0, spec.ramp_s
+        while t < spec.time_limit_s:
+            T_wb = plant.frame_transform("base_link")
+            pose = ground_frame(T_wb)
+            if t >= next_sample:
+                next_sample += 0.1
+                traj.append((t, pose[0], pose[1]))
+                if last_xy is not None:
+                    path_len += math.hypot(pose[0] - last_xy[0], pose[1] - last_xy[1])
+                last_xy = pose[:2]
+                self.collisions.update(plant.data, clearance=True)
+                if world.goal_reached(pose[0], pose[1]):
+                    reached = True
+                    break
+                if plant.base_tilt_deg() > self.rollover_deg:
+                    rolled = True
+                    break
+            else:
+                self.collisions.update(plant.data, clearance=False)
+            if t >= next_replan:
+                next_replan += self.cfg.replan_period_s
+                frame = self.camera.render(plant.data, T_wb, t, colour=spec.perception == "mono" or spec.keep_frames,
+                                           depth=spec.perception == "depth", labels=False)
+                ground = self.perceive(frame)
+                T_gc = np.linalg.inv(T_world_ground(pose)) @ frame.T_world_camera
+                r = self.planner.replan(t, ground, T_gc, pose, world.goal)
+                replans.append(r)
+                if spec.keep_frames:
+                    frames.append(overlay(frame.rgb, ground, r.selection,
+                                          PerceptionCollisionChecker(self.cfg.intrinsics, T_gc,
+                                                                     self.planner.head_width_m)))
+            if t >= spec.ramp_s:
+                if t >= next_command:
+                    next_command += spec.command_period_s
+                    kappa_goal = self.planner.command(t, pose).kappa_per_m
+                step = spec.kappa_slew_per_m_s * dt
+                kappa += max(-step, min(step, kappa_goal - kappa))
+                q = gait.joint_angles(self.robot, t - spec.ramp_s, kappa)
+            else:
+                q = gait.joint_angles(self.robot, 0.0, 0.0) * (t / spec.ramp_s)
+            plant.set_joint_targets(q)
+            t += dt
+            plant.step_to(t)
+        self.camera.close()
+        clearance = self.collisions.min_clearance_m
+        metrics = {"goal_reached": bool(reached), "time_s": round(float(t), 3),
+                   "collisions": int(self.collisions.collisions),
+                   "min_clearance_m": float(clearance) if math.isfinite(clearance) else None,
+                   "path_length_m": round(path_len, 4), "replans": len(replans),
+                   "stops_no_free_arc": sum(1 for r in replans if r.path_world is None),
+                   "rolled_over": rolled, "robot": self.robot.name, "perception": spec.perception,
+                   "seed": spec.seed, "world": world.source or world.name}
+        return NavResult(metrics, np.array(traj), replans, frames, world)

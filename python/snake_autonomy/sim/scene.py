@@ -1,0 +1,113 @@
+"""MJCF of a navigation world: obstacles, floor appearance and lights, for Plant(scene_xml=...).
+
+    scene = build_scene(world)                     # world: sim/world.py World
+    plant = Plant(robot, params, world.start_rad, scene_xml=scene.scene_xml,
+                  assets_xml=scene.assets_xml)
+
+Obstacles are static geoms named obstacle_<k> (k = index in the world file) with contype 2 and
+conaffinity 1: the links (contype 1) touch them, the floor (contype 2, conaffinity 1) does not.
+The floor texture is drawn on a visual-only plane `floor_visual` 0.2 mm above the physical floor
+(no contacts; the camera's segmentation counts both as ground).
+
+Appearance (textures, colours, light) is separate from the world so that the classifier's training
+renders can vary it (`random_appearance(rng)`) over the same geometry.
+"""
+import math
+from dataclasses import dataclass, field
+from typing import List, Optional, Tuple
+
+import numpy as np
+
+from .world_file import FLOOR_TEXTURES, World
+
+#: floor texture presets: (MuJoCo builtin, mark, rgb1, rgb2, random fraction, texrepeat per m)
+FLOOR_PRESETS = {
+    "plain": ("flat", "none", (0.55, 0.55, 0.52), (0.55, 0.55, 0.52), 0.0, 1.0),
+    "checker": ("checker", "none", (0.45, 0.45, 0.48), (0.62, 0.62, 0.60), 0.0, 2.0),
+    "carpet": ("flat", "random", (0.42, 0.30, 0.25), (0.60, 0.50, 0.40), 0.35, 4.0),
+    "tiles": ("checker", "edge", (0.70, 0.68, 0.62), (0.66, 0.64, 0.58), 0.0, 3.0),
+    "concrete": ("flat", "random", (0.50, 0.50, 0.50), (0.70, 0.70, 0.68), 0.25, 6.0),
+}
+assert set(FLOOR_PRESETS) == set(FLOOR_TEXTURES)
+OBSTACLE_MARKS = ("none", "random", "edge", "cross")
+
+
+@dataclass
+class Appearance:
+    """How a world looks: floor texture, obstacle colours/textures, light."""
+    floor: str = "plain"
+    floor_rgb: Optional[Tuple[Tuple[float, float, float], Tuple[float, float, float]]] = None
+    obstacle_rgb: List[Tuple[float, float, float]] = field(default_factory=list)
+    obstacle_mark: str = "none"
+    light_diffuse: float = 0.7
+    light_dir: Tuple[float, float, float] = (0.3, 0.2, -1.0)
+
+    def obstacle_colour(self, k: int) -> Tuple[float, float, float]:
+        if self.obstacle_rgb:
+            return self.obstacle_rgb[k % len(self.obstacle_rgb)]
+        return (0.75, 0.35, 0.15)
+
+
+def random_appearance(rng: np.random.Generator) -> Appearance:
+    """A random floor texture, obstacle colours and marks, and light (for classifier training)."""
+    floor = str(rng.choice(FLOOR_TEXTURES))
+    base = rng.uniform(0.25, 0.75, 3)
+    floor_rgb = (tuple(base), tuple(np.clip(base + rng.uniform(-0.15, 0.15, 3), 0, 1)))
+    colours = [tuple(rng.uniform(0.05, 0.95, 3)) for _ in range(4)]
+    d = (rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), -1.0)
+    return Appearance(floor=floor, floor_rgb=floor_rgb, obstacle_rgb=colours,
+                      obstacle_mark=str(rng.choice(OBSTACLE_MARKS)),
+                      light_diffuse=float(rng.uniform(0.35, 0.9)), light_dir=d)
+
+
+@dataclass
+class Scene:
+    scene_xml: str
+    assets_xml: str
+
+
+def _v(values) -> str:
+    return " ".join(f"{float(x):.6g}" for x in values)
+
+
+def build_scene(world: World, appearance: Optional[Appearance] = None,
+                floor_size_m: float = 30.0) -> Scene:
+    app = appearance or Appearance(floor=world.floor_texture)
+    builtin, mark, rgb1, rgb2, rnd, repeat = FLOOR_PRESETS[app.floor]
+    if app.floor_rgb is not None:
+        rgb1, rgb2 = app.floor_rgb
+    assets = [
+        f'    <texture name="floor_tex" type="2d" builtin="{builtin}" mark="{mark}" '
+        f'rgb1="{_v(rgb1)}" rgb2="{_v(rgb2)}" markrgb="{_v(np.clip(np.asarray(rgb2) * 0.6, 0, 1))}" '
+        f'random="{rnd:.3g}" width="512" height="512"/>',
+        f'    <material name="floor_mat" texture="floor_tex" texrepeat="{repeat:.6g} {repeat:.6g}" '
+        f'texuniform="true" reflectance="0"/>',
+    ]
+    half = 0.5 * floor_size_m
+    scene = [
+        f'    <light name="scene_light" dir="{_v(app.light_dir)}" directional="true" '
+        f'diffuse="{_v([app.light_diffuse] * 3)}" castshadow="false"/>',
+        f'    <geom name="floor_visual" type="plane" pos="{_v(world.start[:2])} 0.0002" '
+        f'size="{half:.6g} {half:.6g} 0.1" material="floor_mat" contype="0" conaffinity="0"/>',
+    ]
+    for k, ob in enumerate(world.obstacles):
+        colour = app.obstacle_colour(k)
+        mat = f"obstacle_mat_{k}"
+        assets += [
+            f'    <texture name="obstacle_tex_{k}" type="2d" builtin="flat" mark="{app.obstacle_mark}" '
+            f'rgb1="{_v(colour)}" rgb2="{_v(colour)}" '
+            f'markrgb="{_v(np.clip(np.asarray(colour) * 0.5 + 0.2, 0, 1))}" random="0.3" '
+            f'width="128" height="128"/>',
+            f'    <material name="{mat}" texture="obstacle_tex_{k}" texrepeat="4 4" texuniform="true"/>',
+        ]
+        common = f'name="obstacle_{k}" contype="2" conaffinity="1" condim="3" material="{mat}"'
+        if ob.kind == "cylinder":
+            scene.append(f'    <geom {common} type="cylinder" pos="{_v((ob.x_m, ob.y_m, ob.height_m / 2))}" '
+                         f'size="{ob.radius_m:.6g} {ob.height_m / 2:.6g}"/>')
+        else:
+            sx, sy, sz = ob.size_m
+            yaw = math.radians(ob.yaw_deg)
+            scene.append(f'    <geom {common} type="box" pos="{_v((ob.x_m, ob.y_m, sz / 2))}" '
+                         f'size="{_v((sx / 2, sy / 2, sz / 2))}" '
+                         f'quat="{_v((math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)))}"/>')
+    return Scene("\n".join(scene) + "\n", "\n".join(assets) + "\n")

@@ -1,0 +1,29 @@
+"""The closed loop in batch (sim/nav_batch.py) and `snake_autonomy nav run`: the metrics contract."""
+import json
+
+from snake_autonomy.cli import main as cli_main
+
+
+def test_nav_run_writes_the_metrics_contract(root, tmp_path):
+    out = tmp_path / "run"
+    # 14 s: the 2 s ramp, two replans (every 10 s), the first 12 s of the gait
+    assert cli_main(["nav", "run", "--world", str(root / "config" / "worlds" / "one_obstacle.yaml"),
+                     "--time-limit", "14", "--out", str(out)]) == 0
+    m = json.loads((out / "metrics.json").read_text())
+    for key, kind in (("goal_reached", bool), ("time_s", float), ("collisions", int),
+                      ("min_clearance_m", float), ("path_length_m", float), ("replans", int),
+                      ("stops_no_free_arc", int)):
+        assert isinstance(m[key], kind), (key, m[key])
+    assert m["replans"] == 2 and m["stops_no_free_arc"] == 0 and m["collisions"] == 0
+    assert not m["goal_reached"] and m["time_s"] >= 14.0
+    # the cylinder's face is 0.6 m ahead of the head at the start, less the robot's progress
+    assert 0.3 < m["min_clearance_m"] < 0.6
+    assert (out / "topview.png").stat().st_size > 0
+    assert len(list((out / "frames").glob("replan_*.png"))) == 2
+
+
+def test_nav_run_refuses_a_bad_world(tmp_path, capsys):
+    bad = tmp_path / "w.yaml"
+    bad.write_text("start: [0, 0, 0]\ngoal: [1, 1]\n")
+    assert cli_main(["nav", "run", "--world", str(bad), "--out", str(tmp_path / "o")]) == 1
+    assert "goal_radius_m: missing" in capsys.readouterr().err

@@ -1,0 +1,89 @@
+"""World files (sim/world.py) and their MuJoCo scene (sim/scene.py, sim/collisions.py)."""
+import math
+
+import pytest
+
+from snake_autonomy.sim.world_file import World, WorldError, load_world
+
+GOOD = {"start": [0.0, 0.0, 90.0], "goal": [3.0, 0.5], "goal_radius_m": 0.3,
+        "obstacles": [{"type": "cylinder", "x": 1.0, "y": 0.2, "radius_m": 0.1, "height_m": 0.3},
+                      {"type": "box", "x": 2.0, "y": -0.3, "size_m": [0.2, 0.4, 0.3], "yaw_deg": 30}],
+        "floor_texture": "checker"}
+
+
+def test_good_world_loads_with_the_contract_fields(root):
+    w = World.from_dict(GOOD)
+    assert w.start_rad == pytest.approx((0.0, 0.0, math.pi / 2))
+    assert w.goal == (3.0, 0.5) and w.goal_radius_m == 0.3
+    assert [o.kind for o in w.obstacles] == ["cylinder", "box"]
+    assert w.obstacles[1].size_m == (0.2, 0.4, 0.3) and w.obstacles[1].yaw_deg == 30
+    assert w.goal_reached(3.1, 0.6) and not w.goal_reached(2.5, 0.5)
+    assert World.from_dict(w.to_dict()).to_dict() == w.to_dict()
+    shipped = load_world(root / "config" / "worlds" / "corridor.yaml")
+    assert len(shipped.obstacles) == 5
+
+
+def test_bad_world_lists_every_problem():
+    bad = {"start": [0, 0], "goal": [1, "x"], "goal_radius_m": -1, "colour": "red",
+           "floor_texture": "lava",
+           "obstacles": [{"type": "cone", "x": 1, "y": 1},
+                         {"type": "cylinder", "x": 1, "radius_m": 0, "height_m": 0.3, "yaw_deg": 3},
+                         {"type": "box", "x": 1, "y": 2, "size_m": [1, 2]}]}
+    with pytest.raises(WorldError) as e:
+        World.from_dict(bad, "bad.yaml")
+    text = "\n".join(e.value.problems)
+    for needle in ("start:", "goal:", "goal_radius_m: must be a number > 0, got -1", "colour: unknown key",
+                   "floor_texture: unknown texture 'lava'", "obstacles[0].type: must be cylinder or box, got 'cone'",
+                   "obstacles[1].y:", "obstacles[1].radius_m: must be a number > 0, got 0",
+                   "obstacles[1].yaw_deg: unknown key", "obstacles[2].size_m:"):
+        assert needle in text, (needle, text)
+    assert len(e.value.problems) == 10
+
+
+def test_obstacle_on_start_or_goal_is_refused():
+    d = dict(GOOD, obstacles=[{"type": "cylinder", "x": 0.0, "y": 0.0, "radius_m": 0.2, "height_m": 0.3},
+                              {"type": "box", "x": 3.0, "y": 0.5, "size_m": [0.2, 0.2, 0.2]}])
+    with pytest.raises(WorldError) as e:
+        World.from_dict(d)
+    assert any("covers the start" in p for p in e.value.problems)
+    assert any("covers the goal" in p for p in e.value.problems)
+
+
+def test_scene_obstacles_are_named_and_collisions_counted_per_episode(cobra_yaml):
+    from snake_autonomy import _core
+    from snake_autonomy.sim.collisions import CollisionMonitor
+    from snake_autonomy.sim.config import SimConfig
+    from snake_autonomy.sim.plant import Plant
+    from snake_autonomy.sim.scene import build_scene
+    robot = _core.RobotModel.from_yaml(cobra_yaml)
+    params = SimConfig.from_yaml(str(_config("sim.yaml"))).draw(seed=0)
+    # an obstacle resting across link 4 (x about -0.5 m): in contact from the first step
+    w = World.from_dict({"start": [0, 0, 0], "goal": [3, 0], "goal_radius_m": 0.3,
+                         "obstacles": [{"type": "box", "x": -0.5, "y": 0.0, "size_m": [0.1, 0.4, 0.2]},
+                                       {"type": "cylinder", "x": 1.0, "y": 1.0, "radius_m": 0.1,
+                                        "height_m": 0.2}]})
+    scene = build_scene(w)
+    plant = Plant(robot, params, w.start_rad, scene_xml=scene.scene_xml, assets_xml=scene.assets_xml)
+    names = [plant.model.geom(g).name for g in range(plant.model.ngeom)]
+    assert "obstacle_0" in names and "obstacle_1" in names
+    mon = CollisionMonitor(plant.model)
+    plant.step(0.01)
+    assert mon.update(plant.data) >= 1
+    first = mon.collisions
+    plant.step(0.01)
+    assert mon.update(plant.data) == 0            # same episode: not counted again
+    assert mon.collisions == first
+    assert mon.min_clearance_m == 0.0
+    # a flicker (apart for less than gap_s) is the same episode; apart for longer, a new one
+    pairs = set(mon._touching)
+    mon._touching = set()
+    mon._last_seen = {p: plant.data.time - 0.1 for p in pairs}
+    assert mon.update(plant.data) == 0
+    mon._touching = set()
+    mon._last_seen = {p: plant.data.time - 0.5 for p in pairs}
+    assert mon.update(plant.data) == len(pairs)
+
+
+def _config(name):
+    from pathlib import Path
+    return Path(__file__).resolve().parents[2] / "config" / name
