@@ -1,0 +1,1 @@
+"""Motion planners (ROS-free): fbsr/ is the FBSR head-raising "scout" planner (Cappel & Choset)."""
