@@ -15,6 +15,7 @@ SUBCOMMANDS = {
     "evaluate": ("snake_autonomy.evaluation.cli", "evaluate a state estimate against ground truth"),
     "urdf": ("snake_autonomy.urdf_cli", "print the URDF generated from a robot description"),
     "report": ("snake_autonomy.experiments.cli", "rebuild a run's results folder from its bag"),
+    "scout": ("snake_autonomy.planning.fbsr.cli", "raise the head stably (FBSR planner): plan, run in physics"),
 }
 
 

@@ -100,6 +100,13 @@ class Chain:
         p_w = self._tail_world[:3, 3] - r_w @ p_t        # root position in the world
         return Pose(p @ r_w.T + p_w, np.einsum("ij,fjk->fik", r_w, rot), r_w @ com + p_w)
 
+    def positions_com(self, q):
+        """(frame positions (num_frames, 3), CoG (3,)) in the world: pose() without rotations."""
+        p, rot, com = self._relative(q)
+        r_w = self._tail_world[:3, :3] @ rot[-1].T
+        p_w = self._tail_world[:3, 3] - r_w @ p[-1]
+        return p @ r_w.T + p_w, r_w @ com + p_w
+
     def _level(self, q) -> np.ndarray:
         """World pose of the tail frame: the lying robot's lowest hull face on the floor, the
         capsules' axes one radius above it, the tail end at x = y = 0, the body along +x."""

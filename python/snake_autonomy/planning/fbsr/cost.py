@@ -86,6 +86,8 @@ class StageCost:
         self.directive = directive
         self.t_end_s = float(t_end_s)
         self.t_s = np.linspace(0.0, self.t_end_s, int(num_samples))
+        self._trapezoid = np.full(len(self.t_s), self.t_s[1] - self.t_s[0])
+        self._trapezoid[[0, -1]] *= 0.5
         self.pipe = pipe
         self.torque_limit_nm = float(torque_limit_nm)
         n_f = chain.num_frames
@@ -106,20 +108,24 @@ class StageCost:
 
     # ---- cost ----------------------------------------------------------------------------------
     def terms(self, delta) -> dict:
-        poses = self.poses(delta, self.t_s)
+        q = self.joints(delta, self.t_s)
         w, m, r = self.w, self.m, self.chain.radius_m
-        zmp = np.array([p.zmp for p in poses])
+        pc = [self.chain.positions_com(qq) for qq in q]
+        pos = np.array([p for p, _ in pc])                  # (samples, frames, 3)
+        zmp = np.array([c[:2] for _, c in pc])
         cs = stability_cost(self.support.signed_distance(zmp), w.ks_per_m2, w.k_out_per_m2)
-        out = {"Cd": self.directive.cost(poses[-1].head), "Cs": self._integrate(cs)}
+        out = {"Cd": self.directive.cost(pos[-1, 0]), "Cs": self._integrate(cs)}
         if self.pipe is not None and w.k3:
-            out["Cp"] = self._integrate([pipe_cost(p.positions[:m, :2], self.pipe) for p in poses])
+            d = pos[:, :m, :2] - (self.pipe.x_m, self.pipe.y_m)
+            out["Cp"] = self._integrate(np.sum(d ** 2, axis=(1, 2)))
         if w.k_torque:
-            ratios = [np.sum((self.chain.gravity_torques(p, m) / self.torque_limit_nm) ** 2)
-                      for p in poses]
+            ratios = [np.sum((self.chain.gravity_torques(self.chain.pose(qq), m)
+                              / self.torque_limit_nm) ** 2) for qq in q]
             out["Ct"] = self._integrate(ratios)
-        ground = [np.sum(np.clip(r - p.positions[:m, 2], 0.0, None) ** 2) for p in poses]
-        out["ground"] = self._integrate(ground)
-        out["clearance"] = self._integrate([self._overlap(p.positions) for p in poses])
+        out["ground"] = self._integrate(np.sum(np.clip(r - pos[:, :m, 2], 0.0, None) ** 2, axis=1))
+        a, b = pos[:, self._pairs[:, 0]], pos[:, self._pairs[:, 1]]
+        gap = np.clip(2.0 * r - np.linalg.norm(a - b, axis=2), 0.0, None)
+        out["clearance"] = self._integrate(np.sum(gap ** 2, axis=1))
         return out
 
     def __call__(self, delta) -> float:
@@ -129,10 +135,5 @@ class StageCost:
                 + w.k_torque * t.get("Ct", 0.0) + w.k_ground_per_m2 * t["ground"]
                 + w.k_clearance_per_m2 * t["clearance"])
 
-    def _overlap(self, positions) -> float:
-        a, b = positions[self._pairs[:, 0]], positions[self._pairs[:, 1]]
-        d = np.linalg.norm(a - b, axis=1)
-        return float(np.sum(np.clip(2.0 * self.chain.radius_m - d, 0.0, None) ** 2))
-
     def _integrate(self, values) -> float:
-        return float(np.trapz(np.asarray(values, float), self.t_s))
+        return float(self._trapezoid @ np.asarray(values, float))
