@@ -31,6 +31,7 @@ class PlannerConfig:
     joint_margin_deg: float = 3.0
     max_restarts: int = 8
     max_shift_replans: int = 4
+    shift_restarts: int = 2
     head_height_tol_m: float = 0.005
 
 
@@ -77,7 +78,7 @@ class ScoutConfig:
             if not getattr(p, key) > 0:
                 out.append(f"planner.{key}: must be > 0, got {getattr(p, key)}")
         for key in ("k1", "k3", "k_torque", "margin_m", "joint_margin_deg", "max_restarts",
-                    "max_shift_replans", "head_height_tol_m", "k1_step"):
+                    "max_shift_replans", "shift_restarts", "head_height_tol_m", "k1_step"):
             if getattr(p, key) < 0:
                 out.append(f"planner.{key}: must be >= 0, got {getattr(p, key)}")
         if p.sample_period_s > 0.05:

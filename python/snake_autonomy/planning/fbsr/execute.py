@@ -10,12 +10,14 @@
   trajectory execution (the TrajectorySource of issue 11) until that exists; replace this one
   function by the driver path then.
 - Every 10 ms step: the centre of pressure from the floor contacts' normal forces, inside the
-  support polygon of the actual contacts by at least COP_MARGIN_M; the lift of the base's frames
+  (closed) support polygon of the actual contacts, which must span an area; the lift of the base's frames
   above the floor; the servos' torques against their limit. The actual contacts are MuJoCo's floor
   contacts plus the frames whose capsule is within CONTACT_GAP_M of the floor: a body lying flat is
   statically indeterminate, and MuJoCo's solver may carry its weight on two capsules for a step
   while the others touch with no force (the polygon would collapse to a line though nothing
-  tips). Tipping lifts the frames beyond the edge by more than that within a degree.
+  tips) or on one capsule (the CoP then sits on a vertex of the polygon: on it, not outside).
+  Tipping about an edge lifts the frames beyond it by more than CONTACT_GAP_M within a degree,
+  leaving a polygon of no area: counted outside.
 - tipped: a frame of the planned base rose more than LIFT_TIPPED_M off the floor (a base module
   lifting off unplanned), or the CoP left the contacts' polygon for more than 0.1 s in a row.
 """
@@ -35,7 +37,7 @@ from .support import Support
 DRIVER_PERIOD_S = 0.01
 SETTLE_S = 1.0
 HOLD_S = 1.5
-COP_MARGIN_M = 0.001
+COP_TOLERANCE_M = 1e-6
 LIFT_TIPPED_M = 0.02
 MIN_NORMAL_FORCE_N = 0.05
 CONTACT_GAP_M = 0.001
@@ -89,7 +91,7 @@ class Monitor:
         frames = self.plant.frame_positions()
         touching = frames[frames[:, 2] - self.radius_m < CONTACT_GAP_M, :2]
         contacts = np.vstack([contacts, touching])
-        ok = cop is not None and Support.of(contacts).signed_distance([cop])[0] >= COP_MARGIN_M
+        ok = cop is not None and Support.of(contacts).signed_distance([cop])[0] >= -COP_TOLERANCE_M
         self.inside.append(bool(ok))
         ratio = np.abs(self.plant.actuator_torques_nm()).max() / self.torque_limit_nm
         self.max_torque_ratio = max(self.max_torque_ratio, float(ratio))

@@ -126,16 +126,22 @@ class FbsrPlanner:
         if target.empty:
             raise PlanningError(f"U ∩ U' is empty going from {m} to {m_next} active modules")
         k1 = cfg.k1
+        failed_s = 0.0        # time of the re-plans that failed, counted in the next stage's
         for _ in range(cfg.max_shift_replans):
             if target.contains_point(self.chain.pose(q).zmp):
                 return q
             k1 = max(0.0, k1 - cfg.k1_step)
             checks = Checks(u, end_within=target, period_s=cfg.sample_period_s)
+            started = time.perf_counter()
             try:
                 stage = self._stage("shift", m, q, target, checks, directive, pipe, rng, k1,
-                                    restarts, next_contacts=self.chain.base_contacts(m_next))
+                                    restarts, next_contacts=self.chain.base_contacts(m_next),
+                                    max_restarts=cfg.shift_restarts)
             except PlanningError:
+                failed_s += time.perf_counter() - started
                 continue          # lower K1 further
+            stage.planning_time_s += failed_s
+            failed_s = 0.0
             self._add(plan, stage)
             q = stage.q_end
         if target.contains_point(self.chain.pose(q).zmp):
@@ -144,14 +150,15 @@ class FbsrPlanner:
                             f"{m_next} active modules (K1 lowered to {k1:.2f})")
 
     def _stage(self, kind, m, q, support, checks, directive, pipe, rng, k1, restarts,
-               next_contacts=None) -> Stage:
+               next_contacts=None, max_restarts=None) -> Stage:
         cfg = self.cfg
         weights = Weights(k1=k1, k2=cfg.k2, k3=cfg.k3 if pipe is not None else 0.0,
                           k_torque=cfg.k_torque, ks_per_m2=cfg.ks_per_m2,
                           k_out_per_m2=cfg.k_out_per_m2)
         cost = StageCost(self.chain, q, m, support, weights, directive, cfg.stage_duration_s,
                          cfg.cost_samples, pipe, self.torque_limit_nm)
-        return optimise(cost, checks, rng, cfg.max_restarts, np.radians(cfg.joint_margin_deg),
+        max_restarts = cfg.max_restarts if max_restarts is None else max_restarts
+        return optimise(cost, checks, rng, max_restarts, np.radians(cfg.joint_margin_deg),
                         kind, self.chain.base_contacts(m), next_contacts, k1, restarts)
 
     @staticmethod
