@@ -22,7 +22,7 @@ class PlannerConfig:
     cost_samples: int = 9
     k1: float = 1.0
     k2: float = 1.0
-    k3: float = 2.0
+    k3: float = 0.5
     k_torque: float = 0.0
     k1_step: float = 0.25
     ks_per_m2: float = 4.0e3
@@ -32,7 +32,9 @@ class PlannerConfig:
     max_restarts: int = 8
     max_shift_replans: int = 4
     shift_restarts: int = 2
+    max_backtracks: int = 4
     head_height_tol_m: float = 0.005
+    target_tol_m: float = 0.02
 
 
 @dataclass
@@ -78,7 +80,7 @@ class ScoutConfig:
             if not getattr(p, key) > 0:
                 out.append(f"planner.{key}: must be > 0, got {getattr(p, key)}")
         for key in ("k1", "k3", "k_torque", "margin_m", "joint_margin_deg", "max_restarts",
-                    "max_shift_replans", "shift_restarts", "head_height_tol_m", "k1_step"):
+                    "max_shift_replans", "shift_restarts", "max_backtracks", "head_height_tol_m", "target_tol_m", "k1_step"):
             if getattr(p, key) < 0:
                 out.append(f"planner.{key}: must be >= 0, got {getattr(p, key)}")
         if p.sample_period_s > 0.05:

@@ -12,6 +12,7 @@ no module below the floor, no module through another.
 - Cp, the pipe potential (eq. 15 with ERRATA #9): the integral of the squared horizontal distance
   of every active module to the pipe axis, sum_i (x_i - qx)^2 + (y_i - qy)^2.
 - Ct: the integral of sum_j (tau_j / tau_limit)^2 over the active joints (quasi-static gravity).
+- With a pipe, its wall: frames at the mouth's height or above stay within the bore.
 The integrals use the trapezoidal rule on the stage's cost samples.
 """
 from dataclasses import dataclass
@@ -52,10 +53,16 @@ class Directive:
 
 @dataclass
 class Pipe:
-    """A vertical pipe: axis through (x_m, y_m), inner radius radius_m."""
+    """A vertical pipe hanging over the floor (paper fig. 6): axis through (x_m, y_m), inner
+    radius radius_m, open mouth mouth_m above the floor."""
     x_m: float
     y_m: float
     radius_m: float
+    mouth_m: float = 0.30
+
+    def entry_point(self, depth_m: float = 0.05):
+        """A head target on the axis, depth_m inside the mouth."""
+        return (self.x_m, self.y_m, self.mouth_m + depth_m)
 
 
 def stability_cost(l, ks_per_m2: float, k_out_per_m2: float) -> np.ndarray:
@@ -70,6 +77,15 @@ def pipe_cost(positions_xy, pipe: Pipe) -> float:
     """The integrand of eq. 15 (ERRATA #9: a sum of squares) for the given active modules."""
     d = np.asarray(positions_xy, float) - (pipe.x_m, pipe.y_m)
     return float(np.sum(d[:, 0] ** 2 + d[:, 1] ** 2))
+
+
+def pipe_wall_overlap(positions, pipe: Pipe, module_radius_m: float) -> np.ndarray:
+    """How far (m) each frame's capsule reaches into the pipe's wall: frames at or above the mouth
+    (less a module radius) must stay within the bore, radius - module radius off the axis."""
+    p = np.asarray(positions, float)
+    off_axis = np.hypot(p[..., 0] - pipe.x_m, p[..., 1] - pipe.y_m)
+    high = p[..., 2] > pipe.mouth_m - module_radius_m
+    return np.where(high, np.clip(off_axis - (pipe.radius_m - module_radius_m), 0.0, None), 0.0)
 
 
 class StageCost:
@@ -115,9 +131,10 @@ class StageCost:
         zmp = np.array([c[:2] for _, c in pc])
         cs = stability_cost(self.support.signed_distance(zmp), w.ks_per_m2, w.k_out_per_m2)
         out = {"Cd": self.directive.cost(pos[-1, 0]), "Cs": self._integrate(cs)}
-        if self.pipe is not None and w.k3:
+        if self.pipe is not None:
             d = pos[:, :m, :2] - (self.pipe.x_m, self.pipe.y_m)
             out["Cp"] = self._integrate(np.sum(d ** 2, axis=(1, 2)))
+            out["pipe_wall"] = self._integrate(np.sum(pipe_wall_overlap(pos[:, :m], self.pipe, r) ** 2, axis=1))
         if w.k_torque:
             ratios = [np.sum((self.chain.gravity_torques(self.chain.pose(qq), m)
                               / self.torque_limit_nm) ** 2) for qq in q]
@@ -132,6 +149,7 @@ class StageCost:
         t = self.terms(delta)
         w = self.w
         return (w.k1 * t["Cd"] + w.k2 * t["Cs"] + w.k3 * t.get("Cp", 0.0)
+                + w.k_ground_per_m2 * t.get("pipe_wall", 0.0)
                 + w.k_torque * t.get("Ct", 0.0) + w.k_ground_per_m2 * t["ground"]
                 + w.k_clearance_per_m2 * t["clearance"])
 

@@ -1,12 +1,11 @@
 """The pipe of the paper's fig. 6 in the MuJoCo world: a vertical pipe hanging with its open mouth
-PIPE_MOUTH_M above the floor, up to PIPE_TOP_M; the head raised under it enters the mouth.
+pipe.mouth_m above the floor, up to PIPE_TOP_M; the head raised under it enters the mouth.
 Its wall is a ring of vertical capsules (contype 2 / conaffinity 1, like the floor: the links touch
 it). The planner knows only the axis and the inner radius (eq. 15)."""
 import numpy as np
 
 from .cost import Pipe
 
-PIPE_MOUTH_M = 0.30
 PIPE_TOP_M = 0.90
 WALL_RADIUS_M = 0.006
 WALL_SEGMENTS = 24
@@ -19,7 +18,7 @@ def pipe_mjcf(pipe: Pipe) -> str:
         a = 2 * np.pi * k / WALL_SEGMENTS
         x, y = ring * np.cos(a), ring * np.sin(a)
         lines.append(f'      <geom name="pipe_{k}" type="capsule" size="{WALL_RADIUS_M}" '
-                     f'fromto="{x:.6g} {y:.6g} {PIPE_MOUTH_M} {x:.6g} {y:.6g} {PIPE_TOP_M}" '
+                     f'fromto="{x:.6g} {y:.6g} {pipe.mouth_m} {x:.6g} {y:.6g} {PIPE_TOP_M}" '
                      f'contype="2" conaffinity="1" rgba="0.3 0.4 0.8 0.5"/>')
     lines.append("    </body>")
     return "\n".join(lines) + "\n"
@@ -28,4 +27,4 @@ def pipe_mjcf(pipe: Pipe) -> str:
 def head_in_mouth(head_xyz, pipe: Pipe, module_radius_m: float) -> bool:
     """The head is past the mouth and within the pipe's bore."""
     d = float(np.hypot(head_xyz[0] - pipe.x_m, head_xyz[1] - pipe.y_m))
-    return head_xyz[2] > PIPE_MOUTH_M and d < pipe.radius_m - module_radius_m
+    return head_xyz[2] > pipe.mouth_m and d < pipe.radius_m - module_radius_m

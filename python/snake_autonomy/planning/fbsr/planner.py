@@ -84,6 +84,8 @@ class FbsrPlanner:
                                 f"{limit} active modules (its base needs contacts spanning an area)")
         if pipe is not None:
             self._check_pipe(pipe)
+        if pipe is not None and target_m is None and height_m is None:
+            target_m = pipe.entry_point()       # the head goes into the pipe's mouth
         directive = Directive(height_m=height_m, target_m=target_m)
         m = min(self.posture.initial_active, max_active)
         q = self.chain.q_lying.copy()
@@ -94,15 +96,24 @@ class FbsrPlanner:
         started = time.perf_counter()
         head_before = self.chain.pose(q).head[2]
         transferred = False
+        backtracks = 0
+        reseed = False
         while True:
             u = self.support(m)
+            first = len(plan.stages)
+            q_before = q
             stage = self._stage("raise", m, q, u, Checks(
                 u, head_above_m=head_before if transferred else None,
-                period_s=cfg.sample_period_s), directive, pipe, rng, cfg.k1, restarts)
+                period_s=cfg.sample_period_s), directive, pipe, rng, cfg.k1, restarts,
+                random_first=reseed)
+            reseed = False
             self._add(plan, stage)
             q = stage.q_end
-            head = self.chain.pose(q).head[2]
+            head_xyz = self.chain.pose(q).head
+            head = head_xyz[2]
             if height_m is not None and head >= height_m - cfg.head_height_tol_m:
+                break
+            if target_m is not None and np.linalg.norm(head_xyz - target_m) < cfg.target_tol_m:
                 break
             if m >= max_active:
                 if height_m is not None:
@@ -111,11 +122,23 @@ class FbsrPlanner:
                         f"active modules of {self.robot.name} (highest found: {head:.3f} m)")
                 break
             m_next = min(m + 2, max_active)
-            q = self._prepare_transfer(plan, m, m_next, q, directive, pipe, rng, restarts)
+            try:
+                q = self._prepare_transfer(plan, m, m_next, q, directive, pipe, rng, restarts)
+            except PlanningError:
+                # No shift into U ∩ U' from where this raise ended: re-plan the raise from a
+                # random start (a restart across stages), at most max_backtracks times.
+                if not restarts or backtracks >= cfg.max_backtracks:
+                    raise
+                backtracks += 1
+                del plan.stages[first:]
+                q, reseed = q_before, True
+                continue
             head_before = self.chain.pose(q).head[2]
             transferred = True
             m = m_next
         plan.planning_time_s = time.perf_counter() - started
+        plan.stage_times_s = [st.planning_time_s for st in plan.stages]
+        plan.restarts = sum(st.restarts for st in plan.stages) + backtracks
         return plan
 
     def _prepare_transfer(self, plan, m, m_next, q, directive, pipe, rng, restarts):
@@ -150,16 +173,19 @@ class FbsrPlanner:
                             f"{m_next} active modules (K1 lowered to {k1:.2f})")
 
     def _stage(self, kind, m, q, support, checks, directive, pipe, rng, k1, restarts,
-               next_contacts=None, max_restarts=None) -> Stage:
+               next_contacts=None, max_restarts=None, random_first=False) -> Stage:
         cfg = self.cfg
-        weights = Weights(k1=k1, k2=cfg.k2, k3=cfg.k3 if pipe is not None else 0.0,
+        # The pipe's pull is a directive too: a shift lowers K3 in proportion with K1.
+        k3 = cfg.k3 * (k1 / cfg.k1 if cfg.k1 > 0 else 1.0) if pipe is not None else 0.0
+        weights = Weights(k1=k1, k2=cfg.k2, k3=k3,
                           k_torque=cfg.k_torque, ks_per_m2=cfg.ks_per_m2,
                           k_out_per_m2=cfg.k_out_per_m2)
         cost = StageCost(self.chain, q, m, support, weights, directive, cfg.stage_duration_s,
                          cfg.cost_samples, pipe, self.torque_limit_nm)
         max_restarts = cfg.max_restarts if max_restarts is None else max_restarts
         return optimise(cost, checks, rng, max_restarts, np.radians(cfg.joint_margin_deg),
-                        kind, self.chain.base_contacts(m), next_contacts, k1, restarts)
+                        kind, self.chain.base_contacts(m), next_contacts, k1, restarts,
+                        random_first)
 
     @staticmethod
     def _add(plan: Plan, stage: Stage) -> None:

@@ -10,7 +10,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from . import spline
-from .cost import StageCost
+from .cost import StageCost, pipe_wall_overlap
 from .support import Support
 
 
@@ -77,6 +77,11 @@ class Checks:
         low = min(float(p.positions[:cost.m, 2].min()) for p in poses)
         if low < r - self.ground_tol_m:
             out.append(f"a module goes {1e3 * (r - low):.1f} mm into the floor")
+        if cost.pipe is not None:
+            wall = max(float(pipe_wall_overlap(p.positions[:cost.m], cost.pipe, r).max())
+                       for p in poses)
+            if wall > self.ground_tol_m:
+                out.append(f"a module goes {1e3 * wall:.1f} mm into the pipe's wall")
         if self.head_above_m is not None and poses[-1].head[2] <= self.head_above_m:
             out.append(f"head ends at {poses[-1].head[2]:.3f} m, not above {self.head_above_m:.3f} m")
         return out
@@ -84,9 +89,9 @@ class Checks:
 
 def optimise(cost: StageCost, checks: Checks, rng: np.random.Generator, max_restarts: int,
              joint_margin_rad: float, kind: str, contacts_xy, next_contacts_xy=None,
-             k1: float = 1.0, restarts_enabled: bool = True) -> Stage:
+             k1: float = 1.0, restarts_enabled: bool = True, random_first: bool = False) -> Stage:
     """The best stage for `cost` that passes `checks`, with random restarts; PlanningError if
-    none does within max_restarts."""
+    none does within max_restarts. random_first: the first attempt starts at random too."""
     m = cost.m
     chain = cost.chain
     lo, hi = spline.delta_bounds(cost.q_start[:m], chain.lower[:m], chain.upper[:m],
@@ -96,7 +101,7 @@ def optimise(cost: StageCost, checks: Checks, rng: np.random.Generator, max_rest
     problems = []
     attempts = 1 + (max_restarts if restarts_enabled else 0)
     for attempt in range(attempts):
-        if attempt == 0:
+        if attempt == 0 and not random_first:
             x0 = np.clip(rng.normal(0.0, 0.02, m), lo, hi)
         else:
             x0 = rng.uniform(lo, hi) * 0.5
