@@ -33,7 +33,8 @@ def add_arguments(parser):
         p.add_argument("--height-m", type=float, metavar="H", help="end condition: head height (m)")
         p.add_argument("--max-active", type=int, metavar="N",
                        help="most active modules (default: the robot's in config/scout.yaml)")
-        p.add_argument("--pipe", metavar="X,Y,R", help="vertical pipe: axis x, y and inner radius (m); negative x: --pipe=-0.1,0.3,0.06")
+        p.add_argument("--pipe", metavar="X,Y,R",
+                       help="vertical pipe: axis x, y and inner radius (m); a negative x: --pipe=-0.1,0.3,0.06")
         p.add_argument("--seed", type=int, default=0, help="planner seed (default 0)")
         p.add_argument("--out", required=True, metavar="DIR", help="results folder")
         p.add_argument("--no-restarts", action="store_true", help="no random restarts (benchmarks)")
@@ -78,7 +79,7 @@ def main(args) -> int:
         if args.height_m is not None and not args.height_m > 0:
             raise ValueError(f"--height-m {args.height_m}: must be > 0")
         planner, cfg = build_planner(args.robot, args.config)
-        reach = planner.chain.num_modules * planner.robot.link_length_m
+        reach = planner.robot.head_length_m + planner.robot.num_joints * planner.robot.link_length_m
         if args.height_m is not None and args.height_m > reach:
             raise ValueError(f"--height-m {args.height_m}: no plan reaches it, {planner.robot.name} "
                              f"is {reach:.2f} m long")

@@ -80,7 +80,8 @@ class ScoutConfig:
             if not getattr(p, key) > 0:
                 out.append(f"planner.{key}: must be > 0, got {getattr(p, key)}")
         for key in ("k1", "k3", "k_torque", "margin_m", "joint_margin_deg", "max_restarts",
-                    "max_shift_replans", "shift_restarts", "max_backtracks", "head_height_tol_m", "target_tol_m", "k1_step"):
+                    "max_shift_replans", "shift_restarts", "max_backtracks", "head_height_tol_m",
+                    "target_tol_m", "k1_step"):
             if getattr(p, key) < 0:
                 out.append(f"planner.{key}: must be >= 0, got {getattr(p, key)}")
         if p.sample_period_s > 0.05:

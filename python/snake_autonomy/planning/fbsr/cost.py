@@ -58,7 +58,7 @@ class Pipe:
     x_m: float
     y_m: float
     radius_m: float
-    mouth_m: float = 0.30
+    mouth_m: float = 0.25
 
     def entry_point(self, depth_m: float = 0.05):
         """A head target on the axis, depth_m inside the mouth."""
@@ -134,7 +134,8 @@ class StageCost:
         if self.pipe is not None:
             d = pos[:, :m, :2] - (self.pipe.x_m, self.pipe.y_m)
             out["Cp"] = self._integrate(np.sum(d ** 2, axis=(1, 2)))
-            out["pipe_wall"] = self._integrate(np.sum(pipe_wall_overlap(pos[:, :m], self.pipe, r) ** 2, axis=1))
+            wall = pipe_wall_overlap(pos[:, :m], self.pipe, r)
+            out["pipe_wall"] = self._integrate(np.sum(wall ** 2, axis=1))
         if w.k_torque:
             ratios = [np.sum((self.chain.gravity_torques(self.chain.pose(qq), m)
                               / self.torque_limit_nm) ** 2) for qq in q]
