@@ -73,3 +73,17 @@ def test_gravity_torque_of_the_horizontal_head_is_its_weight_times_lever(chain):
     assert abs(tau[0]) == pytest.approx(chain.masses[0] * 9.81 * h, rel=1e-9)
     # joint 2 is a yaw joint (vertical axis when flat): gravity gives it no torque
     assert abs(tau[1]) < 1e-12
+
+
+def test_zigzag_offsets_rest_the_body_on_the_face_that_holds_its_centre_of_gravity(root):
+    robot = _core.RobotModel.from_yaml(str(root / "config/robots/unified_snake.yaml"))
+    q = lying_posture(robot, np.radians(2), np.radians(8), np.radians(75), 2)
+    pitch = list(robot.pitch_joints)
+    np.testing.assert_allclose(np.degrees(q[pitch[:4]]), [2, -4, 4, -4])   # +e, -2e, +2e, ...
+    chain = Chain(robot, q)
+    pose = chain.pose(q)
+    on_floor = np.isin(np.arange(chain.num_frames), chain.contact_frames)
+    assert 3 <= on_floor.sum() < chain.num_frames
+    np.testing.assert_allclose(pose.positions[on_floor, 2], chain.radius_m, atol=1e-3)
+    assert np.all(pose.positions[~on_floor, 2] > chain.radius_m)
+    assert Support.of(chain.contacts_xy).contains_point(pose.zmp)

@@ -9,15 +9,19 @@ do not move. The model's root is the head, so the paper's "base frame fixed to t
 tail end" is obtained by placing the root so that the tail frame keeps the pose it has in the lying
 posture: T_world_root = T_world_tail . inv(T_root_tail(q)).
 
-Ground contacts (paper III.B, fig. 2). The lying posture sets every pitch joint to a small offset of
-alternating sign (+e, -2e, +2e, ...): seen from the side the body is a shallow zigzag whose troughs
-are every other pitch joint, so the robot rests on those joints and not on uncertain points along
-its length; the yaw joints give the body a horizontal curl (more at the tail) so that the contacts
-span an area and not a line. The world is levelled on the lowest face of the convex hull of the
-frames in that posture (the face the capsule body rests on: capsules are frames swept by a ball,
-so the same face); the contacts are the frames lying in that face (within CONTACT_TOL_M), i.e. the
-zigzag's troughs plus the chain's ends when they reach down to it. Base joints never move, so the
-contacts of a base are the lying posture's contacts whose frame is in it (index >= m).
+Ground contacts (paper III.B, fig. 2). The paper offsets the base joints slightly so that the robot
+rests on every other module, at known points. `lying_posture` does this with pitch_offset_rad = e:
+the pitch joints bend +e, -2e, +2e, ..., so seen from the side the body is a zigzag of zero mean
+slope resting on its troughs. The world is levelled on the face of the convex hull of the frames
+that the body rests on (nearly downward, holding the CoG's projection; capsules are frames swept by
+a ball, so the capsule body rests on the same face), and the contacts are the frames in that face
+(within CONTACT_TOL_M). With pitch and yaw joints alternating, the slope changes only at pitch
+joints: the troughs come every 4 links and a 5-module base rests on 2 of them, on a line, which
+spans no polygon; the yaw curl also tilts the zigzag so that a rigid body of many frames rests on 3.
+So config/scout.yaml sets e = 0: the base lies flat, every frame of it is a contact (the capsules
+lie along the floor), and the yaw joints curl the body, more at the tail, so that the contacts of
+every base span an area. Base joints never move, so the contacts of a base are the lying posture's
+contacts whose frame is in it (index >= m).
 """
 from dataclasses import dataclass
 
