@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from snake_autonomy.planning.fbsr import spline
-from snake_autonomy.planning.fbsr.cost import Directive, Pipe, pipe_cost, stability_cost
+from snake_autonomy.planning.fbsr.cost import (Directive, Pipe, pipe_cost, pipe_wall_overlap,
+                                               stability_cost)
 
 
 def test_cubic_starts_at_theta0_ends_at_rest_and_a_is_minus_2b_over_3_tend():
@@ -56,3 +57,13 @@ def test_directive_is_lower_for_a_higher_head_and_for_a_closer_target():
     assert Directive(height_m=0.3).cost(np.array([0, 0, 0.29])) < Directive(height_m=0.3).cost(low)
     target = Directive(target_m=[0.1, 0.0, 0.3])
     assert target.cost(np.array([0.1, 0.0, 0.3])) == 0.0 < target.cost(high)
+
+
+def test_pipe_wall_only_stops_modules_at_the_wall_above_the_mouth():
+    pipe = Pipe(0.0, 0.0, radius_m=0.07, mouth_m=0.25, wall_m=0.01)
+    r = 0.025
+    frames = [[0.0, 0.0, 0.4],      # in the bore
+              [0.07, 0.0, 0.4],     # in the wall: out by 2.5 cm inward
+              [0.3, 0.0, 0.4],      # beside the pipe
+              [0.07, 0.0, 0.1]]     # under the mouth
+    np.testing.assert_allclose(pipe_wall_overlap(frames, pipe, r), [0.0, 0.025, 0.0, 0.0])

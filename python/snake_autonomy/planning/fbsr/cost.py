@@ -12,7 +12,8 @@ no module below the floor, no module through another.
 - Cp, the pipe potential (eq. 15 with ERRATA #9): the integral of the squared horizontal distance
   of every active module to the pipe axis, sum_i (x_i - qx)^2 + (y_i - qy)^2.
 - Ct: the integral of sum_j (tau_j / tau_limit)^2 over the active joints (quasi-static gravity).
-- With a pipe, its wall: frames at the mouth's height or above stay within the bore.
+- With a pipe, its wall: frames at the mouth's height or above stay out of it (in the bore or
+  outside the pipe).
 The integrals use the trapezoidal rule on the stage's cost samples.
 """
 from dataclasses import dataclass
@@ -59,6 +60,7 @@ class Pipe:
     y_m: float
     radius_m: float
     mouth_m: float = 0.25
+    wall_m: float = 0.012
 
     def entry_point(self, depth_m: float = 0.05):
         """A head target on the axis, depth_m inside the mouth."""
@@ -80,12 +82,15 @@ def pipe_cost(positions_xy, pipe: Pipe) -> float:
 
 
 def pipe_wall_overlap(positions, pipe: Pipe, module_radius_m: float) -> np.ndarray:
-    """How far (m) each frame's capsule reaches into the pipe's wall: frames at or above the mouth
-    (less a module radius) must stay within the bore, radius - module radius off the axis."""
+    """How far (m) each frame's capsule reaches into the pipe's wall, which spans radii
+    [radius, radius + wall] from the mouth up: frames at or above the mouth (less a module radius)
+    stay within the bore or outside the pipe; the overlap is the way out, inward or outward."""
     p = np.asarray(positions, float)
     off_axis = np.hypot(p[..., 0] - pipe.x_m, p[..., 1] - pipe.y_m)
     high = p[..., 2] > pipe.mouth_m - module_radius_m
-    return np.where(high, np.clip(off_axis - (pipe.radius_m - module_radius_m), 0.0, None), 0.0)
+    inward = off_axis - (pipe.radius_m - module_radius_m)
+    outward = pipe.radius_m + pipe.wall_m + module_radius_m - off_axis
+    return np.where(high, np.clip(np.minimum(inward, outward), 0.0, None), 0.0)
 
 
 class StageCost:

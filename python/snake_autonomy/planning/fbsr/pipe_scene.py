@@ -7,17 +7,17 @@ import numpy as np
 from .cost import Pipe
 
 PIPE_TOP_M = 0.90
-WALL_RADIUS_M = 0.006
 WALL_SEGMENTS = 24
 
 
 def pipe_mjcf(pipe: Pipe) -> str:
-    ring = pipe.radius_m + WALL_RADIUS_M
+    wall_r = pipe.wall_m / 2
+    ring = pipe.radius_m + wall_r
     lines = [f'    <body name="pipe" pos="{pipe.x_m:.6g} {pipe.y_m:.6g} 0">']
     for k in range(WALL_SEGMENTS):
         a = 2 * np.pi * k / WALL_SEGMENTS
         x, y = ring * np.cos(a), ring * np.sin(a)
-        lines.append(f'      <geom name="pipe_{k}" type="capsule" size="{WALL_RADIUS_M}" '
+        lines.append(f'      <geom name="pipe_{k}" type="capsule" size="{wall_r:.6g}" '
                      f'fromto="{x:.6g} {y:.6g} {pipe.mouth_m} {x:.6g} {y:.6g} {PIPE_TOP_M}" '
                      f'contype="2" conaffinity="1" rgba="0.3 0.4 0.8 0.5"/>')
     lines.append("    </body>")
