@@ -24,6 +24,7 @@ class PlannerConfig:
     k2: float = 1.0
     k3: float = 0.5
     k_torque: float = 0.0
+    k_wall_per_m2: float = 10000.0
     k1_step: float = 0.25
     ks_per_m2: float = 4.0e3
     k_out_per_m2: float = 1.0e3
@@ -79,7 +80,7 @@ class ScoutConfig:
         for key in ("stage_duration_s", "sample_period_s", "k2", "ks_per_m2", "k_out_per_m2"):
             if not getattr(p, key) > 0:
                 out.append(f"planner.{key}: must be > 0, got {getattr(p, key)}")
-        for key in ("k1", "k3", "k_torque", "margin_m", "joint_margin_deg", "max_restarts",
+        for key in ("k1", "k3", "k_torque", "k_wall_per_m2", "margin_m", "joint_margin_deg", "max_restarts",
                     "max_shift_replans", "shift_restarts", "max_backtracks", "head_height_tol_m",
                     "target_tol_m", "k1_step"):
             if getattr(p, key) < 0:

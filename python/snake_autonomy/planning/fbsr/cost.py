@@ -36,6 +36,7 @@ class Weights:
     k_out_per_m2: float = 1.0e3   # the rise outside the polygon
     k_ground_per_m2: float = 1.0e4
     k_clearance_per_m2: float = 1.0e3
+    k_wall_per_m2: float = 1.0e4     # the pipe's wall (0: ignored, the pipe only attracts)
 
 
 @dataclass
@@ -155,7 +156,7 @@ class StageCost:
         t = self.terms(delta)
         w = self.w
         return (w.k1 * t["Cd"] + w.k2 * t["Cs"] + w.k3 * t.get("Cp", 0.0)
-                + w.k_ground_per_m2 * t.get("pipe_wall", 0.0)
+                + w.k_wall_per_m2 * t.get("pipe_wall", 0.0)
                 + w.k_torque * t.get("Ct", 0.0) + w.k_ground_per_m2 * t["ground"]
                 + w.k_clearance_per_m2 * t["clearance"])
 

@@ -179,7 +179,7 @@ class FbsrPlanner:
         k3 = cfg.k3 * (k1 / cfg.k1 if cfg.k1 > 0 else 1.0) if pipe is not None else 0.0
         weights = Weights(k1=k1, k2=cfg.k2, k3=k3,
                           k_torque=cfg.k_torque, ks_per_m2=cfg.ks_per_m2,
-                          k_out_per_m2=cfg.k_out_per_m2)
+                          k_out_per_m2=cfg.k_out_per_m2, k_wall_per_m2=cfg.k_wall_per_m2)
         cost = StageCost(self.chain, q, m, support, weights, directive, cfg.stage_duration_s,
                          cfg.cost_samples, pipe, self.torque_limit_nm)
         max_restarts = cfg.max_restarts if max_restarts is None else max_restarts

@@ -77,7 +77,7 @@ class Checks:
         low = min(float(p.positions[:cost.m, 2].min()) for p in poses)
         if low < r - self.ground_tol_m:
             out.append(f"a module goes {1e3 * (r - low):.1f} mm into the floor")
-        if cost.pipe is not None:
+        if cost.pipe is not None and cost.w.k_wall_per_m2 > 0:
             wall = max(float(pipe_wall_overlap(p.positions[:cost.m], cost.pipe, r).max())
                        for p in poses)
             if wall > self.ground_tol_m:
