@@ -34,6 +34,7 @@ class PlannerConfig:
     max_shift_replans: int = 4
     shift_restarts: int = 2
     max_backtracks: int = 4
+    max_final_cycles: int = 2
     head_height_tol_m: float = 0.005
     target_tol_m: float = 0.02
 
@@ -81,7 +82,8 @@ class ScoutConfig:
             if not getattr(p, key) > 0:
                 out.append(f"planner.{key}: must be > 0, got {getattr(p, key)}")
         for key in ("k1", "k3", "k_torque", "k_wall_per_m2", "margin_m", "joint_margin_deg", "max_restarts",
-                    "max_shift_replans", "shift_restarts", "max_backtracks", "head_height_tol_m",
+                    "max_shift_replans", "shift_restarts", "max_backtracks",
+                    "max_final_cycles", "head_height_tol_m",
                     "target_tol_m", "k1_step"):
             if getattr(p, key) < 0:
                 out.append(f"planner.{key}: must be >= 0, got {getattr(p, key)}")

@@ -84,8 +84,11 @@ class FbsrPlanner:
                                 f"{limit} active modules (its base needs contacts spanning an area)")
         if pipe is not None:
             self._check_pipe(pipe)
-        if pipe is not None and target_m is None and height_m is None:
-            target_m = pipe.entry_point()       # the head goes into the pipe's mouth
+        into_pipe = pipe is not None and target_m is None and height_m is None
+        if into_pipe:
+            # The head goes into the mouth from below: first under it, then in.
+            target_m = np.asarray(pipe.entry_point(), float)
+            below = np.asarray(pipe.entry_point(-2.0 * self.chain.radius_m), float)
         directive = Directive(height_m=height_m, target_m=target_m)
         m = min(self.posture.initial_active, max_active)
         q = self.chain.q_lying.copy()
@@ -97,10 +100,15 @@ class FbsrPlanner:
         head_before = self.chain.pose(q).head[2]
         transferred = False
         backtracks = 0
+        extra_cycles = 0
         reseed = False
         while True:
             u = self.support(m)
             first = len(plan.stages)
+            if into_pipe:
+                head_now = self.chain.pose(q).head
+                under = np.hypot(*(head_now[:2] - below[:2])) < pipe.radius_m - self.chain.radius_m
+                directive = Directive(target_m=target_m if under else below)
             q_before = q
             stage = self._stage("raise", m, q, u, Checks(
                 u, head_above_m=head_before if transferred else None,
@@ -113,8 +121,11 @@ class FbsrPlanner:
             head = head_xyz[2]
             if height_m is not None and head >= height_m - cfg.head_height_tol_m:
                 break
-            if target_m is not None and np.linalg.norm(head_xyz - target_m) < cfg.target_tol_m:
+            if target_m is not None and np.linalg.norm(head_xyz - np.asarray(target_m)) < cfg.target_tol_m:
                 break
+            if m >= max_active and target_m is not None and extra_cycles < cfg.max_final_cycles:
+                extra_cycles += 1       # paper II: plan again until the end condition or a
+                continue                # cycle limit; no module left to transfer
             if m >= max_active:
                 if height_m is not None:
                     raise PlanningError(
