@@ -102,18 +102,32 @@ class FbsrPlanner:
         backtracks = 0
         extra_cycles = 0
         reseed = False
+        previous = None          # where the last raise started: (stages, q, m, head, transferred)
         while True:
             u = self.support(m)
             first = len(plan.stages)
+            here = (first, q, m, head_before, transferred)
             if into_pipe:
                 head_now = self.chain.pose(q).head
                 under = np.hypot(*(head_now[:2] - below[:2])) < pipe.radius_m - self.chain.radius_m
                 directive = Directive(target_m=target_m if under else below)
             q_before = q
-            stage = self._stage("raise", m, q, u, Checks(
-                u, head_above_m=head_before if transferred else None,
-                period_s=cfg.sample_period_s), directive, pipe, rng, cfg.k1, restarts,
-                random_first=reseed)
+            try:
+                stage = self._stage("raise", m, q, u, Checks(
+                    u, head_above_m=head_before if transferred else None,
+                    period_s=cfg.sample_period_s), directive, pipe, rng, cfg.k1, restarts,
+                    random_first=reseed)
+            except PlanningError:
+                # No raise from here passes the checks: re-plan the previous raise (and the
+                # transfer after it) from a random start, at most max_backtracks times.
+                if not restarts or previous is None or backtracks >= cfg.max_backtracks:
+                    raise
+                backtracks += 1
+                first, q, m, head_before, transferred = previous
+                del plan.stages[first:]
+                previous, reseed = None, True
+                continue
+            previous = here
             reseed = False
             self._add(plan, stage)
             q = stage.q_end
