@@ -35,3 +35,18 @@ def test_short_plan_executed_in_physics_does_not_tip(root):
     assert m["final_head_height_m"] == pytest.approx(m["planned_head_height_m"], abs=0.02)
     assert 0 < m["max_torque_ratio"] < 1.0
     assert result["extra"]["limit_violations"] == 0
+
+
+def test_cli_run_writes_metrics_with_the_contract_keys(tmp_path):
+    import json
+
+    from snake_autonomy import cli
+
+    out = tmp_path / "run"
+    assert cli.main(["scout", "run", "--robot", "unified_snake", "--max-active", "2",
+                     "--out", str(out)]) == 0
+    m = json.loads((out / "metrics.json").read_text())
+    assert set(m) == {"tipped", "cop_inside_fraction", "final_head_height_m",
+                      "planned_head_height_m", "max_torque_ratio", "active_modules"}
+    assert m["tipped"] is False and m["active_modules"] == 2
+    assert (out / "plan.json").is_file()
