@@ -24,6 +24,7 @@ SUBCOMMANDS = {
     "report": ("snake_autonomy.experiments.cli", "rebuild a run's results folder from its bag"),
     "calibrate": ("snake_autonomy.calibration.cli",
                   "steering offset (eq. 3.31) and heading offset, on the simulated robot or through ROS"),
+    "scout": ("snake_autonomy.planning.fbsr.cli", "raise the head stably (FBSR planner): plan, run in physics"),
 }
 
 

@@ -1,1 +1,2 @@
-"""snake_autonomy.planning: planners (rectilinear perception-space navigation, issue 13)."""
+"""Motion planners (ROS-free): rectilinear/ is perception-space navigation with the rectilinear gait
+(Chang et al., issue 13); fbsr/ is the FBSR head-raising "scout" planner (Cappel & Choset, issue 14)."""

@@ -1,0 +1,15 @@
+"""The FBSR head-raising planner (Cappel & Choset, ../shared/papers/fbsr_head_raising_planner.txt).
+
+config.py     config/scout.yaml: planner parameters and each robot's lying posture, validated
+chain.py      kinematics with the world fixed at the tail, the lying posture, ground contacts
+support.py    support polygons, the ZMP's distance to their edges (shapely)
+spline.py     the one-parameter cubic of eq. 3-8 (ERRATA #10)
+cost.py       C = K1 Cd + K2 Cs + K3 Cp (+ torque, ground and clearance terms), eq. 9-15
+stage.py      one optimised stage (scipy) with its global checks and random restarts
+planner.py    the loop of section II / III.E, dynamic weighting of K1, lowering
+plan_io.py    plan.json (the issue's contract), reading and validating it
+figures.py    ZMP paths in the support polygons per stage (fig. 7), head height over time
+execute.py    running a plan in the MuJoCo plant, centre of pressure, metrics.json
+pipe_scene.py the hanging pipe of fig. 6 as MJCF for the plant
+cli.py        `snake_autonomy scout plan|run`
+"""

@@ -1,0 +1,123 @@
+"""`snake_autonomy scout`: the FBSR head-raising planner (issue 14).
+
+    snake_autonomy scout plan --robot ROBOT [--height-m H] [--max-active N] [--pipe X,Y,R] [--seed S] --out DIR
+    snake_autonomy scout run  --robot ROBOT [same options] --out DIR
+
+`plan` writes DIR/plan.json (plan_io.py) and the figures DIR/zmp_stages.png, DIR/head_height.png.
+`run` also executes the plan in the MuJoCo plant (execute.py) and writes DIR/metrics.json, plus
+DIR/run.json (head position, base lift, pipe distance). Without --height-m the head goes as high as
+the active portion allows; with it, planning stops once the head reaches H. Bad options (unknown
+robot, a height no plan reaches, a pipe inside the robot) end with one message and exit 1.
+"""
+import json
+import sys
+from pathlib import Path
+
+
+def _pipe(text):
+    from .cost import Pipe
+
+    try:
+        x, y, r = (float(v) for v in text.split(","))
+    except ValueError:
+        raise ValueError(f"--pipe: expected X,Y,R in metres (e.g. 0.1,0.3,0.06), got {text!r}") from None
+    return Pipe(x, y, r)
+
+
+def add_arguments(parser):
+    sub = parser.add_subparsers(dest="scout_command", metavar="SCOUT_COMMAND")
+    for name, help_text in (("plan", "plan a head-raising trajectory (plan.json + figures)"),
+                            ("run", "plan, then execute it in the MuJoCo plant (metrics.json)")):
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        p.add_argument("--robot", required=True, help="robot name under config/robots/ or a YAML path")
+        p.add_argument("--height-m", type=float, metavar="H", help="end condition: head height (m)")
+        p.add_argument("--max-active", type=int, metavar="N",
+                       help="most active modules (default: the robot's in config/scout.yaml)")
+        p.add_argument("--pipe", metavar="X,Y,R",
+                       help="vertical pipe: axis x, y and inner radius (m); a negative x: --pipe=-0.1,0.3,0.06")
+        p.add_argument("--seed", type=int, default=0, help="planner seed (default 0)")
+        p.add_argument("--out", required=True, metavar="DIR", help="results folder")
+        p.add_argument("--no-restarts", action="store_true", help="no random restarts (benchmarks)")
+        p.add_argument("--config", metavar="YAML", help="planner configuration (default config/scout.yaml)")
+        if name == "run":
+            p.add_argument("--sim-seed", type=int, default=0, help="physics draws of config/sim.yaml")
+
+
+def build_planner(robot_arg: str, config_arg=None):
+    """(planner, robot) for a robot name or YAML; ValueError/FileNotFoundError with a message."""
+    from snake_autonomy import _core
+    from snake_autonomy.paths import config_path, robot_yaml
+
+    from .config import ScoutConfig, default_path
+    from .planner import FbsrPlanner
+
+    path = robot_yaml(robot_arg)
+    if not Path(path).is_file():
+        known = sorted(p.stem for p in config_path("robots").glob("*.yaml"))
+        raise ValueError(f"--robot {robot_arg}: unknown robot (known: {', '.join(known)})")
+    robot = _core.RobotModel.from_yaml(str(path))
+    cfg = ScoutConfig.from_yaml(config_arg or default_path())
+    torque = _servo_torque_limit()
+    return FbsrPlanner(robot, cfg.planner, cfg.posture(robot.name), torque), cfg
+
+
+def _servo_torque_limit() -> float:
+    from snake_autonomy.paths import config_path
+    from snake_autonomy.sim.config import SimConfig
+
+    return SimConfig.from_yaml(config_path("sim.yaml")).servo.torque_limit_nm
+
+
+def main(args) -> int:
+    from .stage import PlanningError
+
+    if args.scout_command is None:
+        print("usage: snake_autonomy scout {plan,run} --robot ROBOT --out DIR [options]", file=sys.stderr)
+        return 2
+    try:
+        pipe = _pipe(args.pipe) if args.pipe else None
+        if args.height_m is not None and not args.height_m > 0:
+            raise ValueError(f"--height-m {args.height_m}: must be > 0")
+        planner, cfg = build_planner(args.robot, args.config)
+        reach = planner.robot.head_length_m + planner.robot.num_joints * planner.robot.link_length_m
+        if args.height_m is not None and args.height_m > reach:
+            raise ValueError(f"--height-m {args.height_m}: no plan reaches it, {planner.robot.name} "
+                             f"is {reach:.2f} m long")
+        try:
+            plan = planner.plan(max_active=args.max_active, height_m=args.height_m, pipe=pipe,
+                                seed=args.seed, restarts=not args.no_restarts)
+        except PlanningError as err:
+            if args.height_m is None or str(err).startswith("--height-m"):
+                raise
+            raise PlanningError(f"--height-m {args.height_m}: no plan reaches it ({err})") from None
+    except (ValueError, FileNotFoundError, PlanningError) as err:
+        print(f"scout {args.scout_command}: {err}", file=sys.stderr)
+        return 1
+    from . import plan_io
+    from .figures import write_figures
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    period = cfg.planner.sample_period_s
+    doc = plan_io.write(plan, out / "plan.json", period)
+    write_figures(plan, out, period, pipe)
+    print(f"{plan.robot_name}: {plan.active_modules} active modules, head {plan.final_head_height_m:.3f} m, "
+          f"{len(plan.stages)} stages, {plan.duration_s:.1f} s of motion, {plan.restarts} restarts, "
+          f"planned in {plan.planning_time_s:.1f} s -> {out / 'plan.json'} ({len(doc['samples'])} samples)")
+    if args.scout_command != "run":
+        return 0
+    from snake_autonomy.paths import config_path
+
+    from .execute import run_plan
+
+    result = run_plan(plan, config_path("sim.yaml"), args.sim_seed, pipe, period)
+    (out / "metrics.json").write_text(json.dumps(result["metrics"], indent=2) + "\n")
+    (out / "run.json").write_text(json.dumps(result["extra"], indent=2) + "\n")
+    m = result["metrics"]
+    line = (f"physics: tipped {m['tipped']}, CoP inside {m['cop_inside_fraction']:.3f}, head "
+            f"{m['final_head_height_m']:.3f} m (planned {m['planned_head_height_m']:.3f}), "
+            f"max torque {100 * m['max_torque_ratio']:.0f} % of the limit")
+    if pipe is not None:
+        line += f", head {result['extra']['head_to_pipe_axis_m']:.3f} m from the pipe axis"
+    print(line + f" -> {out / 'metrics.json'}")
+    return 0

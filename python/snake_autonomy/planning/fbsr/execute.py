@@ -1,0 +1,148 @@
+"""A plan run in the MuJoCo plant, checked from the contact forces: metrics.json of the contract
+
+    {"tipped": bool, "cop_inside_fraction": float, "final_head_height_m": float,
+     "planned_head_height_m": float, "max_torque_ratio": float, "active_modules": int}
+
+- The start: the plant's robot lying in the plan's first posture (q0_rad, its head placed where
+  the planner's world puts it), left to settle with the servos holding it.
+- Execution: `send_goals` writes the planned positions as servo goals at 100 Hz, cubic-interpolated
+  between the plan's samples: exactly what the driver would write. It stands in for the driver's
+  trajectory execution (the TrajectorySource of issue 11) until that exists; replace this one
+  function by the driver path then.
+- Every 10 ms step: the centre of pressure from the floor contacts' normal forces, inside the
+  (closed) support polygon of the actual contacts, which must span an area; the lift of the base's frames
+  above the floor; the servos' torques against their limit. The actual contacts are MuJoCo's floor
+  contacts plus the frames whose capsule is within CONTACT_GAP_M of the floor: a body lying flat is
+  statically indeterminate, and MuJoCo's solver may carry its weight on two capsules for a step
+  while the others touch with no force (the polygon would collapse to a line though nothing
+  tips) or on one capsule (the CoP then sits on a vertex of the polygon: on it, not outside).
+  Tipping about an edge lifts the frames beyond it by more than CONTACT_GAP_M within a degree,
+  leaving a polygon of no area: counted outside.
+- tipped: a frame of the planned base rose more than LIFT_TIPPED_M off the floor (a base module
+  lifting off unplanned), or the CoP left the contacts' polygon for more than 0.1 s in a row.
+"""
+from typing import Callable, Optional
+
+import mujoco
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from ...sim.config import SimConfig
+from ...sim.plant import Plant
+from .pipe_scene import pipe_mjcf
+from .plan_io import stage_samples
+from .planner import Plan
+from .support import Support
+
+DRIVER_PERIOD_S = 0.01
+SETTLE_S = 1.0
+HOLD_S = 1.5
+COP_TOLERANCE_M = 1e-6
+LIFT_TIPPED_M = 0.02
+MIN_NORMAL_FORCE_N = 0.05
+CONTACT_GAP_M = 0.001
+
+
+def send_goals(plant: Plant, times_s, q_rad, on_step: Callable[[float], None],
+               period_s: float = DRIVER_PERIOD_S) -> None:
+    """The driver's part: the plan's positions as servo goals every period_s (cubic interpolation
+    between samples), the plant stepped in between; on_step(t) after each step. To be replaced by
+    the driver's TrajectorySource (issue 11) once it exists."""
+    spline = CubicSpline(times_s, q_rad, axis=0, bc_type="clamped")
+    t0 = plant.time_s
+    for t in np.arange(0.0, times_s[-1] + 1e-9, period_s):
+        plant.set_joint_targets(spline(t))
+        plant.step_to(t0 + t + period_s)
+        on_step(t)
+
+
+def centre_of_pressure(model, data, floor_geom: int):
+    """(CoP xy or None, (k, 2) contact points xy) of the floor contacts pushing up."""
+    points, forces = [], []
+    f6 = np.zeros(6)
+    for i in range(data.ncon):
+        c = data.contact[i]
+        if floor_geom not in (c.geom1, c.geom2):
+            continue
+        mujoco.mj_contactForce(model, data, i, f6)
+        fz = abs(float((c.frame.reshape(3, 3).T @ f6[:3])[2]))
+        if fz > MIN_NORMAL_FORCE_N:
+            points.append(c.pos[:2].copy())
+            forces.append(fz)
+    if not forces:
+        return None, np.zeros((0, 2))
+    p, f = np.array(points), np.array(forces)
+    return (f[:, None] * p).sum(axis=0) / f.sum(), p
+
+
+class Monitor:
+    """What one run measures at every driver step."""
+
+    def __init__(self, plant: Plant, torque_limit_nm: float):
+        self.plant = plant
+        self.floor = mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+        self.torque_limit_nm = torque_limit_nm
+        self.radius_m = float(plant.robot.link_radius_m)
+        self.inside, self.max_torque_ratio, self.max_lift_m = [], 0.0, 0.0
+        self.base_from = plant.robot.num_frames   # frames >= this index are the planned base
+
+    def __call__(self, _t=None) -> None:
+        cop, contacts = centre_of_pressure(self.plant.model, self.plant.data, self.floor)
+        frames = self.plant.frame_positions()
+        touching = frames[frames[:, 2] - self.radius_m < CONTACT_GAP_M, :2]
+        contacts = np.vstack([contacts, touching])
+        ok = cop is not None and Support.of(contacts).signed_distance([cop])[0] >= -COP_TOLERANCE_M
+        self.inside.append(bool(ok))
+        ratio = np.abs(self.plant.actuator_torques_nm()).max() / self.torque_limit_nm
+        self.max_torque_ratio = max(self.max_torque_ratio, float(ratio))
+        z = frames[self.base_from:, 2]
+        if len(z):
+            self.max_lift_m = max(self.max_lift_m, float((z - self.radius_m).max()))
+
+    def longest_outside_s(self) -> float:
+        longest = run = 0
+        for ok in self.inside:
+            run = 0 if ok else run + 1
+            longest = max(longest, run)
+        return longest * DRIVER_PERIOD_S
+
+
+def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
+             sample_period_s: float = 0.05, record: Optional[list] = None) -> dict:
+    """Execute `plan` in a fresh plant (sim.yaml's physics, seed's draws); metrics.json's dict."""
+    chain = plan.chain
+    robot = chain.robot
+    params = SimConfig.from_yaml(sim_yaml).draw(seed, num_joints=robot.num_joints)
+    samples = stage_samples(plan, sample_period_s)
+    times = np.array([t for _, t, _ in samples])
+    q = np.array([qq for _, _, qq in samples])
+    start_pose = chain.pose(q[0])
+    heading = float(np.arctan2(start_pose.rotations[0][1, 0], start_pose.rotations[0][0, 0]))
+    plant = Plant(robot, params, start=(*start_pose.positions[0, :2], heading), q0_rad=q[0],
+                  scene_xml=pipe_mjcf(pipe) if pipe is not None else "")
+    monitor = Monitor(plant, params.config.servo.torque_limit_nm)
+    plant.step(SETTLE_S)
+    # The base of every stage: frames from its active-module count on; the final base is the
+    # smallest, and the one held at the end. Lift is measured on the final base's frames.
+    monitor.base_from = plan.active_modules
+    step = (lambda t: (monitor(), record.append((t, plant.frame_positions())))) \
+        if record is not None else monitor
+    send_goals(plant, times, q, step)
+    for _ in range(int(round(HOLD_S / DRIVER_PERIOD_S))):
+        plant.step(DRIVER_PERIOD_S)
+        monitor()
+    head = plant.frame_positions()[0]
+    tipped = monitor.max_lift_m > LIFT_TIPPED_M or monitor.longest_outside_s() > 0.1
+    metrics = {
+        "tipped": bool(tipped),
+        "cop_inside_fraction": float(np.mean(monitor.inside)),
+        "final_head_height_m": float(head[2]),
+        "planned_head_height_m": float(plan.final_head_height_m),
+        "max_torque_ratio": float(monitor.max_torque_ratio),
+        "active_modules": int(plan.active_modules),
+    }
+    extra = {"head_xy_m": head[:2].tolist(), "max_base_lift_m": monitor.max_lift_m,
+             "limit_violations": int(plant.limit_violations)}
+    if pipe is not None:
+        extra["head_to_pipe_axis_m"] = float(np.hypot(head[0] - pipe.x_m, head[1] - pipe.y_m))
+    return {"metrics": metrics, "extra": extra}

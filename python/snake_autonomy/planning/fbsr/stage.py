@@ -1,0 +1,116 @@
+"""One FBSR stage: optimise the active joints' cubics, check the result, restart on failure
+(paper III.E: "does the ZMP stay inside the polygon for the total length of the given
+trajectory? If not, we randomly reseed the spline coefficients ... and re-plan").
+"""
+import time
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+from scipy.optimize import minimize
+
+from . import spline
+from .cost import StageCost, pipe_wall_overlap
+from .support import Support
+
+
+class PlanningError(RuntimeError):
+    """No plan satisfies the checks; the message says which and why."""
+
+
+@dataclass
+class Stage:
+    kind: str                    # "raise", "shift" (eq. 1 before a transfer) or "lower"
+    active_modules: int
+    q_start: np.ndarray          # (N,) joint angles at the start
+    delta: np.ndarray            # (active_modules,) end offsets of the active joints
+    t_end_s: float
+    contacts_xy: np.ndarray      # the base's ground contacts (U is their hull)
+    next_contacts_xy: Optional[np.ndarray] = None   # U' before a transfer
+    k1: float = 1.0
+    restarts: int = 0
+    planning_time_s: float = 0.0
+    cost_terms: dict = field(default_factory=dict)
+
+    def joints(self, t_s) -> np.ndarray:
+        t = np.atleast_1d(np.asarray(t_s, float))
+        q = np.repeat(self.q_start[None, :], len(t), axis=0)
+        m = self.active_modules
+        q[:, :m] = spline.positions(self.q_start[:m], self.delta, self.t_end_s, t)
+        return q
+
+    @property
+    def q_end(self) -> np.ndarray:
+        return self.joints([self.t_end_s])[0]
+
+    def reversed(self) -> "Stage":
+        """The same motion backwards: again a cubic of eq. 3-8 (smoothstep is symmetric)."""
+        return Stage("lower", self.active_modules, self.q_end, -self.delta, self.t_end_s,
+                     self.contacts_xy, None, self.k1, 0, 0.0, {})
+
+
+def sample_times(t_end_s: float, period_s: float) -> np.ndarray:
+    """Times from 0 to t_end inclusive, at most period_s apart."""
+    n = int(np.ceil(t_end_s / period_s - 1e-9))
+    return np.linspace(0.0, t_end_s, n + 1)
+
+
+@dataclass
+class Checks:
+    """The global checks of a stage, on samples period_s apart."""
+    within: Support                       # the ZMP stays strictly inside at every sample
+    end_within: Optional[Support] = None  # ... and ends inside this one (U ∩ U' for a shift)
+    head_above_m: Optional[float] = None  # the head ends higher than this (after a transfer)
+    ground_tol_m: float = 0.002
+    period_s: float = 0.05
+
+    def failures(self, cost: StageCost, delta) -> list:
+        poses = cost.poses(delta, sample_times(cost.t_end_s, self.period_s))
+        out = []
+        zmp = np.array([p.zmp for p in poses])
+        l = self.within.signed_distance(zmp)
+        if np.any(l <= 0):
+            out.append(f"ZMP leaves the polygon (worst edge distance {l.min() * 1e3:.1f} mm)")
+        if self.end_within is not None and self.end_within.signed_distance(zmp[-1:])[0] <= 0:
+            out.append("ZMP ends outside U ∩ U'")
+        r = cost.chain.radius_m
+        low = min(float(p.positions[:cost.m, 2].min()) for p in poses)
+        if low < r - self.ground_tol_m:
+            out.append(f"a module goes {1e3 * (r - low):.1f} mm into the floor")
+        if cost.pipe is not None and cost.w.k_wall_per_m2 > 0:
+            wall = max(float(pipe_wall_overlap(p.positions[:cost.m], cost.pipe, r).max())
+                       for p in poses)
+            if wall > self.ground_tol_m:
+                out.append(f"a module goes {1e3 * wall:.1f} mm into the pipe's wall")
+        if self.head_above_m is not None and poses[-1].head[2] <= self.head_above_m:
+            out.append(f"head ends at {poses[-1].head[2]:.3f} m, not above {self.head_above_m:.3f} m")
+        return out
+
+
+def optimise(cost: StageCost, checks: Checks, rng: np.random.Generator, max_restarts: int,
+             joint_margin_rad: float, kind: str, contacts_xy, next_contacts_xy=None,
+             k1: float = 1.0, restarts_enabled: bool = True, random_first: bool = False) -> Stage:
+    """The best stage for `cost` that passes `checks`, with random restarts; PlanningError if
+    none does within max_restarts. random_first: the first attempt starts at random too."""
+    m = cost.m
+    chain = cost.chain
+    lo, hi = spline.delta_bounds(cost.q_start[:m], chain.lower[:m], chain.upper[:m],
+                                 joint_margin_rad)
+    bounds = list(zip(lo, hi))
+    started = time.perf_counter()
+    problems = []
+    attempts = 1 + (max_restarts if restarts_enabled else 0)
+    for attempt in range(attempts):
+        if attempt == 0 and not random_first:
+            x0 = np.clip(rng.normal(0.0, 0.02, m), lo, hi)
+        else:
+            x0 = rng.uniform(lo, hi) * 0.5
+        res = minimize(cost, x0, method="L-BFGS-B", bounds=bounds,
+                       options={"maxiter": 200, "eps": 1e-4})
+        problems = checks.failures(cost, res.x)
+        if not problems:
+            return Stage(kind, m, cost.q_start.copy(), np.asarray(res.x, float), cost.t_end_s,
+                         np.asarray(contacts_xy, float), next_contacts_xy, k1, attempt,
+                         time.perf_counter() - started, cost.terms(res.x))
+    raise PlanningError(f"{kind} stage with {m} active modules: no trajectory passes the checks "
+                        f"after {attempts} attempts ({'; '.join(problems)})")

@@ -1,0 +1,52 @@
+"""FBSR in physics (MuJoCo plant): the centre of pressure of a robot at rest is its CoG, and a short
+plan executed as servo goals does not tip the robot and reaches the planned head height."""
+import mujoco
+import numpy as np
+import pytest
+
+from snake_autonomy import _core
+from snake_autonomy.planning.fbsr.cli import build_planner
+from snake_autonomy.planning.fbsr.execute import centre_of_pressure, run_plan
+from snake_autonomy.sim.config import SimConfig
+from snake_autonomy.sim.plant import Plant
+
+
+def test_centre_of_pressure_of_a_robot_at_rest_is_under_its_centre_of_gravity(root):
+    robot = _core.RobotModel.from_yaml(str(root / "config/robots/unified_snake.yaml"))
+    params = SimConfig.from_yaml(root / "config/sim.yaml").draw(0, num_joints=robot.num_joints)
+    q0 = np.zeros(robot.num_joints)
+    q0[1::2] = 0.5                       # yaw joints: a curled body, contacts spanning an area
+    plant = Plant(robot, params, q0_rad=q0)
+    plant.step(1.0)
+    floor = mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+    cop, contacts = centre_of_pressure(plant.model, plant.data, floor)
+    assert len(contacts) >= 3
+    np.testing.assert_allclose(cop, plant.center_of_mass()[:2], atol=0.003)
+
+
+def test_short_plan_executed_in_physics_does_not_tip(root):
+    planner = build_planner(str(root / "config/robots/unified_snake.yaml"))[0]
+    plan = planner.plan(max_active=4, seed=0)
+    result = run_plan(plan, root / "config/sim.yaml", seed=0)
+    m = result["metrics"]
+    assert m["tipped"] is False
+    assert m["cop_inside_fraction"] == 1.0
+    assert m["active_modules"] == 4
+    assert m["final_head_height_m"] == pytest.approx(m["planned_head_height_m"], abs=0.02)
+    assert 0 < m["max_torque_ratio"] < 1.0
+    assert result["extra"]["limit_violations"] == 0
+
+
+def test_cli_run_writes_metrics_with_the_contract_keys(tmp_path):
+    import json
+
+    from snake_autonomy import cli
+
+    out = tmp_path / "run"
+    assert cli.main(["scout", "run", "--robot", "unified_snake", "--max-active", "2",
+                     "--out", str(out)]) == 0
+    m = json.loads((out / "metrics.json").read_text())
+    assert set(m) == {"tipped", "cop_inside_fraction", "final_head_height_m",
+                      "planned_head_height_m", "max_torque_ratio", "active_modules"}
+    assert m["tipped"] is False and m["active_modules"] == 2
+    assert (out / "plan.json").is_file()
