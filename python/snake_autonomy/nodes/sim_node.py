@@ -10,7 +10,10 @@ Publishes   base_pose (geometry_msgs/PoseStamped, motion capture of base_link, 1
             ground_truth/base_pose (PoseStamped, 100 Hz), ground_truth/camera_pose (PoseStamped, with
             every odom message, same stamp), ground_truth/com_pose (PoseStamped, 10 Hz: centre of mass
             and heading from the true base pose), sim/status (diagnostic_msgs/DiagnosticStatus, 1 Hz,
-            also on /diagnostics: simulated time, tilt, roll-over, joint goals beyond the limits).
+            also on /diagnostics: simulated time, tilt, roll-over, joint goals beyond the limits),
+            /clock (rosgraph_msgs/Clock, every physics step: the plant's time, starting at the wall
+            time the simulation started; /use_sim_time:=true makes every node follow it, and then
+            the messages above are stamped with it too).
 Subscribes  sim/disturbance (geometry_msgs/WrenchStamped: header.frame_id = the body, base_link or
             link_1..link_11; world-frame force and torque; lasts ~disturbance_duration_s),
             tracking_status (the mission's active waypoint: arms the mission's mid-leg disturbances).
@@ -21,17 +24,17 @@ Params      ~feedback (mocap|vio), ~seed, ~start ("x,y,heading_deg" of the centr
 import math
 import threading
 import time
-from pathlib import Path
 
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped, WrenchStamped
 from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Clock
 
 from snake_autonomy.msg import TrackingStatus
+from snake_autonomy.paths import config_path
 from snake_autonomy.sim.realtime import RealTimeSim, SimSetup
 
-ROOT = Path(__file__).resolve().parents[3]
 
 
 def _pose(msg_pose, position, quat):
@@ -48,7 +51,7 @@ class SimNode:
             assert len(start_t) == 3
         except (ValueError, AssertionError):
             raise ValueError(f"~start: expected x,y,heading_deg, got {start!r}") from None
-        config = ROOT / "config"
+        config = config_path()
         setup = SimSetup(feedback=rospy.get_param("~feedback", "mocap"), seed=int(rospy.get_param("~seed", 0)),
                          start=start_t, port=rospy.get_param("~port", "/tmp/snake_sim_bus"),
                          sim_config=rospy.get_param("~sim_config", str(config / "sim.yaml")),
@@ -61,6 +64,11 @@ class SimNode:
         self.duration_s = float(rospy.get_param("~disturbance_duration_s", 0.1))
         self.sim = RealTimeSim(setup)
         self.feedback = setup.feedback
+        # /clock: the plant's time from the wall time of the start. With /use_sim_time this node's own
+        # rospy clock comes back from /clock, so it stamps with the value it publishes instead.
+        self.use_sim_time = bool(rospy.get_param("/use_sim_time", False))
+        self.clock_epoch_s = time.time()
+        self.pub_clock = rospy.Publisher("/clock", Clock, queue_size=10)
         self.pub_base = rospy.Publisher("base_pose", PoseStamped, queue_size=20) if self.feedback == "mocap" else None
         self.pub_odom = rospy.Publisher("odom", Odometry, queue_size=20) if self.feedback == "vio" else None
         self.pub_gt_base = rospy.Publisher("ground_truth/base_pose", PoseStamped, queue_size=20)
@@ -116,8 +124,14 @@ class SimNode:
             elif delay > 0:
                 time.sleep(delay)
 
+    def stamp(self, t_s=None):
+        if not self.use_sim_time:
+            return rospy.Time.now()
+        return rospy.Time.from_sec(self.clock_epoch_s + (self.sim.plant.time_s if t_s is None else t_s))
+
     def publish(self, out, k):
-        stamp = rospy.Time.now()
+        self.pub_clock.publish(Clock(clock=rospy.Time.from_sec(self.clock_epoch_s + out.t_s)))
+        stamp = self.stamp(out.t_s)
         for text in out.fired:
             rospy.logwarn(f"disturbance: {text}")
         if out.mocap is not None:
@@ -160,7 +174,7 @@ class SimNode:
             values=[KeyValue(k, f"{v:.3f}" if isinstance(v, float) else str(v)) for k, v in s.items()])
         self.pub_status.publish(status)
         arr = DiagnosticArray(status=[status])
-        arr.header.stamp = rospy.Time.now()
+        arr.header.stamp = self.stamp()
         self.pub_diag.publish(arr)
 
     def shutdown(self):

@@ -39,14 +39,14 @@ from snake_autonomy import _core
 from ..control.angles import wrap
 from ..missions import load_defaults, load_mission
 from ..missions.runner import MissionRunner
+from ..paths import config_path
 from .config import SimConfig
 from .disturbances import parse_triggers
 from .feedback import make_feedback
 from .mujoco_servo_backend import MujocoServoBackend
 from .plant import Plant
 
-ROOT = Path(__file__).resolve().parents[3]
-CONFIG = ROOT / "config"
+CONFIG = config_path()
 DRIVER_RATE_HZ = 100.0
 TRAJECTORY_RATE_HZ = 10.0
 DEG = 180.0 / math.pi

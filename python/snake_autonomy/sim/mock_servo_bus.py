@@ -28,13 +28,12 @@ import socket
 import threading
 import time
 import tty
-from pathlib import Path
 
 from snake_autonomy._core import dynamixel as dx
+from snake_autonomy.paths import config_path
 from snake_autonomy.sim.servo_backend import ServoBackend
 
-ROOT = Path(__file__).resolve().parents[3]
-DEFAULT_TABLE = ROOT / "config" / "dynamixel" / "xh540_w270.yaml"
+DEFAULT_TABLE = config_path("dynamixel", "xh540_w270.yaml")
 MEMORY_BYTES = 1024
 FAULT_KINDS = ("corrupt_crc", "drop_reply", "truncate_reply", "garbage_before")
 INSTRUCTION_NAMES = {
