@@ -10,7 +10,10 @@ Publishes   base_pose (geometry_msgs/PoseStamped, motion capture of base_link, 1
             ground_truth/base_pose (PoseStamped, 100 Hz), ground_truth/camera_pose (PoseStamped, with
             every odom message, same stamp), ground_truth/com_pose (PoseStamped, 10 Hz: centre of mass
             and heading from the true base pose), sim/status (diagnostic_msgs/DiagnosticStatus, 1 Hz,
-            also on /diagnostics: simulated time, tilt, roll-over, joint goals beyond the limits),
+            latched: simulated time, tilt, roll-over, joint goals beyond the limits),
+            /diagnostics (diagnostic_updater, every ~diagnostic_period (1 s): "sim: simulated robot"
+            with sim/status's level, message and values; "sim: base_pose topic status" (mocap) or
+            "sim: odom topic status" (vio): the pose source's rate within 10 % of sim.yaml's),
             /clock (rosgraph_msgs/Clock, every physics step: the plant's time, starting at the wall
             time the simulation started; /use_sim_time:=true makes every node follow it, and then
             the messages above are stamped with it too).
@@ -25,8 +28,9 @@ import math
 import threading
 import time
 
+import diagnostic_updater
 import rospy
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
@@ -75,7 +79,15 @@ class SimNode:
         self.pub_gt_cam = rospy.Publisher("ground_truth/camera_pose", PoseStamped, queue_size=20)
         self.pub_gt_com = rospy.Publisher("ground_truth/com_pose", PoseStamped, queue_size=10)
         self.pub_status = rospy.Publisher("sim/status", DiagnosticStatus, queue_size=2, latch=True)
-        self.pub_diag = rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=2)
+        self.last_status = None
+        self.updater = diagnostic_updater.Updater()
+        self.updater.setHardwareID("mujoco")
+        self.updater.add("simulated robot", self.diagnose)
+        source = self.sim.params.config.mocap if self.feedback == "mocap" else self.sim.params.config.vio
+        self._source_rate = {"min": 0.9 * source.rate_hz, "max": 1.1 * source.rate_hz}   # the task keeps this dict
+        self.source_freq = diagnostic_updater.HeaderlessTopicDiagnostic(
+            "base_pose" if self.feedback == "mocap" else "odom", self.updater,
+            diagnostic_updater.FrequencyStatusParam(self._source_rate, 0.0, 10))
         rospy.Subscriber("sim/disturbance", WrenchStamped, self.on_disturbance, queue_size=10)
         rospy.Subscriber("tracking_status", TrackingStatus, self.on_status, queue_size=10)
         self.sim.start()
@@ -117,6 +129,7 @@ class SimNode:
             if now - last_status >= 1.0:
                 last_status = now
                 self.publish_status()
+            self.updater.update()   # publishes /diagnostics when its period is due
             next_t += period
             delay = next_t - time.monotonic()
             if delay < -0.5:
@@ -124,10 +137,10 @@ class SimNode:
             elif delay > 0:
                 time.sleep(delay)
 
-    def stamp(self, t_s=None):
+    def stamp(self, t_s):
         if not self.use_sim_time:
             return rospy.Time.now()
-        return rospy.Time.from_sec(self.clock_epoch_s + (self.sim.plant.time_s if t_s is None else t_s))
+        return rospy.Time.from_sec(self.clock_epoch_s + t_s)
 
     def publish(self, out, k):
         self.pub_clock.publish(Clock(clock=rospy.Time.from_sec(self.clock_epoch_s + out.t_s)))
@@ -144,12 +157,14 @@ class SimNode:
                 m.header.stamp, m.header.frame_id = stamp, self.world_frame
                 _pose(m.pose, out.mocap.position_m, out.mocap.quat_xyzw)
                 self.pub_base.publish(m)
+                self.source_freq.tick()
         if out.vio is not None and self.pub_odom is not None:
             o = Odometry()
             o.header.stamp, o.header.frame_id, o.child_frame_id = stamp, self.world_frame, self.camera_frame
             _pose(o.pose.pose, out.vio.position_m, out.vio.quat_xyzw)
             o.pose.covariance = out.vio.covariance_row_major()
             self.pub_odom.publish(o)
+            self.source_freq.tick()
             gt = PoseStamped()
             gt.header.stamp, gt.header.frame_id = stamp, self.world_frame
             _pose(gt.pose, *out.truth_camera)
@@ -173,9 +188,17 @@ class SimNode:
                      f"{s['limit_violations']} joint goals beyond the limits" if s["limit_violations"] else "running"),
             values=[KeyValue(k, f"{v:.3f}" if isinstance(v, float) else str(v)) for k, v in s.items()])
         self.pub_status.publish(status)
-        arr = DiagnosticArray(status=[status])
-        arr.header.stamp = self.stamp()
-        self.pub_diag.publish(arr)
+        self.last_status = status
+
+    def diagnose(self, stat):
+        s = self.last_status
+        if s is None:
+            stat.summary(DiagnosticStatus.WARN, "starting")
+            return stat
+        stat.summary(s.level, s.message)
+        for kv in s.values:
+            stat.add(kv.key, kv.value)
+        return stat
 
     def shutdown(self):
         self._stop.set()
