@@ -129,7 +129,8 @@ class SimNode:
             if now - last_status >= 1.0:
                 last_status = now
                 self.publish_status()
-            self.updater.update()   # publishes /diagnostics when its period is due
+            if k % 20 == 0:
+                self.updater.update()   # publishes /diagnostics when its period (1 s) is due
             next_t += period
             delay = next_t - time.monotonic()
             if delay < -0.5:
