@@ -243,8 +243,21 @@ void bind_kinematics(py::module_& m) {
           py::arg("base_position"), py::arg("base_quaternion_xyzw"), py::arg("q"),
           "Poses of every frame, centre of mass, virtual chassis and bounding box; q in radians.");
 
-  m.def("make_urdf", &make_urdf, py::arg("model"), py::arg("effort_nm") = 9.9, py::arg("velocity_rad_s") = 4.8,
-        "URDF of the robot description (same frames as Kinematics).");
+  m.def(
+      "make_urdf",
+      [](const RobotModel& model, double effort_nm, double velocity_rad_s, const py::object& camera_in_head,
+         const std::string& camera_name) {
+        std::optional<CameraMount> camera;
+        if (!camera_in_head.is_none()) {
+          const auto t = camera_in_head.cast<Eigen::Matrix4d>();
+          camera = CameraMount{camera_name, Eigen::Isometry3d(t)};
+        }
+        return make_urdf(model, effort_nm, velocity_rad_s, camera);
+      },
+      py::arg("model"), py::arg("effort_nm") = 9.9, py::arg("velocity_rad_s") = 4.8,
+      py::arg("camera_in_head") = py::none(), py::arg("camera_name") = "camera",
+      "URDF of the robot description (same frames as Kinematics); camera_in_head (4x4, T_head^camera) "
+      "adds <camera_name>_link and <camera_name>_color_optical_frame on head_link.");
 }
 // ---------------------------------------------------------------------------------------------
 // Dynamixel Protocol 2.0 (submodule snake_autonomy._core.dynamixel): the codec the mocked bus

@@ -1,69 +1,128 @@
 #include "snake_autonomy/core/urdf.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
+#include <stdexcept>
 
 #include "snake_autonomy/core/kinematics.hpp"
 
 namespace snake_autonomy::core {
 namespace {
 
-// A cylinder (URDF cylinders run along z) lying along −x of its link from the origin to −length.
-void body_cylinder(std::ostringstream& o, double length, double radius) {
+// URDF cylinders run along z: this rotation lays one along x.
+constexpr const char* kAlongX = "0 1.5707963267948966 0";
+
+// A capsule lying along −x of its link, from x = x0 to x = x0 − length: visual cylinder, collision
+// cylinder and a sphere at each end.
+void capsule(std::ostringstream& o, double x0, double length, double radius, const char* material) {
+  const double mid = x0 - length / 2;
   o << "    <visual>\n"
-    << "      <origin xyz=\"" << -length / 2 << " 0 0\" rpy=\"0 " << M_PI / 2 << " 0\"/>\n"
+    << "      <origin xyz=\"" << mid << " 0 0\" rpy=\"" << kAlongX << "\"/>\n"
     << "      <geometry><cylinder length=\"" << length << "\" radius=\"" << radius << "\"/></geometry>\n"
-    << "      <material name=\"snake\"/>\n"
-    << "    </visual>\n";
+    << "      <material name=\"" << material << "\"/>\n"
+    << "    </visual>\n"
+    << "    <collision>\n"
+    << "      <origin xyz=\"" << mid << " 0 0\" rpy=\"" << kAlongX << "\"/>\n"
+    << "      <geometry><cylinder length=\"" << length << "\" radius=\"" << radius << "\"/></geometry>\n"
+    << "    </collision>\n";
+  for (const double x : {x0, x0 - length}) {
+    o << "    <collision>\n"
+      << "      <origin xyz=\"" << x << " 0 0\"/>\n"
+      << "      <geometry><sphere radius=\"" << radius << "\"/></geometry>\n"
+      << "    </collision>\n";
+  }
 }
 
-// A point mass at the frame origin, as in eq. 3.15 (a small sphere's inertia keeps tools happy).
-void point_mass(std::ostringstream& o, double mass, double radius) {
-  const double i = 0.4 * mass * radius * radius;
+// A solid cylinder of `mass` along x, centred at (cx, 0, 0) of its link.
+void cylinder_inertial(std::ostringstream& o, double mass, double cx, double length, double radius) {
+  const double axial = 0.5 * mass * radius * radius;
+  const double transverse = mass * (3.0 * radius * radius + length * length) / 12.0;
   o << "    <inertial>\n"
-    << "      <origin xyz=\"0 0 0\"/>\n"
+    << "      <origin xyz=\"" << cx << " 0 0\"/>\n"
     << "      <mass value=\"" << mass << "\"/>\n"
-    << "      <inertia ixx=\"" << i << "\" ixy=\"0\" ixz=\"0\" iyy=\"" << i << "\" iyz=\"0\" izz=\"" << i << "\"/>\n"
+    << "      <inertia ixx=\"" << axial << "\" ixy=\"0\" ixz=\"0\" iyy=\"" << transverse << "\" iyz=\"0\" izz=\""
+    << transverse << "\"/>\n"
     << "    </inertial>\n";
+}
+
+void fixed_joint(std::ostringstream& o, const std::string& name, const std::string& parent, const std::string& child,
+                 const Eigen::Vector3d& xyz, const Eigen::Vector3d& rpy) {
+  o << "  <joint name=\"" << name << "\" type=\"fixed\">\n"
+    << "    <parent link=\"" << parent << "\"/><child link=\"" << child << "\"/>\n"
+    << "    <origin xyz=\"" << xyz.x() << " " << xyz.y() << " " << xyz.z() << "\" rpy=\"" << rpy.x() << " "
+    << rpy.y() << " " << rpy.z() << "\"/>\n"
+    << "  </joint>\n";
+}
+
+// Roll, pitch, yaw of a rotation, as URDF reads them (R = Rz(yaw) · Ry(pitch) · Rx(roll)).
+Eigen::Vector3d rpy_of(const Eigen::Matrix3d& r) {
+  const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
+  if (std::abs(std::cos(pitch)) < 1e-9) {  // gimbal lock: put the whole rotation about z into yaw
+    return {0.0, pitch, std::atan2(-r(0, 1), r(1, 1))};
+  }
+  return {std::atan2(r(2, 1), r(2, 2)), pitch, std::atan2(r(1, 0), r(0, 0))};
+}
+
+void camera_links(std::ostringstream& o, const std::string& head, const CameraMount& camera) {
+  const std::string link = camera.name + "_link";
+  const std::string optical = camera.name + "_color_optical_frame";
+  o << "  <link name=\"" << link << "\"/>\n"
+    << "  <link name=\"" << optical << "\"/>\n";
+  fixed_joint(o, link + "_joint", head, link, camera.camera_in_head.translation(),
+              rpy_of(camera.camera_in_head.rotation()));
+  fixed_joint(o, optical + "_joint", link, optical, Eigen::Vector3d::Zero(), Eigen::Vector3d(-M_PI / 2, 0.0, -M_PI / 2));
+}
+
+void transmission(std::ostringstream& o, const std::string& joint, int servo_id, int direction) {
+  o << "  <transmission name=\"" << joint << "_transmission\">\n"
+    << "    <type>transmission_interface/SimpleTransmission</type>\n"
+    << "    <joint name=\"" << joint << "\">\n"
+    << "      <hardwareInterface>hardware_interface/PositionJointInterface</hardwareInterface>\n"
+    << "    </joint>\n"
+    << "    <actuator name=\"servo_" << servo_id << "\">\n"
+    << "      <hardwareInterface>hardware_interface/PositionJointInterface</hardwareInterface>\n"
+    << "      <mechanicalReduction>" << direction << "</mechanicalReduction>\n"
+    << "    </actuator>\n"
+    << "  </transmission>\n";
 }
 
 }  // namespace
 
-std::string make_urdf(const RobotModel& model, double effort_nm, double velocity_rad_s) {
+std::string make_urdf(const RobotModel& model, double effort_nm, double velocity_rad_s,
+                      const std::optional<CameraMount>& camera) {
   model.validate_or_throw();
+  if (camera && !camera->camera_in_head.matrix().allFinite()) {
+    throw std::invalid_argument("camera_in_head: not finite");
+  }
   const auto frames = model.frame_names();
   const auto joints = model.joint_names();
+  const double r = model.link_radius_m;
+  const double head = model.head_length_m;
+  const double link = model.link_length_m;
   std::ostringstream o;
   o << std::setprecision(17);
   o << "<?xml version=\"1.0\"?>\n"
     << "<!-- Generated by snake_autonomy from the robot description '" << model.name
-    << "'. Do not edit: change config/robots/" << model.name << ".yaml. -->\n"
+    << "'. Do not edit: change config/robots/" << model.name << ".yaml (camera: config/camera.yaml). -->\n"
     << "<robot name=\"" << model.name << "\">\n"
     << "  <material name=\"snake\"><color rgba=\"0.85 0.55 0.1 1\"/></material>\n"
     << "  <material name=\"head\"><color rgba=\"0.2 0.2 0.25 1\"/></material>\n";
-  // base_link carries no inertial (KDL does not support a root link with inertia): its mass is
-  // added to head_link's. Kinematics uses the masses of the YAML, frame by frame.
-  o << "  <link name=\"" << frames[0] << "\">\n"
-    << "    <visual>\n"
-    << "      <origin xyz=\"" << -model.head_length_m / 2 << " 0 0\" rpy=\"0 " << M_PI / 2 << " 0\"/>\n"
-    << "      <geometry><cylinder length=\"" << model.head_length_m << "\" radius=\"" << model.link_radius_m
-    << "\"/></geometry>\n"
-    << "      <material name=\"head\"/>\n"
-    << "    </visual>\n"
-    << "  </link>\n";
-  o << "  <link name=\"" << frames[1] << "\">\n";
-  point_mass(o, model.masses_kg[0] + model.masses_kg[1], model.link_radius_m);
+  o << "  <link name=\"" << frames[0] << "\">\n";
+  capsule(o, 0.0, head, r, "head");
   o << "  </link>\n"
-    << "  <joint name=\"head_fixed\" type=\"fixed\">\n"
-    << "    <parent link=\"" << frames[0] << "\"/><child link=\"" << frames[1] << "\"/>\n"
-    << "    <origin xyz=\"" << -model.head_length_m << " 0 0\" rpy=\"" << Kinematics::head_twist_rad(model)
-    << " 0 0\"/>\n"
-    << "  </joint>\n";
+    << "  <link name=\"" << frames[1] << "\">\n";
+  // head_link sits at the head's far end with the same x axis: the head's centroid is at +H/2.
+  cylinder_inertial(o, model.masses_kg[0] + model.masses_kg[1], head / 2, head, r);
+  o << "  </link>\n";
+  fixed_joint(o, "head_fixed", frames[0], frames[1], Eigen::Vector3d(-head, 0, 0),
+              Eigen::Vector3d(Kinematics::head_twist_rad(model), 0, 0));
   for (int i = 0; i < model.num_joints; ++i) {
     const std::string rotor = frames[i + 2] + "_rotor";
     o << "  <link name=\"" << rotor << "\">\n";
-    body_cylinder(o, model.link_length_m, model.link_radius_m);
+    capsule(o, 0.0, link, r, "snake");
+    cylinder_inertial(o, model.masses_kg[i + 2], -link / 2, link, r);
     o << "  </link>\n"
       << "  <joint name=\"" << joints[i] << "\" type=\"revolute\">\n"
       << "    <parent link=\"" << frames[i + 1] << "\"/><child link=\"" << rotor << "\"/>\n"
@@ -72,14 +131,13 @@ std::string make_urdf(const RobotModel& model, double effort_nm, double velocity
       << "    <limit lower=\"" << model.joint_lower_rad[i] << "\" upper=\"" << model.joint_upper_rad[i]
       << "\" effort=\"" << effort_nm << "\" velocity=\"" << velocity_rad_s << "\"/>\n"
       << "  </joint>\n"
-      << "  <link name=\"" << frames[i + 2] << "\">\n";
-    point_mass(o, model.masses_kg[i + 2], model.link_radius_m);
-    o << "  </link>\n"
-      << "  <joint name=\"" << frames[i + 2] << "_fixed\" type=\"fixed\">\n"
-      << "    <parent link=\"" << rotor << "\"/><child link=\"" << frames[i + 2] << "\"/>\n"
-      << "    <origin xyz=\"" << -model.link_length_m << " 0 0\" rpy=\"" << Kinematics::link_twist_rad(model, i)
-      << " 0 0\"/>\n"
-      << "  </joint>\n";
+      << "  <link name=\"" << frames[i + 2] << "\"/>\n";
+    fixed_joint(o, frames[i + 2] + "_fixed", rotor, frames[i + 2], Eigen::Vector3d(-link, 0, 0),
+                Eigen::Vector3d(Kinematics::link_twist_rad(model, i), 0, 0));
+  }
+  if (camera) camera_links(o, frames[1], *camera);
+  for (int i = 0; i < model.num_joints; ++i) {
+    transmission(o, joints[i], model.servos.ids[i], model.servos.directions[i]);
   }
   o << "</robot>\n";
   return o.str();

@@ -63,3 +63,31 @@ TEST(Urdf, JointLimitsComeFromTheYaml) {
   EXPECT_NE(urdf.find("<joint name=\"joint_11\" type=\"revolute\">"), std::string::npos);
   EXPECT_NE(urdf.find("lower=\"-1.5707963267948966\""), std::string::npos);
 }
+
+// camera_link sits at T_head^camera on head_link, and the optical frame looks along camera_link's x
+// (its z axis) with x to the camera's right (−y) and y down (−z), as REP 103 asks.
+TEST(Urdf, CameraFramesParsedByKdlMatchTheCalibration) {
+  const RobotModel model = RobotModel::from_yaml_file(std::string(SNAKE_SOURCE_DIR) + "/config/robots/cobra.yaml");
+  CameraMount camera;
+  camera.camera_in_head = Eigen::Translation3d(0.03, -0.01, 0.02) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()) *
+                          Eigen::AngleAxisd(-1.2, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ());
+  KDL::Tree tree;
+  ASSERT_TRUE(kdl_parser::treeFromString(make_urdf(model, 9.9, 4.8, camera), tree));
+  KDL::Chain chain;
+  ASSERT_TRUE(tree.getChain("head_link", "camera_color_optical_frame", chain));
+  ASSERT_EQ(chain.getNrOfJoints(), 0u);
+  KDL::ChainFkSolverPos_recursive solver(chain);
+  KDL::Frame link_pose, optical_pose;
+  const KDL::JntArray none(0);
+  ASSERT_GE(solver.JntToCart(none, link_pose, 1), 0);
+  ASSERT_GE(solver.JntToCart(none, optical_pose, 2), 0);
+  const Eigen::Matrix3d r = camera.camera_in_head.rotation();
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(link_pose.p(k), camera.camera_in_head.translation()(k), 1e-12);
+    EXPECT_NEAR(optical_pose.p(k), camera.camera_in_head.translation()(k), 1e-12);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(link_pose.M(k, c), r(k, c), 1e-12);
+    EXPECT_NEAR(optical_pose.M(k, 2), r(k, 0), 1e-12);   // optical z = camera x (forward)
+    EXPECT_NEAR(optical_pose.M(k, 0), -r(k, 1), 1e-12);  // optical x = camera −y (right)
+    EXPECT_NEAR(optical_pose.M(k, 1), -r(k, 2), 1e-12);  // optical y = camera −z (down)
+  }
+}

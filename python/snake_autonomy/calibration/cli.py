@@ -14,6 +14,8 @@ import math
 import sys
 from pathlib import Path
 
+from ..paths import config_path
+
 DEFAULT_DELTAS = "0,5,10,15"
 
 
@@ -26,7 +28,7 @@ def add_arguments(parser):
     parser.add_argument("--gait", default="sidewind", help="the steerable gait (default sidewind)")
     parser.add_argument("--settle-cycles", type=float, default=3.0, help="gait cycles after each new delta, not recorded")
     parser.add_argument("--cycles", type=int, default=6, help="gait cycles recorded per delta (default 6)")
-    root = Path(__file__).resolve().parents[3] / "config"
+    root = config_path()
     parser.add_argument("--gaits", default=str(root / "gaits.yaml"), help="gait library (its period; the driver's)")
     parser.add_argument("--pose-timeout", type=float, default=0.5, metavar="S", help="stale pose: hold (default 0.5)")
     sim = parser.add_argument_group("--sim")

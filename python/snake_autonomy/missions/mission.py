@@ -23,9 +23,9 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from ..control.waypoint_tracker import TRACKER_GAITS, TrackerParams
 from ..safe_yaml import YamlFileError, load_yaml_file
+from ..paths import config_path
 
-PACKAGE_ROOT = Path(__file__).resolve().parents[3]
-CONFIG_DIR = PACKAGE_ROOT / "config"
+CONFIG_DIR = config_path()
 MISSIONS_DIR = CONFIG_DIR / "missions"
 
 #: Gait library names known without config/gaits.yaml (the driver's library).

@@ -9,7 +9,6 @@ Services    ~reset (std_srvs/Trigger): forget the last pose (after a jump, accep
 Params      ~camera_config (config/camera.yaml), ~robot_config (config/robots/cobra.yaml: head length),
             ~world_frame (default: the odometry's frame_id).
 """
-from pathlib import Path
 
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -19,16 +18,16 @@ from std_srvs.srv import Trigger, TriggerResponse
 
 from snake_autonomy.estimation import (PoseRemapper, TrackingGate, load_camera_calibration,
                                        load_gate_params)
+from snake_autonomy.paths import config_path
 from snake_autonomy.transforms import matrix_to_pose, pose_to_matrix
 
-ROOT = Path(__file__).resolve().parents[3]
 LEVELS = {"ok": DiagnosticStatus.OK, "waiting": DiagnosticStatus.WARN}
 
 
 class PoseRemapNode:
     def __init__(self):
-        camera_config = rospy.get_param("~camera_config", str(ROOT / "config" / "camera.yaml"))
-        robot_config = rospy.get_param("~robot_config", str(ROOT / "config" / "robots" / "cobra.yaml"))
+        camera_config = rospy.get_param("~camera_config", str(config_path("camera.yaml")))
+        robot_config = rospy.get_param("~robot_config", str(config_path("robots", "cobra.yaml")))
         self.world_frame = rospy.get_param("~world_frame", "")
         calib = load_camera_calibration(camera_config)
         if not calib.calibrated:

@@ -10,7 +10,13 @@ Publishes   base_pose (geometry_msgs/PoseStamped, motion capture of base_link, 1
             ground_truth/base_pose (PoseStamped, 100 Hz), ground_truth/camera_pose (PoseStamped, with
             every odom message, same stamp), ground_truth/com_pose (PoseStamped, 10 Hz: centre of mass
             and heading from the true base pose), sim/status (diagnostic_msgs/DiagnosticStatus, 1 Hz,
-            also on /diagnostics: simulated time, tilt, roll-over, joint goals beyond the limits).
+            latched: simulated time, tilt, roll-over, joint goals beyond the limits),
+            /diagnostics (diagnostic_updater, every ~diagnostic_period (1 s): "sim: simulated robot"
+            with sim/status's level, message and values; "sim: base_pose topic status" (mocap) or
+            "sim: odom topic status" (vio): the pose source's rate within 10 % of sim.yaml's),
+            /clock (rosgraph_msgs/Clock, every physics step: the plant's time, starting at the wall
+            time the simulation started; /use_sim_time:=true makes every node follow it, and then
+            the messages above are stamped with it too).
 Subscribes  sim/disturbance (geometry_msgs/WrenchStamped: header.frame_id = the body, base_link or
             link_1..link_11; world-frame force and torque; lasts ~disturbance_duration_s),
             tracking_status (the mission's active waypoint: arms the mission's mid-leg disturbances).
@@ -21,17 +27,18 @@ Params      ~feedback (mocap|vio), ~seed, ~start ("x,y,heading_deg" of the centr
 import math
 import threading
 import time
-from pathlib import Path
 
+import diagnostic_updater
 import rospy
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped, WrenchStamped
 from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Clock
 
 from snake_autonomy.msg import TrackingStatus
+from snake_autonomy.paths import config_path
 from snake_autonomy.sim.realtime import RealTimeSim, SimSetup
 
-ROOT = Path(__file__).resolve().parents[3]
 
 
 def _pose(msg_pose, position, quat):
@@ -48,7 +55,7 @@ class SimNode:
             assert len(start_t) == 3
         except (ValueError, AssertionError):
             raise ValueError(f"~start: expected x,y,heading_deg, got {start!r}") from None
-        config = ROOT / "config"
+        config = config_path()
         setup = SimSetup(feedback=rospy.get_param("~feedback", "mocap"), seed=int(rospy.get_param("~seed", 0)),
                          start=start_t, port=rospy.get_param("~port", "/tmp/snake_sim_bus"),
                          sim_config=rospy.get_param("~sim_config", str(config / "sim.yaml")),
@@ -61,13 +68,26 @@ class SimNode:
         self.duration_s = float(rospy.get_param("~disturbance_duration_s", 0.1))
         self.sim = RealTimeSim(setup)
         self.feedback = setup.feedback
+        # /clock: the plant's time from the wall time of the start. With /use_sim_time this node's own
+        # rospy clock comes back from /clock, so it stamps with the value it publishes instead.
+        self.use_sim_time = bool(rospy.get_param("/use_sim_time", False))
+        self.clock_epoch_s = time.time()
+        self.pub_clock = rospy.Publisher("/clock", Clock, queue_size=10)
         self.pub_base = rospy.Publisher("base_pose", PoseStamped, queue_size=20) if self.feedback == "mocap" else None
         self.pub_odom = rospy.Publisher("odom", Odometry, queue_size=20) if self.feedback == "vio" else None
         self.pub_gt_base = rospy.Publisher("ground_truth/base_pose", PoseStamped, queue_size=20)
         self.pub_gt_cam = rospy.Publisher("ground_truth/camera_pose", PoseStamped, queue_size=20)
         self.pub_gt_com = rospy.Publisher("ground_truth/com_pose", PoseStamped, queue_size=10)
         self.pub_status = rospy.Publisher("sim/status", DiagnosticStatus, queue_size=2, latch=True)
-        self.pub_diag = rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=2)
+        self.last_status = None
+        self.updater = diagnostic_updater.Updater()
+        self.updater.setHardwareID("mujoco")
+        self.updater.add("simulated robot", self.diagnose)
+        source = self.sim.params.config.mocap if self.feedback == "mocap" else self.sim.params.config.vio
+        self._source_rate = {"min": 0.9 * source.rate_hz, "max": 1.1 * source.rate_hz}   # the task keeps this dict
+        self.source_freq = diagnostic_updater.HeaderlessTopicDiagnostic(
+            "base_pose" if self.feedback == "mocap" else "odom", self.updater,
+            diagnostic_updater.FrequencyStatusParam(self._source_rate, 0.0, 10))
         rospy.Subscriber("sim/disturbance", WrenchStamped, self.on_disturbance, queue_size=10)
         rospy.Subscriber("tracking_status", TrackingStatus, self.on_status, queue_size=10)
         self.sim.start()
@@ -109,6 +129,8 @@ class SimNode:
             if now - last_status >= 1.0:
                 last_status = now
                 self.publish_status()
+            if k % 20 == 0:
+                self.updater.update()   # publishes /diagnostics when its period (1 s) is due
             next_t += period
             delay = next_t - time.monotonic()
             if delay < -0.5:
@@ -116,8 +138,14 @@ class SimNode:
             elif delay > 0:
                 time.sleep(delay)
 
+    def stamp(self, t_s):
+        if not self.use_sim_time:
+            return rospy.Time.now()
+        return rospy.Time.from_sec(self.clock_epoch_s + t_s)
+
     def publish(self, out, k):
-        stamp = rospy.Time.now()
+        self.pub_clock.publish(Clock(clock=rospy.Time.from_sec(self.clock_epoch_s + out.t_s)))
+        stamp = self.stamp(out.t_s)
         for text in out.fired:
             rospy.logwarn(f"disturbance: {text}")
         if out.mocap is not None:
@@ -130,12 +158,14 @@ class SimNode:
                 m.header.stamp, m.header.frame_id = stamp, self.world_frame
                 _pose(m.pose, out.mocap.position_m, out.mocap.quat_xyzw)
                 self.pub_base.publish(m)
+                self.source_freq.tick()
         if out.vio is not None and self.pub_odom is not None:
             o = Odometry()
             o.header.stamp, o.header.frame_id, o.child_frame_id = stamp, self.world_frame, self.camera_frame
             _pose(o.pose.pose, out.vio.position_m, out.vio.quat_xyzw)
             o.pose.covariance = out.vio.covariance_row_major()
             self.pub_odom.publish(o)
+            self.source_freq.tick()
             gt = PoseStamped()
             gt.header.stamp, gt.header.frame_id = stamp, self.world_frame
             _pose(gt.pose, *out.truth_camera)
@@ -159,9 +189,17 @@ class SimNode:
                      f"{s['limit_violations']} joint goals beyond the limits" if s["limit_violations"] else "running"),
             values=[KeyValue(k, f"{v:.3f}" if isinstance(v, float) else str(v)) for k, v in s.items()])
         self.pub_status.publish(status)
-        arr = DiagnosticArray(status=[status])
-        arr.header.stamp = rospy.Time.now()
-        self.pub_diag.publish(arr)
+        self.last_status = status
+
+    def diagnose(self, stat):
+        s = self.last_status
+        if s is None:
+            stat.summary(DiagnosticStatus.WARN, "starting")
+            return stat
+        stat.summary(s.level, s.message)
+        for kv in s.values:
+            stat.add(kv.key, kv.value)
+        return stat
 
     def shutdown(self):
         self._stop.set()

@@ -16,6 +16,8 @@ import math
 import sys
 from pathlib import Path
 
+from ..paths import config_path
+
 EXPERIMENT_NAMES = ("single", "star", "bidirectional", "disturbance")
 
 
@@ -68,7 +70,7 @@ def add_arguments(parser):
 
 
 def _common(p):
-    root = Path(__file__).resolve().parents[3] / "config"
+    root = config_path()
     p.add_argument("--sim-config", default=str(root / "sim.yaml"), help="simulated robot (default config/sim.yaml)")
     p.add_argument("--gaits", default=str(root / "gaits.yaml"), help="gait library (default config/gaits.yaml)")
     p.add_argument("--no-plots", action="store_true", help="metrics and CSVs only")

@@ -32,14 +32,13 @@ import logging
 import math
 import threading
 import time
-from pathlib import Path
 
 from snake_autonomy._core import dynamixel as dx
+from snake_autonomy.paths import config_path
 from snake_autonomy.sim.pty_serving import CONTROL_COMMANDS, MockBusClient, PtyServing  # noqa: F401 (API)
 from snake_autonomy.sim.servo_backend import ServoBackend
 
-ROOT = Path(__file__).resolve().parents[3]
-DEFAULT_TABLE = ROOT / "config" / "dynamixel" / "xh540_w270.yaml"
+DEFAULT_TABLE = config_path("dynamixel", "xh540_w270.yaml")
 MEMORY_BYTES = 1024
 LOG = logging.getLogger(__name__)
 FAULT_KINDS = ("corrupt_crc", "drop_reply", "truncate_reply", "garbage_before")

@@ -27,6 +27,7 @@ from typing import List, Optional
 
 import numpy as np
 
+from ..paths import config_path
 from .camera import HeadCamera
 from .collisions import CollisionMonitor
 from .config import SimConfig
@@ -34,7 +35,6 @@ from .scales import ScaledPlant
 from .scene import build_scene
 from .world_file import World
 
-ROOT = Path(__file__).resolve().parents[3]
 
 
 @dataclass
@@ -144,7 +144,7 @@ class NavRun:
         self.cfg = NavConfig.from_yaml(spec.nav_config)
         ry = robot_yaml(spec.robot)
         self.robot = _core.RobotModel.from_yaml(str(ry))
-        sim_cfg = SimConfig.from_yaml(spec.sim_config or str(ROOT / "config" / "sim.yaml"))
+        sim_cfg = SimConfig.from_yaml(spec.sim_config or str(config_path("sim.yaml")))
         self.params = sim_cfg.draw(seed=spec.seed, num_joints=self.robot.num_joints)
         scene = build_scene(spec.world)
         self.plant = ScaledPlant(self.robot, self.params, spec.world.start_rad,

@@ -17,7 +17,6 @@ joint goals beyond the limits. The start pose and true heading use the tracker's
 import math
 import threading
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -27,6 +26,7 @@ from snake_autonomy import _core
 from ..control.angles import wrap
 from ..estimation import load_camera_calibration
 from ..missions import load_defaults, load_mission
+from ..paths import config_path
 from ..transforms import matrix_to_quat
 from .config import SimConfig
 from .disturbances import Disturbance, parse_triggers
@@ -37,7 +37,7 @@ from .pose_sample import PoseSample
 from .sensor_clock import SensorClock
 from .vio import SimulatedVio
 
-CONFIG = Path(__file__).resolve().parents[3] / "config"
+CONFIG = config_path()
 FEEDBACKS = ("mocap", "vio")
 TRIGGER_CHECK_HZ = 10.0          # mission triggers checked on this grid of simulated time
 RECOVERY_WINDOW_S = 2.0          # a fired trigger's CoM pose is recorded again this much later

@@ -17,8 +17,9 @@ import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[4]
-ROBOTS = ROOT / "config" / "robots"
+from ...paths import config_path
+
+ROBOTS = config_path("robots")
 
 
 def add_arguments(parser):
@@ -57,7 +58,7 @@ def _setup(args):
     from .config import NavConfig
     cfg = NavConfig.from_yaml(args.config)
     robot = _core.RobotModel.from_yaml(str(robot_yaml(args.robot)))
-    params = SimConfig.from_yaml(str(ROOT / "config" / "sim.yaml")).draw(seed=0)
+    params = SimConfig.from_yaml(str(config_path("sim.yaml"))).draw(seed=0)
     return cfg, robot, params
 
 

@@ -5,6 +5,7 @@ from typing import Any, Dict, List
 
 import numpy as np
 
+from ...paths import config_path
 from ...safe_yaml import load_yaml_file
 from ...perception.depth_traversability import DepthTraversabilityParams
 from ...sim.camera import CameraIntrinsics, CameraMount
@@ -12,7 +13,7 @@ from .follower import FollowerParams
 from .gait import RectilinearGait
 from .sampler import SamplerParams
 
-NAV_YAML = Path(__file__).resolve().parents[4] / "config" / "nav.yaml"
+NAV_YAML = config_path("nav.yaml")
 
 
 class NavConfigError(ValueError):

@@ -1,0 +1,116 @@
+"""package.xml, CMakeLists.txt and requirements.txt: catkin_lint clean, every Python import declared.
+
+The declared dependencies are checked against what the code imports: each third-party module that
+python/, scripts/, test/ or bench/ imports has a rosdep key in package.xml or a pin in
+requirements.txt (PyPI-only), and each pin is imported somewhere (shapely: see PLANNED).
+"""
+import ast
+import os
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+# Module imported -> how it is declared: ("rosdep", key) in package.xml or ("pypi", name) in requirements.txt.
+THIRD_PARTY = {
+    "numpy": ("rosdep", "python3-numpy"), "scipy": ("rosdep", "python3-scipy"), "yaml": ("rosdep", "python3-yaml"),
+    "matplotlib": ("rosdep", "python3-matplotlib"), "tqdm": ("rosdep", "python3-tqdm"),
+    "rospkg": ("rosdep", "python3-rospkg"), "pytest": ("rosdep", "python3-pytest"),
+    "rospy": ("rosdep", "rospy"), "rosbag": ("rosdep", "rosbag"), "rostest": ("rosdep", "rostest"),
+    "genpy": ("rosdep", "rospy"), "tf2_msgs": ("rosdep", "tf2_msgs"), "tf2_ros": ("rosdep", "tf2_ros"),
+    "std_msgs": ("rosdep", "std_msgs"), "std_srvs": ("rosdep", "std_srvs"), "geometry_msgs": ("rosdep", "geometry_msgs"),
+    "sensor_msgs": ("rosdep", "sensor_msgs"), "nav_msgs": ("rosdep", "nav_msgs"),
+    "diagnostic_msgs": ("rosdep", "diagnostic_msgs"), "visualization_msgs": ("rosdep", "visualization_msgs"),
+    "rosgraph_msgs": ("rosdep", "rosgraph_msgs"), "catkin_pkg": ("rosdep", "catkin"),
+    "diagnostic_updater": ("rosdep", "diagnostic_updater"),
+    "mujoco": ("pypi", "mujoco"), "evo": ("pypi", "evo"), "rosbags": ("pypi", "rosbags"),
+    "dynamixel_sdk": ("pypi", "dynamixel-sdk"), "shapely": ("pypi", "shapely"),
+}
+# Pinned before their first import, for work under way (the FBSR planner).
+PLANNED = {"shapely"}
+
+
+def _imports():
+    """Top-level modules imported by the package's Python (files without .py in scripts/ and bench/ too)."""
+    files = list((ROOT / "python").rglob("*.py")) + list((ROOT / "test").rglob("*.py"))
+    for folder in ("scripts", "bench"):
+        files += [p for p in (ROOT / folder).iterdir()
+                  if p.is_file() and p.read_bytes()[:40].startswith(b"#!/usr/bin/env python3")]
+    local = {p.stem for p in (ROOT / "test").rglob("*.py")} | {"snake_autonomy"}
+    found = {}
+    for path in files:
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names = [node.module]
+            for name in names:
+                top = name.split(".")[0]
+                if top not in sys.stdlib_module_names and top not in local:
+                    found.setdefault(top, path.relative_to(ROOT))
+    return found
+
+
+def _manifest_keys():
+    root = ET.parse(ROOT / "package.xml").getroot()
+    return root, {e.text for e in root if e.tag.endswith("depend")}
+
+
+def _requirements():
+    out = {}
+    for line in (ROOT / "requirements.txt").read_text().splitlines():
+        line = line.split("#")[0].strip()
+        if line:
+            name, _, version = line.partition("==")
+            out[name.strip()] = version.strip()
+    return out
+
+
+def test_package_xml_is_format_3_without_catch_all_depends_on_test_tools():
+    root, keys = _manifest_keys()
+    assert root.get("format") == "3"
+    depends = {e.text for e in root.findall("depend")}
+    assert not depends & {"rostest", "gtest", "python3-pytest", "pybind11-dev", "orocos_kdl"}, depends
+    assert "liborocos-kdl-dev" in depends and "orocos_kdl" not in keys   # orocos_kdl is no rosdep key in noetic
+
+
+def test_every_imported_module_is_declared():
+    _, keys = _manifest_keys()
+    pins = _requirements()
+    problems = []
+    for module, where in sorted(_imports().items()):
+        if module not in THIRD_PARTY:
+            problems.append(f"{module} (imported in {where}): add it to package.xml or requirements.txt and here")
+            continue
+        kind, name = THIRD_PARTY[module]
+        if kind == "rosdep" and name not in keys:
+            problems.append(f"{module} (imported in {where}): rosdep key {name} missing from package.xml")
+        if kind == "pypi" and name not in pins:
+            problems.append(f"{module} (imported in {where}): {name} missing from requirements.txt")
+    assert not problems, "\n".join(problems)
+
+
+def test_every_requirement_is_imported_and_pinned():
+    imported = set(_imports())
+    by_name = {name: module for module, (kind, name) in THIRD_PARTY.items()}
+    for name, version in _requirements().items():
+        assert version, f"requirements.txt: {name} is not pinned (name==version)"
+        module = by_name.get(name, name)
+        assert module in imported or module in PLANNED, f"requirements.txt: {name} is never imported"
+
+
+def test_catkin_lint_is_clean(tmp_path):
+    if shutil.which("catkin_lint") is None:
+        pytest.fail("catkin_lint is missing: scripts/bootstrap installs it (catkin-lint)")
+    # catkin_lint wants the folder named like the package; a clone or worktree may be named otherwise.
+    link = tmp_path / "snake_autonomy"
+    link.symlink_to(ROOT)
+    env = dict(os.environ, PATH="/usr/bin:/bin")
+    r = subprocess.run(["catkin_lint", "-W2", "--strict", str(link)], capture_output=True, text=True, env=env,
+                       timeout=120)
+    assert r.returncode == 0 and "found 0 problems" in r.stderr + r.stdout, r.stdout + r.stderr
