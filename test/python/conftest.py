@@ -4,6 +4,9 @@ from pathlib import Path
 
 import pytest
 
+# Before any test module imports mujoco directly (it picks its GL backend at import): headless EGL.
+os.environ.setdefault("MUJOCO_GL", "egl")
+
 ROOT = Path(__file__).resolve().parents[2]
 # ../shared beside the clone; a git worktree in <clone's parent>/wt/NAME finds it one level higher;
 # SNAKE_AUTONOMY_SHARED overrides both.

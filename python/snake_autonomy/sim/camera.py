@@ -12,7 +12,7 @@ robot's forward direction (the head capsule's front cap is at its origin).
 Rendering sets MuJoCo's GL frustum from the intrinsics directly, so any fx, fy, cx, cy work; the
 convention is OpenCV's (pixel (u, v) centred on integer coordinates): a point (X, Y, Z) in the
 optical frame lands on u = fx X / Z + cx, v = fy Y / Z + cy. MuJoCo picks its GL backend when first
-imported: snake_autonomy.sim's __init__ sets MUJOCO_GL=egl (headless) unless it is set.
+imported: snake_autonomy's __init__ sets MUJOCO_GL=egl (headless) unless it is set.
 """
 import math
 from dataclasses import dataclass
