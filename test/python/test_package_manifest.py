@@ -2,7 +2,7 @@
 
 The declared dependencies are checked against what the code imports: each third-party module that
 python/, scripts/, test/ or bench/ imports has a rosdep key in package.xml or a pin in
-requirements.txt (PyPI-only), and each pin is imported somewhere (shapely: see PLANNED).
+requirements.txt (PyPI-only), and each pin is imported somewhere (or listed in PLANNED).
 """
 import ast
 import os
@@ -29,9 +29,11 @@ THIRD_PARTY = {
     "diagnostic_updater": ("rosdep", "diagnostic_updater"),
     "mujoco": ("pypi", "mujoco"), "evo": ("pypi", "evo"), "rosbags": ("pypi", "rosbags"),
     "dynamixel_sdk": ("pypi", "dynamixel-sdk"), "shapely": ("pypi", "shapely"),
+    "cv2": ("pypi", "opencv-python-headless"), "sklearn": ("pypi", "scikit-learn"), "joblib": ("pypi", "joblib"),
+    "rosgraph": ("rosdep", "rosgraph"), "rosnode": ("rosdep", "rosnode"),
 }
-# Pinned before their first import, for work under way (the FBSR planner).
-PLANNED = {"shapely"}
+# Pinned before their first import, for work under way (none now: shapely is imported by planning/fbsr).
+PLANNED = set()
 
 
 def _imports():
