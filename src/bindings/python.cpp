@@ -294,6 +294,9 @@ py::dict counters_dict(const dx::BusCounters& c) {
   d["servo_errors"] = c.servo_errors;
   d["unexpected_packets"] = c.unexpected_packets;
   d["io_errors"] = c.io_errors;
+  d["drains"] = c.drains;
+  d["late_bytes"] = c.late_bytes;
+  d["verify_mismatches"] = c.verify_mismatches;
   return d;
 }
 

@@ -1,5 +1,6 @@
 #include "snake_autonomy/dynamixel/protocol2_bus.hpp"
 
+#include <algorithm>
 #include <cstring>
 
 namespace snake_autonomy::dynamixel {
@@ -23,6 +24,11 @@ std::size_t pending_index(const std::uint8_t* ids, std::size_t n, const ServoRep
     if (ids[i] == id && replies[i].status == Status::kTimeout) return i;
   }
   return n;
+}
+
+// A transaction that ended like this may leave a reply on its way: the bus drains after it.
+bool is_line_failure(Status s) noexcept {
+  return s == Status::kTimeout || s == Status::kCrcError || s == Status::kMalformed;
 }
 
 Status first_failure(const ServoReply* replies, std::size_t n) noexcept {
@@ -49,6 +55,10 @@ SteadyTime Protocol2Bus::deadline_for(std::size_t bytes_out, std::size_t bytes_b
   const double s = reply_timeout_s(bytes_out, bytes_back, n_replies, transport_.baud_bps(), timing_);
   return std::chrono::steady_clock::now() +
          std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
+}
+
+double Protocol2Bus::single_reply_timeout_s(std::size_t data_bytes) const noexcept {
+  return reply_timeout_s(0, kStatusOverhead + data_bytes, 1, transport_.baud_bps(), timing_);
 }
 
 Status Protocol2Bus::send(std::size_t size) noexcept {
@@ -131,11 +141,42 @@ Status Protocol2Bus::record_reply(Status s) noexcept {
   return s;
 }
 
+void Protocol2Bus::drain(double quiet_s) noexcept {
+  using Clock = std::chrono::steady_clock;
+  ++counters_.drains;
+  counters_.late_bytes += rx_size_;  // what the failed transaction left unparsed
+  rx_size_ = 0;
+  const auto quiet = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(quiet_s));
+  const SteadyTime end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                            std::chrono::duration<double>(quiet_s * kDrainQuietPeriods));
+  SteadyTime quiet_until = Clock::now() + quiet;
+  for (;;) {
+    const SteadyTime until = std::min(quiet_until, end);
+    if (Clock::now() >= until) break;
+    const long got = transport_.read_some(rx_.data(), rx_.size(), until);
+    if (got < 0) break;  // the next transaction meets the I/O error and reports it
+    if (got == 0) continue;
+    counters_.bytes_received += static_cast<std::uint64_t>(got);
+    counters_.late_bytes += static_cast<std::uint64_t>(got);
+    quiet_until = Clock::now() + quiet;
+  }
+  rx_size_ = 0;
+}
+
+Status Protocol2Bus::finish(Status s, double timeout_s) noexcept {
+  if (s == Status::kTimeout || s == Status::kCrcError || s == Status::kMalformed) {
+    drain(timeout_s);
+    suspect_ = true;
+  }
+  return s;
+}
+
 Status Protocol2Bus::transact(std::uint8_t id, std::size_t tx_size, std::size_t data_bytes, std::uint8_t* data,
                               std::uint8_t* error) noexcept {
   if (error) *error = 0;
   const Status sent = send(tx_size);
   if (sent != Status::kOk || id == kBroadcastId) return sent;
+  const double timeout_s = reply_timeout_s(tx_size, kStatusOverhead + data_bytes, 1, transport_.baud_bps(), timing_);
   const SteadyTime deadline = deadline_for(tx_size, kStatusOverhead + data_bytes, 1);
   for (;;) {
     Packet p;
@@ -151,21 +192,42 @@ Status Protocol2Bus::transact(std::uint8_t id, std::size_t tx_size, std::size_t 
         }
         if (error) *error = err;
         if (has_data(st) && data && data_bytes) std::memcpy(data, p.params + 1, data_bytes);
-        return record_reply(st);
+        return finish(record_reply(st), timeout_s);
       }
-      case Event::kBadCrc: return Status::kCrcError;
-      case Event::kMalformed: return Status::kMalformed;
-      case Event::kDeadline: ++counters_.timeouts; return Status::kTimeout;
+      case Event::kBadCrc: return finish(Status::kCrcError, timeout_s);
+      case Event::kMalformed: return finish(Status::kMalformed, timeout_s);
+      case Event::kDeadline: ++counters_.timeouts; return finish(Status::kTimeout, timeout_s);
       case Event::kIoError: return Status::kIoError;
     }
   }
+}
+
+Status Protocol2Bus::verified(std::uint8_t id, std::size_t tx_size, std::size_t data_bytes, std::uint8_t* data,
+                              std::uint8_t* error) noexcept {
+  if (!suspect_) return transact(id, tx_size, data_bytes, data, error);
+  // tx_ still holds the request after each transact(): it is sent again as it is.
+  Status prev = transact(id, tx_size, data_bytes, verify_.data(), error);
+  if (!has_data(prev)) return prev;
+  for (int attempt = 1; attempt < kVerifyAttempts; ++attempt) {
+    const Status s = transact(id, tx_size, data_bytes, data, error);
+    if (!has_data(s)) return s;
+    if (s == prev && std::memcmp(verify_.data(), data, data_bytes) == 0) {
+      suspect_ = false;
+      return s;
+    }
+    ++counters_.verify_mismatches;
+    prev = s;
+    std::memcpy(verify_.data(), data, data_bytes);
+  }
+  suspect_ = true;
+  return record_reply(Status::kMalformed);
 }
 
 Status Protocol2Bus::ping(std::uint8_t id, std::uint16_t* model_number, std::uint8_t* error) noexcept {
   if (!valid_id(id)) return Status::kInvalidArgument;
   const std::size_t n = encode_packet(id, instruction::kPing, nullptr, 0, tx_.data(), tx_.size());
   std::uint8_t data[3] = {0, 0, 0};
-  const Status s = transact(id, n, 3, data, error);
+  const Status s = verified(id, n, 3, data, error);
   if (has_data(s) && model_number) *model_number = static_cast<std::uint16_t>(get_le(data, 2, false));
   return s;
 }
@@ -177,7 +239,7 @@ Status Protocol2Bus::read(std::uint8_t id, std::uint16_t address, std::uint16_t 
   e.begin(id, instruction::kRead);
   e.put16(address);
   e.put16(length);
-  return transact(id, e.finish(), length, data, error);
+  return verified(id, e.finish(), length, data, error);
 }
 
 Status Protocol2Bus::write(std::uint8_t id, std::uint16_t address, const std::uint8_t* data, std::uint16_t length,
@@ -274,9 +336,12 @@ Status Protocol2Bus::sync_read(std::uint16_t address, std::uint16_t length, cons
     if (has_data(st)) std::memcpy(data + i * length, p.params + 1, length);
     --pending;
   }
+  bool failed = false;
   for (std::size_t i = 0; i < n; ++i) {
     if (replies[i].status == Status::kTimeout) ++counters_.timeouts;
+    failed = failed || is_line_failure(replies[i].status);
   }
+  if (failed) finish(Status::kTimeout, single_reply_timeout_s(length));
   return first_failure(replies, n);
 }
 
@@ -348,6 +413,9 @@ Status Protocol2Bus::fast_sync_read(std::uint16_t address, std::uint16_t length,
       replies[i].status = whole;
     }
   }
+  bool failed = false;
+  for (std::size_t i = 0; i < n; ++i) failed = failed || is_line_failure(replies[i].status);
+  if (failed) finish(Status::kTimeout, single_reply_timeout_s(length));
   return first_failure(replies, n);
 }
 

@@ -348,6 +348,8 @@ class DriverNode {
                   kv("crc_errors", str(c.crc_errors)), kv("timeouts", str(c.timeouts)), kv("malformed", str(c.malformed)),
                   kv("hardware_error_alerts", str(c.hardware_error_alerts)), kv("servo_errors", str(c.servo_errors)),
                   kv("unexpected_packets", str(c.unexpected_packets)), kv("io_errors", str(c.io_errors)),
+                  kv("drains", str(c.drains)), kv("late_bytes", str(c.late_bytes)),
+                  kv("verify_mismatches", str(c.verify_mismatches)),
                   kv("failed_cycles", str(s.failed_cycles)),
                   kv("consecutive_failed_cycles", str(s.consecutive_failed_cycles))};
     array.status.push_back(bus);

@@ -154,6 +154,11 @@ class DriverHarness:
             time.sleep(0.02)
         return hi - lo
 
+    def wait_frozen(self, servo_id, timeout, window_s=1.0):
+        """Waits (up to timeout) until a servo's goals stay put for a whole window_s."""
+        return wait_for(lambda: self.goal_span(servo_id, window_s) <= 0, timeout,
+                        f"servo {servo_id}'s goals to stay frozen for {window_s} s")
+
     def wait_moving(self, servo_id, min_span, timeout, window_s=1.5):
         return wait_for(lambda: self.goal_span(servo_id, window_s) >= min_span, timeout,
                         f"servo {servo_id}'s goals to swing over {min_span} ticks")

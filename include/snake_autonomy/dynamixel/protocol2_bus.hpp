@@ -37,6 +37,12 @@ struct BusTiming {
   double return_delay_s = 0.0;    // the servos' Return Delay Time (address 9, 2 us per unit); set it to 0
   double margin = 1.5;            // factor on the wire time (stuffing, inter-byte gaps)
 };
+// After a transaction that failed (timeout, CRC error, truncated or garbled reply) the bus drains:
+// it reads and discards until the line has been quiet for the failed transaction's own reply
+// deadline, for at most kDrainQuietPeriods of them in total (a babbling line cannot stall it).
+// Status packets carry nothing that ties them to their request (ID, error, params only): a reply
+// arriving after its deadline would otherwise be taken as the answer to the next request.
+constexpr double kDrainQuietPeriods = 4.0;
 // Seconds to move `bytes` bytes at `baud_bps` (10 bits per byte).
 double wire_time_s(std::size_t bytes, int baud_bps) noexcept;
 // The deadline above, in seconds.
@@ -50,8 +56,14 @@ class Protocol2Bus : public ServoBus {
       : transport_(transport), timing_(timing) {}
 
   Status ping(std::uint8_t id, std::uint16_t* model_number, std::uint8_t* error) noexcept override;
+  // After a failed transaction (the bus is suspect: a late reply may still be on its way, later
+  // than the drain waited) a read is verified: repeated until two consecutive replies agree (at
+  // most kVerifyAttempts reads, else kMalformed), so a late reply to an earlier request carrying
+  // another register's value is refused, counted in verify_mismatches. PING is verified the same way.
   Status read(std::uint8_t id, std::uint16_t address, std::uint16_t length, std::uint8_t* data,
               std::uint8_t* error) noexcept override;
+  static constexpr int kVerifyAttempts = 4;
+  bool suspect() const noexcept { return suspect_; }
   Status write(std::uint8_t id, std::uint16_t address, const std::uint8_t* data, std::uint16_t length,
                std::uint8_t* error) noexcept override;
   Status reboot(std::uint8_t id, std::uint8_t* error) noexcept override;
@@ -81,8 +93,18 @@ class Protocol2Bus : public ServoBus {
   Event receive(SteadyTime deadline, Packet* packet, std::uint8_t* id) noexcept;
   Status transact(std::uint8_t id, std::size_t tx_size, std::size_t data_bytes, std::uint8_t* data,
                   std::uint8_t* error) noexcept;
+  // transact() of the request in tx_, verified when the bus is suspect (see read()).
+  Status verified(std::uint8_t id, std::size_t tx_size, std::size_t data_bytes, std::uint8_t* data,
+                  std::uint8_t* error) noexcept;
   SteadyTime deadline_for(std::size_t bytes_out, std::size_t bytes_back, std::size_t n_replies) const noexcept;
   Status record_reply(Status s) noexcept;
+  // Reads and discards until the line is quiet for `quiet_s` (bounded, see kDrainQuietPeriods).
+  void drain(double quiet_s) noexcept;
+  // The quiet time of a drain after a group read: one servo's reply deadline (not the whole
+  // group's), so a dead servo costs the 100 Hz loop little more than its timeout.
+  double single_reply_timeout_s(std::size_t data_bytes) const noexcept;
+  // Ends a single-servo transaction: a failure drains and marks the bus suspect (see read()).
+  Status finish(Status s, double timeout_s) noexcept;
 
   Transport& transport_;
   BusTiming timing_;
@@ -91,6 +113,9 @@ class Protocol2Bus : public ServoBus {
   std::array<std::uint8_t, 4 * kMaxPacketBytes> rx_{};  // received, not yet parsed
   std::size_t rx_size_ = 0;
   std::array<std::uint8_t, kMaxPacketBytes> scratch_{};  // un-stuffed parameters of one packet
+  // Set by a failed transaction, cleared by a verified read that agreed.
+  bool suspect_ = false;
+  std::array<std::uint8_t, kMaxPacketBytes> verify_{};  // the previous read of a verified read
 };
 
 }  // namespace snake_autonomy::dynamixel

@@ -36,6 +36,9 @@ struct BusCounters {
   std::uint64_t servo_errors = 0;           // replies with an error number (instruction refused)
   std::uint64_t unexpected_packets = 0;     // valid packets from another ID or not status packets
   std::uint64_t io_errors = 0;
+  std::uint64_t drains = 0;                 // waits for a quiet line after a failed transaction
+  std::uint64_t late_bytes = 0;             // bytes discarded by those waits (late or garbled replies)
+  std::uint64_t verify_mismatches = 0;      // re-read after a failure disagreed (a late reply was taken)
 };
 
 // The outcome for one servo of a (sync) read.

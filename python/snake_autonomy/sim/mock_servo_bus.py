@@ -171,7 +171,8 @@ class MockServoBus(PtyServing):
     def reset_stats(self):
         with self._lock:
             self._stats = {"packets": 0, "bad_packets": 0, "dropped": 0, "bytes_received": 0, "bytes_sent": 0,
-                           "replies": 0, "replies_damaged": 0, "rejected_writes": 0,
+                           "replies": 0, "replies_damaged": 0, "rejected_writes": 0, "superseded": 0,
+                           "late_dropped": 0,
                            "instructions": {name: 0 for name in INSTRUCTION_NAMES.values()}}
             for s in self._servos.values():
                 s.goal_writes = 0
@@ -207,8 +208,14 @@ class MockServoBus(PtyServing):
     def _clear_input(self):
         self._rx.clear()
 
-    def handle(self, data: bytes) -> bytes:
-        """Feed received bytes; returns the bytes the servos send back."""
+    def _late_dropped(self):  # (called with _lock held)
+        self._stats["late_dropped"] += 1
+
+    def handle(self, data: bytes, latest_only: bool = False) -> bytes:
+        """Feed received bytes; returns the bytes the servos send back. latest_only (the pty): when
+        several packets came in one read, the master sent the later ones after giving up on the
+        earlier ones, so only the last packet is answered (a real servo's late answer would have
+        collided with them); the earlier ones still act (writes are applied), counted as superseded."""
         out = bytearray()
         with self._lock:
             self._stats["bytes_received"] += len(data)
@@ -223,6 +230,9 @@ class MockServoBus(PtyServing):
                     self._stats["bad_packets"] += 1
                 else:
                     self._stats["packets"] += 1
+                if latest_only and out:  # a later packet followed: the master gave up on this answer
+                    self._stats["superseded"] += 1
+                    out.clear()
                 out += self._answer(status, pid, inst, params)
             self._stats["bytes_sent"] += len(out)
         return bytes(out)

@@ -2,11 +2,13 @@
 
 PtyServing is the half of MockServoBus that owns the pty, the serving loop, the thread and the
 control socket (a Unix socket, one JSON object per line, answered by one JSON line); the class
-that mixes it in provides ``handle(bytes) -> bytes``, ``_clear_input()``, ``_lock`` and the
+that mixes it in provides ``handle(bytes, latest_only) -> bytes``, ``_clear_input()``,
+``_late_dropped()``, ``_lock`` and the
 methods CONTROL_COMMANDS call. MockBusClient talks to the control socket of a running mock.
 """
 import json
 import os
+import select
 import selectors
 import socket
 import threading
@@ -131,13 +133,27 @@ class PtyServing:
             return
         except OSError:
             return  # closed underneath us (close_pty)
-        reply = self.handle(data)
+        reply = self.handle(data, latest_only=True)
         with self._lock:
+            if reply and self._master == fd and self._input_waiting(fd):
+                # The master sent its next packet while this reply was being made (this process was
+                # slow, e.g. a loaded machine): it gave up on this one. A real servo answers within
+                # its return delay or not at all, so the late reply is dropped, not sent into the
+                # next transaction.
+                self._late_dropped()
+                return
             if reply and self._master == fd:
                 try:
                     os.write(fd, reply)
                 except OSError:
                     pass  # nobody reads (full buffer): the bytes are lost, as on a wire
+
+    @staticmethod
+    def _input_waiting(fd) -> bool:
+        try:
+            return bool(select.select([fd], [], [], 0)[0])
+        except (OSError, ValueError):
+            return False
 
     def _serve_control(self, conn, clients) -> bool:
         try:
