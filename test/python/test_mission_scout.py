@@ -151,3 +151,16 @@ def test_scout_at_the_last_waypoint_finishes_the_mission_after_lowering():
     assert d.finished and r.state == "done"
     assert [n for _, n in ex.sent] == ["raise", "lower"] and r.scout_log[0].outcome == "done"
     assert t == ex.sent[1][0] + 3.0 and ex.sent[1][0] >= ex.sent[0][0] + 4.0
+
+
+def test_a_refused_lowering_aborts_the_mission_with_the_head_held_up():
+    ex = FakeExecutor(("lower",))
+    r = arrive(mission({"hold_s": 0}), planner(), ex)
+    r.step(1.0)
+    assert r.scout.wait_planned(WAIT_S)
+    t, d = 2.0, None
+    while r.state == "running" and t < 30.0:
+        d = r.step(t)
+        t += 1.0
+    assert r.state == "aborted" and "lowering: the executor refused" in r.outcome
+    assert d.finished and d.trajectory_active and [n for _, n in ex.sent] == ["raise"]

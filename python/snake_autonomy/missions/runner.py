@@ -146,7 +146,12 @@ class MissionRunner:
             if self.scout.active:
                 return self._scouting(t_s, phase)
             self.scout_log.append(self.scout.record)
-            self.scout = None
+            stop, self.scout = self.scout, None
+            if stop.head_up:      # never resume locomotion with the head raised
+                self.abort(f"scout at waypoint {stop.record.waypoint_index}: {stop.record.outcome}")
+                d = self.final_decision(t_s)
+                d.trajectory_active = True
+                return d
         limit = self.mission.time_limit_s
         if limit is not None and t_s - self.t_start > limit:
             self.state, self.outcome = TIMEOUT, f"timeout: time limit {limit:g} s reached"

@@ -18,6 +18,8 @@ The sequence (`ScoutStop`), driven by MissionRunner's control tick once the wayp
     -> holding (hold_s after the executor reports the raise finished)
     -> lowering (the inverse plan back to the lying posture)
     -> done: the mission resumes locomotion.
+    A lowering the executor refuses leaves the head up: the mission is aborted (never resumed),
+    holding the raised posture (the driver holds the last point).
 
 The planner (`ScoutPlanner`, a callable ScoutSpec -> ScoutPlan) does every check before anything
 moves: the FBSR planner's own (ZMP inside U at every sample, joint limits, head above after a
@@ -142,6 +144,11 @@ class ScoutStop:
     @property
     def active(self) -> bool:
         return self.phase not in (DONE, FAILED)
+
+    @property
+    def head_up(self) -> bool:
+        """Failed after the raise was accepted: the head may be up (the lowering was refused)."""
+        return self.phase == FAILED and LOWERING in self.record.outcome
 
     @property
     def trajectory_active(self) -> bool:

@@ -278,6 +278,9 @@ class BatchRun:
                     break
                 if decision.trajectory_active:      # a scout trajectory owns the joints
                     self._record(dec, decision)
+                    if decision.finished:           # aborted with the head up: it stays held
+                        outcome = runner.outcome
+                        break
                     continue
                 if self.scout_executor is not None and self.scout_executor.active:
                     self.scout_executor.release()
