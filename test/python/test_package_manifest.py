@@ -26,11 +26,12 @@ THIRD_PARTY = {
     "sensor_msgs": ("rosdep", "sensor_msgs"), "nav_msgs": ("rosdep", "nav_msgs"),
     "diagnostic_msgs": ("rosdep", "diagnostic_msgs"), "visualization_msgs": ("rosdep", "visualization_msgs"),
     "rosgraph_msgs": ("rosdep", "rosgraph_msgs"), "catkin_pkg": ("rosdep", "catkin"),
-    "diagnostic_updater": ("rosdep", "diagnostic_updater"),
+    "diagnostic_updater": ("rosdep", "diagnostic_updater"), "trajectory_msgs": ("rosdep", "trajectory_msgs"),
     "mujoco": ("pypi", "mujoco"), "evo": ("pypi", "evo"), "rosbags": ("pypi", "rosbags"),
     "dynamixel_sdk": ("pypi", "dynamixel-sdk"), "shapely": ("pypi", "shapely"),
     "cv2": ("pypi", "opencv-python-headless"), "sklearn": ("pypi", "scikit-learn"), "joblib": ("pypi", "joblib"),
     "rosgraph": ("rosdep", "rosgraph"), "rosnode": ("rosdep", "rosnode"),
+    "threadpoolctl": ("pypi", "threadpoolctl"),
 }
 # Pinned before their first import, for work under way (none now: shapely is imported by planning/fbsr).
 PLANNED = set()

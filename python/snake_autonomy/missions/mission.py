@@ -11,6 +11,9 @@ Optional keys: ``name``, ``description``, ``frame`` (world frame id, information
 ``sidewind: sidewind_slow``) and ``disturbances`` (pushes and twists for the simulator, a list of
 mappings checked by snake_autonomy.sim.disturbances; ignored on the robot).
 
+A waypoint may also be a mapping ``{pose: [x_m, y_m, heading_deg], scout: {height_m: 0.3, hold_s: 5}}``:
+a scout stop there once it is reached (missions/scout.py: keys, sequence).
+
 A bad mission is refused whole, before anything moves, with every problem listed (MissionError);
 each problem names the key and the value.
 """
@@ -24,6 +27,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 from ..control.waypoint_tracker import TRACKER_GAITS, TrackerParams
 from ..safe_yaml import YamlFileError, load_yaml_file
 from ..paths import config_path
+from .scout import ScoutSpec, parse_scout
 
 CONFIG_DIR = config_path()
 MISSIONS_DIR = CONFIG_DIR / "missions"
@@ -48,6 +52,8 @@ TRACKER_BOUNDS = {"d_th_m": 100.0, "kp": 1000.0}
 MAX_TRACKER_DEG = 360.0
 #: Run keys of config/tracker.yaml: (largest value, unit).
 RUN_KEY_BOUNDS = {"rate_hz": (1000.0, "Hz"), "pose_timeout_s": (3600.0, "s"), "yaw_filter_window": (10000, "samples")}
+#: Keys of a waypoint written as a mapping (missions/scout.py: the scout stop).
+WAYPOINT_KEYS = ("pose", "scout")
 MISSION_KEYS = ("name", "description", "frame", "waypoints", "time_limit_s", "tracker", "gaits", "disturbances")
 # Physical ranges of a mission (a value outside is refused with its key and value).
 MAX_WAYPOINTS = 1000
@@ -74,6 +80,7 @@ class Mission:
     waypoints_deg: List[Tuple[float, float, float]]    # (x_m, y_m, heading_deg) as written
     tracker_params: Dict[str, Any]                     # TrackerParams fields, radians/metres
     gaits: Dict[str, str]                              # tracker gait -> gait library name
+    scouts: Dict[int, ScoutSpec] = field(default_factory=dict)   # waypoint index -> scout stop there
     time_limit_s: Optional[float] = None
     description: str = ""
     frame: str = ""
@@ -93,7 +100,7 @@ class Mission:
         lines = [f"mission {_short(self.name)}: {len(self.waypoints_deg)} waypoint(s)"
                  + (f", time limit {self.time_limit_s:g} s" if self.time_limit_s else ", no time limit")]
         for i, (x, y, h) in enumerate(self.waypoints_deg):
-            lines.append(f"  {i}: x {x:+.3f} m  y {y:+.3f} m  heading {h:+.1f} deg")
+            lines.append(f"  {i}: x {x:+.3f} m  y {y:+.3f} m  heading {h:+.1f} deg" + _scout_text(self.scouts.get(i)))
         lines.append("  tracker: d_th {:.3f} m, psi_wp {:.1f} deg, psi_turn {:.1f} deg, delta0 {:.1f} deg, "
                      "delta_lim {:.1f} deg, kp {:g}".format(
                          p["d_th"], math.degrees(p["psi_wp"]), math.degrees(p["psi_turn"]),
@@ -106,6 +113,30 @@ def _short(v, limit: int = 80) -> str:
     """repr(v), cut to `limit` characters: a problem message stays one readable line."""
     text = repr(v)
     return text if len(text) <= limit else text[:limit] + f"... ({len(text)} characters)"
+
+
+def _scout_text(spec) -> str:
+    if spec is None:
+        return ""
+    height = "highest head" if spec.height_m is None else f"head {spec.height_m:g} m"
+    return f"  then scout: {height}, hold {spec.hold_s:g} s"
+
+
+def _waypoint_entry(wp: dict, i: int, scouts: Dict[int, "ScoutSpec"], problems: List[str]):
+    """A waypoint written as a mapping {pose: [x_m, y_m, heading_deg], scout: {...}}: its pose
+    (None when missing), its scout stop recorded in `scouts`."""
+    for key in wp:
+        if key not in WAYPOINT_KEYS:
+            problems.append(f"waypoints[{i}].{key}: unknown key (value {_short(wp[key])}); "
+                            f"known: {', '.join(WAYPOINT_KEYS)}")
+    if "scout" in wp:
+        spec = parse_scout(wp["scout"], f"waypoints[{i}].scout", problems)
+        if spec is not None:
+            scouts[i] = spec
+    if "pose" not in wp:
+        problems.append(f"waypoints[{i}].pose: missing ([x_m, y_m, heading_deg])")
+        return None
+    return wp["pose"]
 
 
 def _is_number(v) -> bool:
@@ -264,6 +295,7 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
             problems.append(f"{key}: unknown key (value {_short(data[key])}); known: {', '.join(MISSION_KEYS)}")
 
     waypoints: List[Tuple[float, float, float]] = []
+    scouts: Dict[int, ScoutSpec] = {}
     raw_wps = data.get("waypoints")
     if "waypoints" not in data:
         problems.append("waypoints: missing (a list of [x_m, y_m, heading_deg])")
@@ -275,6 +307,11 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
         problems.append(f"waypoints: at most {MAX_WAYPOINTS} waypoints, got {len(raw_wps)}")
     else:
         for i, wp in enumerate(raw_wps):
+            if isinstance(wp, dict):
+                wp = _waypoint_entry(wp, i, scouts, problems)
+                if wp is None:
+                    waypoints.append(None)
+                    continue
             if not isinstance(wp, (list, tuple)) or len(wp) != 3:
                 problems.append(f"waypoints[{i}]: expected [x_m, y_m, heading_deg], got {_short(wp)}")
                 waypoints.append(None)
@@ -340,7 +377,7 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
     if problems:
         raise MissionError(source, problems)
     return Mission(name=name, waypoints_deg=list(waypoints), tracker_params=tracker, gaits=gaits,
-                   time_limit_s=float(time_limit) if time_limit is not None else None,
+                   scouts=scouts, time_limit_s=float(time_limit) if time_limit is not None else None,
                    description=data.get("description", ""), frame=data.get("frame", ""),
                    source=source, raw=copy.deepcopy(data))
 

@@ -6,7 +6,13 @@ The mission node wires it to topics; the simulator can drive it directly. Safety
   ``pose_timeout_s``, a pose source reporting lost tracking, or a non-finite pose all hold the
   robot (the tracker is not stepped, ERRATA #7) and say so; tracking resumes when fresh poses have
   refilled the yaw filter;
-- the mission ends (hold) when the last waypoint is reached, on abort and on its time limit.
+- the mission ends (hold) when the last waypoint is reached, on abort and on its time limit;
+- a waypoint with a scout stop (missions/scout.py): once reached, locomotion holds while the stop
+  plans (a worker thread), raises, holds and lowers; `Decision.trajectory_active` then tells the
+  caller not to send gait commands (the trajectory owns the joints). A failed plan is recorded in
+  `scout_log` and the mission resumes. The time limit is checked only between scout stops (a raised
+  head is lowered first); a stop needs `scout_planner` and `executor`, without them it is recorded
+  as failed and skipped.
 
 Heading. The tracker's yaw is the direction the robot travels when it sidewinds. ``com_pose`` carries
 the virtual chassis (x axis along the body, eq. 3.11-3.14); ``heading_offset_rad`` (config/tracker.yaml
@@ -15,11 +21,13 @@ thesis states for COBRA; +90 deg on the simulated COBRA, which sidewinds towards
 (config/sim.yaml, measured there).
 """
 import math
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any, Dict, Optional
+from typing import Any, Dict, List, Optional
 
 from ..control import TrackerCommand, WaypointTracker, YawMovingAverage
 from .mission import Mission
+from .scout import ScoutPlanner, ScoutRecord, ScoutStop, TrajectoryExecutor
 
 IDLE, RUNNING, DONE, ABORTED, TIMEOUT = "idle", "running", "done", "aborted", "timeout"
 NAN = float("nan")
@@ -36,12 +44,15 @@ class Decision:
     hold: bool                     # locomotion held (stale pose or mission over)
     finished: bool = False         # the mission ended at this tick
     outcome: str = ""
+    trajectory_active: bool = False  # a scout trajectory owns the joints: send no gait command
     command: Optional[TrackerCommand] = field(default=None, repr=False)
 
 
 class MissionRunner:
     def __init__(self, mission: Mission, pose_timeout_s: float = 0.5, yaw_window: int = 10,
-                 min_fresh_samples: Optional[int] = None, heading_offset_rad: float = 0.0):
+                 min_fresh_samples: Optional[int] = None, heading_offset_rad: float = 0.0,
+                 scout_planner: Optional[ScoutPlanner] = None,
+                 executor: Optional[TrajectoryExecutor] = None):
         if not (isinstance(pose_timeout_s, (int, float)) and math.isfinite(pose_timeout_s) and pose_timeout_s > 0):
             raise ValueError(f"pose_timeout_s: must be a positive number, got {pose_timeout_s!r}")
         self.mission = mission
@@ -61,6 +72,10 @@ class MissionRunner:
         self._source_detail = ""
         self._stale_reason = "no pose yet"
         self._was_stale = True
+        self.scout_planner, self.executor = scout_planner, executor
+        self.scout: Optional[ScoutStop] = None
+        self.scout_log: List[ScoutRecord] = []
+        self._pool: Optional[ThreadPoolExecutor] = None
 
     @property
     def hold_gait(self) -> str:
@@ -126,6 +141,17 @@ class MissionRunner:
         if self.state != RUNNING:
             return None
         n = len(self.mission.waypoints)
+        if self.scout is not None:
+            phase = self.scout.poll(t_s)
+            if self.scout.active:
+                return self._scouting(t_s, phase)
+            self.scout_log.append(self.scout.record)
+            stop, self.scout = self.scout, None
+            if stop.head_up:      # never resume locomotion with the head raised
+                self.abort(f"scout at waypoint {stop.record.waypoint_index}: {stop.record.outcome}")
+                d = self.final_decision(t_s)
+                d.trajectory_active = True
+                return d
         limit = self.mission.time_limit_s
         if limit is not None and t_s - self.t_start > limit:
             self.state, self.outcome = TIMEOUT, f"timeout: time limit {limit:g} s reached"
@@ -144,11 +170,39 @@ class MissionRunner:
                       distance=cmd.distance, yaw_error_abs=cmd.yaw_error_abs, yaw_error_rel=cmd.yaw_error_rel,
                       yaw_error=cmd.yaw_error, w=cmd.w, mode=cmd.mode, delta=cmd.delta_rad, gait=gait,
                       done=cmd.done, pose_stale=False, note=cmd.action)
+        if cmd.reached and cmd.target_index in self.mission.scouts:
+            self._start_scout(t_s, cmd.target_index)
+            if self.scout is not None:
+                return self._scouting(t_s, self.scout.phase)
         finished = cmd.done
         if finished:
             self.state, self.outcome = DONE, "done: every waypoint reached"
         return Decision(t_s, gait, cmd.steer, cmd.delta_rad if cmd.steer else 0.0, status, hold=cmd.done,
                         finished=finished, outcome=self.outcome, command=cmd)
+
+    # -- scout stops (missions/scout.py) -------------------------------------------------------------
+    def _start_scout(self, t_s: float, index: int) -> None:
+        spec = self.mission.scouts[index]
+        if self.scout_planner is None or self.executor is None:
+            record = ScoutRecord(index, spec, "failed: no scout planner or trajectory executor on this path")
+            self.scout_log.append(record)
+            return
+        if self._pool is None:
+            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="scout-planner")
+        self.scout = ScoutStop(index, spec, self.scout_planner, self.executor, self._pool)
+        self.scout.poll(t_s)
+
+    def _scouting(self, t_s: float, phase: str) -> Decision:
+        """Locomotion held while a scout stop runs; the time limit waits for the head to be down."""
+        d = self._hold(t_s, f"scout at waypoint {self.scout.record.waypoint_index}: {phase}", stale=False)
+        d.trajectory_active = self.scout.trajectory_active
+        return d
+
+    def close(self) -> None:
+        """Stop the planner's worker (a plan under way is finished and dropped)."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
 
     def _hold(self, t_s: float, note: str, stale: bool, finished: bool = False) -> Decision:
         tr = self.tracker

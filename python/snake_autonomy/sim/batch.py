@@ -44,6 +44,7 @@ from .world import CONFIG, SimWorld, WorldSpec
 
 DRIVER_RATE_HZ = 100.0
 TRAJECTORY_RATE_HZ = 10.0
+SCOUT_PLAN_TIMEOUT_S = 600.0     # wall time a scout plan may take in a batch run
 DEG = 180.0 / math.pi
 
 
@@ -57,6 +58,7 @@ class RunSpec(WorldSpec):
     driver_config: str = str(CONFIG / "driver.yaml")   # the DriverController's keys of driver_node's file
     settle_s: float = 0.5                     # pose source running before the mission starts
     label: str = ""                           # free text for tables
+    scout_config: Optional[str] = None        # the FBSR planner's (None: config/scout.yaml)
 
     def __post_init__(self):
         if self.sensors is None:
@@ -203,8 +205,15 @@ class BatchRun:
         self.heading_offset_rad, self.plant = w.heading_offset_rad, w.plant
         self.driver = LockStepDriver(self.robot, self.library, self.plant, load_driver_config(spec.driver_config))
         self.feedback = make_feedback(spec.feedback, self.params, self.robot)
+        self.scout_executor, scout_planner, self._watching_tail = None, None, False
+        if self.mission.scouts:     # scout stops: the FBSR planner, trajectories on the plant
+            from ..missions.scout import fbsr_scout_planner
+            from .scout_executor import PlantTrajectoryExecutor
+            scout_planner = fbsr_scout_planner(spec.robot, spec.scout_config, spec.driver_config)
+            self.scout_executor = PlantTrajectoryExecutor(self.plant)
         self.runner = MissionRunner(self.mission, self.defaults["pose_timeout_s"], self.defaults["yaw_filter_window"],
-                                    heading_offset_rad=self.heading_offset_rad)
+                                    heading_offset_rad=self.heading_offset_rad, scout_planner=scout_planner,
+                                    executor=self.scout_executor)
         self.time_limit_s = spec.time_limit_s if spec.time_limit_s is not None else self.mission.time_limit_s
         if self.time_limit_s is not None:
             self.runner.mission.time_limit_s = float(self.time_limit_s)
@@ -240,6 +249,8 @@ class BatchRun:
                 runner.set_source_status(ok, detail)
                 source_ok = ok
             driver.update(t, dt)
+            if self.scout_executor is not None:
+                self._scout_step(t)
             com = driver.com_pose()
             if com is not None:
                 runner.on_pose(t, *com)
@@ -259,9 +270,20 @@ class BatchRun:
                 outcome = runner.outcome
                 break
             if k >= k_start and (k - k_start) % tick_every == 0:
+                if runner.scout is not None and runner.scout.phase == "planning":
+                    # lock-step: planning takes no simulated time (its wall time is in the record)
+                    runner.scout.wait_planned(SCOUT_PLAN_TIMEOUT_S)
                 decision = runner.step(t)
                 if decision is None:
                     break
+                if decision.trajectory_active:      # a scout trajectory owns the joints
+                    self._record(dec, decision)
+                    if decision.finished:           # aborted with the head up: it stays held
+                        outcome = runner.outcome
+                        break
+                    continue
+                if self.scout_executor is not None and self.scout_executor.active:
+                    self.scout_executor.release()
                 why = driver.command_gait(decision.gait, decision.steer, decision.delta_rad)
                 if why:
                     raise RuntimeError(f"the driver refused the mission's command: {why}")
@@ -280,7 +302,22 @@ class BatchRun:
         if bar is not None:
             bar.close()
         wall = time.perf_counter() - wall0
+        runner.close()
         return self._result(traj, dec, outcome or runner.outcome, t_start, wall)
+
+    def _scout_step(self, t: float) -> None:
+        """The scout trajectory's goals over the driver's; the head's height while held raised."""
+        ex = self.scout_executor
+        ex.apply(t)
+        if ex.active != self._watching_tail:      # the head is raised on purpose: watch the tail
+            self._watching_tail = ex.active
+            self.world.watch_tilt_of(self.robot.frame_names[-1] if ex.active else None)
+        stop = self.runner.scout
+        if stop is not None and stop.phase == "holding":
+            head_z = float(self.plant.frame_positions()[0, 2])
+            rec = stop.record
+            rec.measured_head_height_m = head_z if math.isnan(rec.measured_head_height_m) \
+                else min(rec.measured_head_height_m, head_z)
 
     def _record(self, dec, decision) -> None:
         s = decision.status
@@ -320,6 +357,7 @@ class BatchRun:
             "sim_time_s": sim_time, "mission_time_s": sim_time - t_start, "wall_time_s": wall,
             "real_time_factor": sim_time / wall if wall > 0 else None,
             "disturbances": disturbances,
+            "scouts": [r.as_dict() for r in self.runner.scout_log],
             "recovered_all": all(d["recovered"] for d in disturbances),
             "seed": spec.seed, "feedback": spec.feedback, "start": list(spec.start),
         }

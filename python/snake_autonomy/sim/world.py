@@ -119,6 +119,7 @@ class SimWorld:
                     if "vio" in sensors else None)
         self.rollover_tilt_deg = self.config.monitor.rollover_tilt_deg
         self.rolled_over = False
+        self._tilt_ref = None          # (frame, its world rotation) while the head is raised on purpose
         self.max_tilt_deg = 0.0
         self.mission_t0: Optional[float] = None     # plant time when the mission started
         self.target_index = 0
@@ -185,7 +186,7 @@ class SimWorld:
             out.vio = self.vio.measure(t, world_t_head)
             cam = world_t_head @ self.vio.head_t_camera
             out.truth_camera = (cam[:3, 3].copy(), matrix_to_quat(cam[:3, :3]))
-        out.tilt_deg = plant.base_tilt_deg()
+        out.tilt_deg = plant.base_tilt_deg() if self._tilt_ref is None else self._reference_tilt_deg()
         self.max_tilt_deg = max(self.max_tilt_deg, out.tilt_deg)
         if out.tilt_deg > self.rollover_tilt_deg:
             self.rolled_over = True
@@ -196,6 +197,17 @@ class SimWorld:
         return out
 
     # ---- ground truth ----------------------------------------------------------------------------
+    def watch_tilt_of(self, frame: Optional[str]) -> None:
+        """While a scout stop raises the head (base_link) on purpose, the roll-over check watches
+        `frame` (a frame of the lying base, e.g. the tail) tipping from its present orientation
+        instead of base_link's tilt from the vertical; None goes back to base_link."""
+        self._tilt_ref = None if frame is None else (frame, self.plant.frame_transform(frame)[:3, :3].copy())
+
+    def _reference_tilt_deg(self) -> float:
+        frame, rot0 = self._tilt_ref
+        up = self.plant.frame_transform(frame)[:3, :3] @ rot0.T[:, 2]
+        return float(np.degrees(np.arccos(np.clip(up[2], -1.0, 1.0))))
+
     def true_com_pose(self) -> Tuple[float, float, float]:
         """Centre of mass (x, y) and heading (virtual chassis yaw + heading offset) from the true
         base pose and joint angles: what the driver would compute from a perfect pose."""

@@ -2,6 +2,7 @@
 
 config.py     config/scout.yaml: planner parameters and each robot's lying posture, validated
 chain.py      kinematics with the world fixed at the tail, the lying posture, ground contacts
+batch_kinematics.py  the same FK with numpy on a batch of postures (the cost and its gradient)
 support.py    support polygons, the ZMP's distance to their edges (shapely)
 spline.py     the one-parameter cubic of eq. 3-8 (ERRATA #10)
 cost.py       C = K1 Cd + K2 Cs + K3 Cp (+ torque, ground and clearance terms), eq. 9-15
@@ -11,5 +12,6 @@ plan_io.py    plan.json (the issue's contract), reading and validating it
 figures.py    ZMP paths in the support polygons per stage (fig. 7), head height over time
 execute.py    running a plan in the MuJoCo plant, centre of pressure, metrics.json
 pipe_scene.py the hanging pipe of fig. 6 as MJCF for the plant
+trajectory.py a plan as the driver's JointTrajectory points, checked against its velocity limit
 cli.py        `snake_autonomy scout plan|run`
 """

@@ -30,6 +30,8 @@ from scipy.spatial import ConvexHull
 
 from snake_autonomy import _core
 
+from .batch_kinematics import ChainModel, StageKinematics
+
 #: A frame this close to the resting face is a ground contact.
 CONTACT_TOL_M = 1e-3
 
@@ -85,6 +87,7 @@ class Chain:
         self.lower = np.asarray(robot.joint_lower_rad, float)
         self.upper = np.asarray(robot.joint_upper_rad, float)
         self.q_lying = np.asarray(q_lying, float).copy()
+        self._batch_model = None
         self._tail_world = self._level(self.q_lying)
         lying = self.pose(self.q_lying)
         self.contact_frames = np.flatnonzero(
@@ -129,6 +132,14 @@ class Chain:
         t[:3, :3] = r_tail
         t[:3, 3] = (0.0, 0.0, self.radius_m - z0)
         return t
+
+    def stage_kinematics(self, q_start, active_modules: int) -> StageKinematics:
+        """Batched FK of the postures that move only the first `active_modules` joints from
+        q_start (batch_kinematics.py; the same chain as pose(), computed with numpy)."""
+        if self._batch_model is None:
+            self._batch_model = ChainModel(self._relative, self.num_joints, self.masses)
+        pose = self.pose(q_start)
+        return StageKinematics(self._batch_model, pose.positions, pose.rotations, active_modules)
 
     # ---- partition -----------------------------------------------------------------------------
     def base_contacts(self, active_modules: int) -> np.ndarray:

@@ -3,7 +3,10 @@
     snake_autonomy scout plan --robot ROBOT [--height-m H] [--max-active N] [--pipe X,Y,R] [--seed S] --out DIR
     snake_autonomy scout run  --robot ROBOT [same options] --out DIR
 
-`plan` writes DIR/plan.json (plan_io.py) and the figures DIR/zmp_stages.png, DIR/head_height.png.
+`plan` writes DIR/plan.json (plan_io.py) and the figures DIR/zmp_stages.png, DIR/head_height.png,
+and DIR/trajectory.json: the points of the driver's trajectory_msgs/JointTrajectory (trajectory.py;
+refused with exit 1 when they exceed config/driver.yaml's max_joint_velocity_rad_s). With --lower
+these are the inverse plan's, from the raised posture back down to the lying one.
 `run` also executes the plan in the MuJoCo plant (execute.py) and writes DIR/metrics.json, plus
 DIR/run.json (head position, base lift, pipe distance). Without --height-m the head goes as high as
 the active portion allows; with it, planning stops once the head reaches H. Bad options (unknown
@@ -39,6 +42,9 @@ def add_arguments(parser):
         p.add_argument("--out", required=True, metavar="DIR", help="results folder")
         p.add_argument("--no-restarts", action="store_true", help="no random restarts (benchmarks)")
         p.add_argument("--config", metavar="YAML", help="planner configuration (default config/scout.yaml)")
+        if name == "plan":
+            p.add_argument("--lower", action="store_true",
+                           help="write the inverse: from the raised posture back to the lying one")
         if name == "run":
             p.add_argument("--sim-seed", type=int, default=0, help="physics draws of config/sim.yaml")
 
@@ -95,12 +101,29 @@ def main(args) -> int:
         return 1
     from . import plan_io
     from .figures import write_figures
+    from .planner import lowering
+    from .trajectory import driver_velocity_limit, lead_in_s, plan_points, velocity_problems
 
+    chain = planner.chain
+    vmax = driver_velocity_limit()
+    if getattr(args, "lower", False):
+        raised_s = plan.planning_time_s
+        plan = lowering(plan)
+        plan.planning_time_s = raised_s
+        trajectory = plan_points(plan, cfg.planner.sample_period_s)
+    else:
+        trajectory = plan_points(plan, cfg.planner.sample_period_s, lead_in_s(chain.lower, chain.upper, vmax))
+    problems = velocity_problems(trajectory, vmax)
+    if problems:
+        print(f"scout {args.scout_command}: the trajectory breaks the driver's limit: {'; '.join(problems)}",
+              file=sys.stderr)
+        return 1
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     period = cfg.planner.sample_period_s
     doc = plan_io.write(plan, out / "plan.json", period)
     write_figures(plan, out, period, pipe)
+    (out / "trajectory.json").write_text(json.dumps(trajectory.to_dict()) + "\n")
     print(f"{plan.robot_name}: {plan.active_modules} active modules, head {plan.final_head_height_m:.3f} m, "
           f"{len(plan.stages)} stages, {plan.duration_s:.1f} s of motion, {plan.restarts} restarts, "
           f"planned in {plan.planning_time_s:.1f} s -> {out / 'plan.json'} ({len(doc['samples'])} samples)")

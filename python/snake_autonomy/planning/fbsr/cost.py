@@ -46,11 +46,15 @@ class Directive:
     target_m: Optional[Sequence[float]] = None
 
     def cost(self, head) -> float:
+        return float(self.costs(np.asarray(head, float)[None, :])[0])
+
+    def costs(self, heads) -> np.ndarray:
+        """Cd for (B, 3) head positions."""
         if self.target_m is not None:
-            return float(np.linalg.norm(head - np.asarray(self.target_m, float)))
+            return np.linalg.norm(heads - np.asarray(self.target_m, float), axis=1)
         if self.height_m is not None:
-            return float(np.hypot(head[2] - self.height_m, 1e-3))
-        return float(-head[2])
+            return np.hypot(heads[:, 2] - self.height_m, 1e-3)
+        return -heads[:, 2]
 
 
 @dataclass
@@ -116,6 +120,7 @@ class StageCost:
         i, j = np.meshgrid(np.arange(n_f), np.arange(n_f), indexing="ij")
         moving = (i < self.m) | (j < self.m)
         self._pairs = np.argwhere((j - i >= 3) & moving)
+        self.kin = chain.stage_kinematics(self.q_start, self.m)
 
     # ---- trajectory ----------------------------------------------------------------------------
     def joints(self, delta, t_s) -> np.ndarray:
@@ -128,37 +133,69 @@ class StageCost:
     def poses(self, delta, t_s):
         return [self.chain.pose(q) for q in self.joints(delta, t_s)]
 
+    def positions_com(self, delta, t_s):
+        """((len(t), F, 3) frame positions, (len(t), 3) CoGs) in the world (batched FK)."""
+        t = np.atleast_1d(np.asarray(t_s, float))
+        return self.kin.positions_com(spline.positions(self.q_start[:self.m], delta, self.t_end_s, t))
+
     # ---- cost ----------------------------------------------------------------------------------
     def terms(self, delta) -> dict:
-        q = self.joints(delta, self.t_s)
+        return {k: float(v[0]) for k, v in self.terms_batch(np.asarray(delta, float)[None, :]).items()}
+
+    def terms_batch(self, deltas) -> dict:
+        """Every term for each row of deltas (B, m): {name: (B,)}; all B x samples postures in one
+        batched FK."""
+        deltas = np.atleast_2d(deltas)
+        b, s_n = len(deltas), len(self.t_s)
         w, m, r = self.w, self.m, self.chain.radius_m
-        pc = [self.chain.positions_com(qq) for qq in q]
-        pos = np.array([p for p, _ in pc])                  # (samples, frames, 3)
-        zmp = np.array([c[:2] for _, c in pc])
-        cs = stability_cost(self.support.signed_distance(zmp), w.ks_per_m2, w.k_out_per_m2)
-        out = {"Cd": self.directive.cost(pos[-1, 0]), "Cs": self._integrate(cs)}
+        t = self.t_s[:, None]
+        a, bb = spline.coefficients(deltas, self.t_end_s)              # (B, m) each
+        q = a[:, None, :] * t ** 3 + bb[:, None, :] * t ** 2 + self.q_start[:m]   # (B, S, m)
+        pos, com = self.kin.positions_com(q.reshape(b * s_n, m))
+        pos = pos.reshape(b, s_n, -1, 3)
+        zmp = com[:, :2]
+        cs = stability_cost(self.support.signed_distance(zmp), w.ks_per_m2, w.k_out_per_m2).reshape(b, s_n)
+        out = {"Cd": self.directive.costs(pos[:, -1, 0]), "Cs": self._integrate(cs)}
         if self.pipe is not None:
-            d = pos[:, :m, :2] - (self.pipe.x_m, self.pipe.y_m)
-            out["Cp"] = self._integrate(np.sum(d ** 2, axis=(1, 2)))
-            wall = pipe_wall_overlap(pos[:, :m], self.pipe, r)
-            out["pipe_wall"] = self._integrate(np.sum(wall ** 2, axis=1))
+            d = pos[:, :, :m, :2] - (self.pipe.x_m, self.pipe.y_m)
+            out["Cp"] = self._integrate(np.sum(d ** 2, axis=(2, 3)))
+            wall = pipe_wall_overlap(pos[:, :, :m], self.pipe, r)
+            out["pipe_wall"] = self._integrate(np.sum(wall ** 2, axis=2))
         if w.k_torque:
-            ratios = [np.sum((self.chain.gravity_torques(self.chain.pose(qq), m)
-                              / self.torque_limit_nm) ** 2) for qq in q]
-            out["Ct"] = self._integrate(ratios)
-        out["ground"] = self._integrate(np.sum(np.clip(r - pos[:, :m, 2], 0.0, None) ** 2, axis=1))
-        a, b = pos[:, self._pairs[:, 0]], pos[:, self._pairs[:, 1]]
-        gap = np.clip(2.0 * r - np.linalg.norm(a - b, axis=2), 0.0, None)
-        out["clearance"] = self._integrate(np.sum(gap ** 2, axis=1))
+            qq = np.repeat(self.q_start[None, None, :], s_n, axis=1).repeat(b, axis=0)
+            qq[:, :, :m] = q
+            ratios = [[np.sum((self.chain.gravity_torques(self.chain.pose(x), m) / self.torque_limit_nm) ** 2)
+                       for x in row] for row in qq]
+            out["Ct"] = self._integrate(np.asarray(ratios))
+        out["ground"] = self._integrate(np.sum(np.clip(r - pos[:, :, :m, 2], 0.0, None) ** 2, axis=2))
+        pa, pb = pos[:, :, self._pairs[:, 0]], pos[:, :, self._pairs[:, 1]]
+        gap = np.clip(2.0 * r - np.linalg.norm(pa - pb, axis=3), 0.0, None)
+        out["clearance"] = self._integrate(np.sum(gap ** 2, axis=2))
         return out
 
-    def __call__(self, delta) -> float:
-        t = self.terms(delta)
+    def totals(self, deltas) -> np.ndarray:
+        """C of eq. 9 (with the penalties) for each row of deltas (B, m)."""
+        t = self.terms_batch(deltas)
         w = self.w
-        return (w.k1 * t["Cd"] + w.k2 * t["Cs"] + w.k3 * t.get("Cp", 0.0)
-                + w.k_wall_per_m2 * t.get("pipe_wall", 0.0)
-                + w.k_torque * t.get("Ct", 0.0) + w.k_ground_per_m2 * t["ground"]
+        zero = 0.0
+        return (w.k1 * t["Cd"] + w.k2 * t["Cs"] + w.k3 * t.get("Cp", zero)
+                + w.k_wall_per_m2 * t.get("pipe_wall", zero)
+                + w.k_torque * t.get("Ct", zero) + w.k_ground_per_m2 * t["ground"]
                 + w.k_clearance_per_m2 * t["clearance"])
 
-    def _integrate(self, values) -> float:
-        return float(self._trapezoid @ np.asarray(values, float))
+    def __call__(self, delta) -> float:
+        return float(self.totals(np.asarray(delta, float)[None, :])[0])
+
+    def value_and_gradient(self, delta, step: float, lower, upper):
+        """(C, dC/d delta) by forward differences of `step` (backward at an upper bound), every
+        perturbed trajectory in the same batch as the nominal one."""
+        x = np.asarray(delta, float)
+        h = np.where(x + step <= upper, step, -step)
+        batch = np.repeat(x[None, :], len(x) + 1, axis=0)
+        batch[np.arange(1, len(x) + 1), np.arange(len(x))] += h
+        c = self.totals(batch)
+        return float(c[0]), (c[1:] - c[0]) / h
+
+    def _integrate(self, values) -> np.ndarray:
+        """Trapezoidal integral over the cost samples (last axis)."""
+        return np.asarray(values, float) @ self._trapezoid

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from typing import List, Optional
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from .chain import Chain, lying_posture
 from .config import PlannerConfig, RobotPosture
@@ -75,6 +76,12 @@ class FbsrPlanner:
     def plan(self, max_active: Optional[int] = None, height_m: Optional[float] = None,
              pipe: Optional[Pipe] = None, seed: int = 0, restarts: bool = True,
              target_m=None) -> Plan:
+        # One BLAS thread: L-BFGS-B makes many BLAS calls on vectors of a few elements, and
+        # OpenBLAS's second thread spin-waits on them; on a busy machine that cost 4x (bench/).
+        with threadpool_limits(limits=1, user_api="blas"):
+            return self._plan(max_active, height_m, pipe, seed, restarts, target_m)
+
+    def _plan(self, max_active, height_m, pipe, seed, restarts, target_m) -> Plan:
         cfg = self.cfg
         rng = np.random.default_rng(seed)
         max_active = self.posture.max_active if max_active is None else int(max_active)

@@ -14,6 +14,10 @@ from .cost import StageCost, pipe_wall_overlap
 from .support import Support
 
 
+#: Forward-difference step of the cost's gradient (rad).
+GRADIENT_STEP_RAD = 1e-4
+
+
 class PlanningError(RuntimeError):
     """No plan satisfies the checks; the message says which and why."""
 
@@ -65,25 +69,25 @@ class Checks:
     period_s: float = 0.05
 
     def failures(self, cost: StageCost, delta) -> list:
-        poses = cost.poses(delta, sample_times(cost.t_end_s, self.period_s))
+        pos, com = cost.positions_com(delta, sample_times(cost.t_end_s, self.period_s))
         out = []
-        zmp = np.array([p.zmp for p in poses])
+        zmp = com[:, :2]
         l = self.within.signed_distance(zmp)
         if np.any(l <= 0):
             out.append(f"ZMP leaves the polygon (worst edge distance {l.min() * 1e3:.1f} mm)")
         if self.end_within is not None and self.end_within.signed_distance(zmp[-1:])[0] <= 0:
             out.append("ZMP ends outside U ∩ U'")
         r = cost.chain.radius_m
-        low = min(float(p.positions[:cost.m, 2].min()) for p in poses)
+        low = float(pos[:, :cost.m, 2].min())
         if low < r - self.ground_tol_m:
             out.append(f"a module goes {1e3 * (r - low):.1f} mm into the floor")
         if cost.pipe is not None and cost.w.k_wall_per_m2 > 0:
-            wall = max(float(pipe_wall_overlap(p.positions[:cost.m], cost.pipe, r).max())
-                       for p in poses)
+            wall = float(pipe_wall_overlap(pos[:, :cost.m], cost.pipe, r).max())
             if wall > self.ground_tol_m:
                 out.append(f"a module goes {1e3 * wall:.1f} mm into the pipe's wall")
-        if self.head_above_m is not None and poses[-1].head[2] <= self.head_above_m:
-            out.append(f"head ends at {poses[-1].head[2]:.3f} m, not above {self.head_above_m:.3f} m")
+        head_z = float(pos[-1, 0, 2])
+        if self.head_above_m is not None and head_z <= self.head_above_m:
+            out.append(f"head ends at {head_z:.3f} m, not above {self.head_above_m:.3f} m")
         return out
 
 
@@ -105,8 +109,9 @@ def optimise(cost: StageCost, checks: Checks, rng: np.random.Generator, max_rest
             x0 = np.clip(rng.normal(0.0, 0.02, m), lo, hi)
         else:
             x0 = rng.uniform(lo, hi) * 0.5
-        res = minimize(cost, x0, method="L-BFGS-B", bounds=bounds,
-                       options={"maxiter": 200, "eps": 1e-4})
+        # the gradient by forward differences (the step scipy used), batched in one FK call
+        res = minimize(cost.value_and_gradient, x0, args=(GRADIENT_STEP_RAD, lo, hi), jac=True,
+                       method="L-BFGS-B", bounds=bounds, options={"maxiter": 200})
         problems = checks.failures(cost, res.x)
         if not problems:
             return Stage(kind, m, cost.q_start.copy(), np.asarray(res.x, float), cost.t_end_s,
