@@ -44,6 +44,7 @@ class Launch:
     """roslaunch snake_autonomy sim.launch ARGS in a new session; every output line collected."""
 
     def __init__(self, tmp_path, *args):
+        self.tmp_path = tmp_path
         port = _free_port()
         env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_HOME=str(tmp_path),
                    ROS_LOG_DIR=str(tmp_path / "log"), PYTHONUNBUFFERED="1")
@@ -72,13 +73,33 @@ class Launch:
             return found()
 
     def close(self):
-        """Kills whatever is left of the process group (nodes left behind included)."""
+        """Kills whatever is left: roslaunch's process group, and the nodes it started, which roslaunch
+        puts in sessions of their own (a SIGKILLed roslaunch leaves them running, with the master):
+        every process whose command line names this test's folder (their __log:= argument)."""
         try:
             os.killpg(self.proc.pid, signal.SIGKILL)
         except ProcessLookupError:
             pass
         self.proc.wait(timeout=30)
         self._reader.join(5)
+        _kill_processes_naming(str(self.tmp_path))
+
+
+def _kill_processes_naming(text: str) -> None:
+    """SIGKILL every process (but this one) whose command line contains `text`."""
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit() or int(entry) == os.getpid():
+            continue
+        try:
+            with open(f"/proc/{entry}/cmdline", "rb") as f:
+                cmdline = f.read().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:
+            continue
+        if text in cmdline:
+            try:
+                os.kill(int(entry), signal.SIGKILL)
+            except ProcessLookupError:
+                pass
 
 
 @needs_ros
