@@ -35,6 +35,7 @@ class GaitPoint:
     seed: int = 0                # plant parameters drawn with this seed (config/sim.yaml)
     randomize: bool = False      # False: the plant's nominal parameters
     scales: bool = False
+    flat_belly_fraction: float = 0.0   # the plant option (nav runs use nav.yaml plant:)
     wavelength_m: float = 1.0
     frequency_hz: float = 0.4
     ramp_s: float = 2.0
@@ -73,7 +74,9 @@ def simulate_point(point: GaitPoint) -> Dict:
     from .scales import ScaledPlant
     robot = _core.RobotModel.from_yaml(str(robot_yaml(point.robot)))
     cfg = SimConfig.from_yaml(str(config_path("sim.yaml")))
-    cfg = dataclasses.replace(cfg, scales=dataclasses.replace(cfg.scales, enabled=point.scales))
+    cfg = dataclasses.replace(cfg, scales=dataclasses.replace(cfg.scales, enabled=point.scales),
+                              physics=dataclasses.replace(cfg.physics,
+                                                          flat_belly_fraction=point.flat_belly_fraction))
     params = cfg.draw(seed=point.seed, num_joints=robot.num_joints, randomize=point.randomize)
     plant = ScaledPlant(robot, params, (0.0, 0.0, 0.0))
     pattern, f = _joint_pattern(point, robot)

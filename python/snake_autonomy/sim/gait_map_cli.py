@@ -35,6 +35,8 @@ def add_arguments(p) -> None:
     p.add_argument("--measure-cycles", type=int, default=4)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--scales", action="store_true", help="ventral scales on (config/sim.yaml scales:)")
+    p.add_argument("--flat-belly", type=float, default=0.0, metavar="F",
+                   help="plant option physics.flat_belly_fraction (nav runs: config/nav.yaml plant:)")
     p.add_argument("--out", required=True, metavar="DIR")
     add_engine_arguments(p)
 
@@ -52,7 +54,7 @@ def main(args) -> int:
     from .sweep_runner import open_executor, run_tasks
     amps = args.amplitudes or ([0.01, 0.02] if args.gait == "rectilinear" else [35.0, 45.0])
     points = gait_map_points(args.robot, args.gait, amps, args.kappas, args.deltas, seed=args.seed,
-                             scales=args.scales, measure_cycles=args.measure_cycles)
+                             scales=args.scales, flat_belly_fraction=args.flat_belly, measure_cycles=args.measure_cycles)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -61,7 +63,7 @@ def main(args) -> int:
                          progress=not args.no_progress)
     wall = time.perf_counter() - t0
     summary = fit_gait_map(rows, args.nominal_amplitude)
-    doc = {"robot": args.robot, "gait": args.gait, "scales": bool(args.scales), "seed": args.seed,
+    doc = {"robot": args.robot, "gait": args.gait, "scales": bool(args.scales), "flat_belly_fraction": args.flat_belly, "seed": args.seed,
            "engine": args.engine, "points": len(rows), "wall_s": round(wall, 1), **summary}
     (out / "gait_map.yaml").write_text(
         "# snake_autonomy gait-map: steady body velocity fits (sim/gait_map.py). follower: keys are\n"
