@@ -89,3 +89,27 @@ def test_nav_config_reads_the_follower_keys_of_a_gait_map(tmp_path):
     with pytest.raises(NavConfigError, match=r"plant.flat_belly_fraction: must be in \[0, 1\], got 2.0"):
         NavConfig.from_dict({"plant": {"flat_belly_fraction": 2.0}})
     assert math.isclose(NavConfig.from_yaml().plant.flat_belly_fraction, 0.8)
+
+
+class _AllFree:
+    def pose_free(self, poses, ground):
+        return np.ones(len(poses), dtype=bool)
+
+
+def test_with_every_arc_free_the_goal_bias_takes_the_arc_passing_closest_to_the_goal():
+    from snake_autonomy.planning.rectilinear.sampler import SamplerParams, TrajectorySampler
+    s = TrajectorySampler(_AllFree(), SamplerParams(num_arcs=5, max_curvature_per_m=2.0, horizon_m=1.2,
+                                                    goal_tie_m=0.3))
+    # the goal 0.5 m ahead and 0.25 m to the right (round 1's run drove past such a goal)
+    sel = s.select(np.ones((4, 4), bool), (0.5, -0.25))
+    assert sel.arc.curvature_per_m < 0
+    assert s.select(np.ones((4, 4), bool), (0.5, 0.25)).arc.curvature_per_m > 0
+    assert s.select(np.ones((4, 4), bool), (2.0, 0.0)).arc.curvature_per_m == 0.0
+    # without the bias (the paper's rule) the least curvature wins among equally long arcs
+    plain = TrajectorySampler(_AllFree(), SamplerParams(num_arcs=5, goal_tie_m=0.0))
+    assert plain.select(np.ones((4, 4), bool), (0.5, -0.25)).arc.curvature_per_m == 0.0
+
+
+def test_the_lateral_margin_must_not_be_negative():
+    from snake_autonomy.planning.rectilinear.sampler import SamplerParams
+    assert SamplerParams(lateral_margin_m=-0.1).validate() == ["lateral_margin_m: must be >= 0, got -0.1"]
