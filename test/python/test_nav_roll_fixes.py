@@ -71,8 +71,7 @@ def test_the_flat_belly_is_an_option_whose_bottom_is_flush_with_the_capsules(roo
 
 
 def test_sim_yaml_refuses_a_flat_belly_outside_0_1(root, tmp_path):
-    text = (root / "config" / "sim.yaml").read_text().replace("start_height_m: 0.001",
-                                                               "start_height_m: 0.001\n  flat_belly_fraction: 1.5")
+    text = (root / "config" / "sim.yaml").read_text().replace("flat_belly_fraction: 0.0", "flat_belly_fraction: 1.5")
     bad = tmp_path / "sim.yaml"
     bad.write_text(text)
     with pytest.raises(ValueError, match=r"physics.flat_belly_fraction: must be in \[0, 1\], got 1.5"):
@@ -113,3 +112,17 @@ def test_with_every_arc_free_the_goal_bias_takes_the_arc_passing_closest_to_the_
 def test_the_lateral_margin_must_not_be_negative():
     from snake_autonomy.planning.rectilinear.sampler import SamplerParams
     assert SamplerParams(lateral_margin_m=-0.1).validate() == ["lateral_margin_m: must be >= 0, got -0.1"]
+
+
+class _FreeUpTo:
+    """Straight arc free to its end, curved ones only to 0.6 m (the far floor unsure)."""
+    def pose_free(self, poses, ground):
+        return np.array([abs(y) < 1e-9 or x < 0.6 for x, y, _ in poses])
+
+
+def test_an_arc_free_beyond_the_goal_is_long_enough_for_the_goal_bias():
+    from snake_autonomy.planning.rectilinear.sampler import SamplerParams, TrajectorySampler
+    s = TrajectorySampler(_FreeUpTo(), SamplerParams(num_arcs=5, max_curvature_per_m=2.0, horizon_m=1.2,
+                                                     goal_tie_m=0.3))
+    assert s.select(np.ones((4, 4), bool), (0.4, 0.2)).arc.curvature_per_m > 0     # goal near: turn
+    assert s.select(np.ones((4, 4), bool), (1.5, 0.4)).arc.curvature_per_m == 0.0  # goal far: longest

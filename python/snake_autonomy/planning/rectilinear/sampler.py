@@ -9,11 +9,13 @@ says so (no_free_arc) and the caller stops and turns in place.
 
 Optional goal bias (not in the paper, off by default): arcs whose free length is within
 goal_tie_m of the longest count as equally long, and among them the one whose free prefix passes
-closest to the goal (to 1 cm) is taken before curvature decides (round 1 compared the heading at
+closest to the goal (to 1 cm) is taken before curvature decides; an arc free beyond the goal's
+distance counts as long enough (the far floor is often marked unsure at the horizon) (round 1 compared the heading at
 the prefix's end: with the goal nearer than the horizon every prefix ends past it and COBRA drove
 by the goal at 0.28 m). lateral_margin_m widens the checked footprint on each side (the body
 slips sideways and bends inside a turn: round 2's run touched the obstacle with its middle).
 """
+import math
 from dataclasses import dataclass, field
 from typing import List, Optional, Tuple
 
@@ -101,7 +103,11 @@ class TrajectorySampler:
             return Selection(arcs, None)
         longest = max(arcs[i].free_m for i in cands)
         tie = max(p.goal_tie_m, 0.5 * p.spacing_m)
-        best = [i for i in cands if arcs[i].free_m >= longest - tie]
+        enough = longest - tie
+        if goal_in_ground is not None and p.goal_tie_m > 0:
+            # an arc free beyond the goal's distance is long enough (the far floor is often unsure)
+            enough = min(enough, math.hypot(goal_in_ground[0], goal_in_ground[1]))
+        best = [i for i in cands if arcs[i].free_m >= enough]
 
         def key(i):
             a = arcs[i]
