@@ -29,6 +29,7 @@ THIRD_PARTY = {
     "diagnostic_updater": ("rosdep", "diagnostic_updater"),
     "mujoco": ("pypi", "mujoco"), "evo": ("pypi", "evo"), "rosbags": ("pypi", "rosbags"),
     "dynamixel_sdk": ("pypi", "dynamixel-sdk"), "shapely": ("pypi", "shapely"),
+    "distributed": ("pypi", "distributed"),
 }
 # Pinned before their first import, for work under way (the FBSR planner).
 PLANNED = {"shapely"}
