@@ -21,6 +21,8 @@ SUBCOMMANDS = {
     "urdf": ("snake_autonomy.urdf_cli", "print the URDF generated from a robot description"),
     "nav": ("snake_autonomy.planning.rectilinear.cli",
             "navigation among obstacles (rectilinear gait, head camera): classifier, perception"),
+    "gait-map": ("snake_autonomy.sim.gait_map_cli",
+                 "gait map: sweep amplitude and steering on Dask -> steady body velocity, fits, plot"),
     "report": ("snake_autonomy.experiments.cli", "rebuild a run's results folder from its bag"),
     "calibrate": ("snake_autonomy.calibration.cli",
                   "steering offset (eq. 3.31) and heading offset, on the simulated robot or through ROS"),

@@ -32,6 +32,7 @@ THIRD_PARTY = {
     "cv2": ("pypi", "opencv-python-headless"), "sklearn": ("pypi", "scikit-learn"), "joblib": ("pypi", "joblib"),
     "rosgraph": ("rosdep", "rosgraph"), "rosnode": ("rosdep", "rosnode"),
     "threadpoolctl": ("pypi", "threadpoolctl"),
+    "distributed": ("pypi", "distributed"),
 }
 # Pinned before their first import, for work under way (none now: shapely is imported by planning/fbsr).
 PLANNED = set()

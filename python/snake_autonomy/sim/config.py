@@ -50,6 +50,8 @@ class PhysicsConfig:
     solver_iterations: int = 30
     self_collision: bool = False        # contacts between non-adjacent links
     start_height_m: float = 0.001       # clearance of the capsules above the floor at t = 0
+    flat_belly_fraction: float = 0.0    # > 0: a flat box under each link, this fraction of the
+                                        # capsule's diameter wide (sim/mjcf.py); 0: round links
 
 
 @dataclass
@@ -182,6 +184,8 @@ class SimConfig:
         positive("physics.contact_dampratio", p.contact_dampratio)
         positive("physics.solver_iterations", p.solver_iterations)
         non_negative("physics.start_height_m", p.start_height_m)
+        if not 0.0 <= p.flat_belly_fraction <= 1.0:
+            errs.append(f"physics.flat_belly_fraction: must be in [0, 1], got {p.flat_belly_fraction!r}")
         for key in ("torque_limit_nm", "speed_limit_rad_s", "kp_nm_per_rad",
                     "torque_constant_nm_per_a", "setpoint_period_s"):
             positive(f"servo.{key}", getattr(s, key))

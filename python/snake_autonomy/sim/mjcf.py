@@ -45,6 +45,22 @@ def _quat_rx(angle_rad: float) -> str:
     return f"{np.cos(angle_rad / 2):.17g} {np.sin(angle_rad / 2):.17g} 0 0"
 
 
+def _flat_belly(length_m: float, r: float, fraction: float, roll_rad: float, indent: str) -> list:
+    """A flat-bottomed contact option (physics.flat_belly_fraction > 0, off by default and for the
+    thesis experiments): a massless box under a link of frame Rx(roll_rad) in the straight pose,
+    its bottom face flush with the capsule's lowest line, fraction x 2r wide, r/4 thick: a round
+    link on a floor touches along one line and rolls freely; a flat one resists rolling like a
+    robot with a flat belly or skids (Chang et al.'s rectilinear robot has a flat ventral side)."""
+    if fraction <= 0:
+        return []
+    t = 0.125 * r
+    d = r - t
+    down = (-np.sin(roll_rad), -np.cos(roll_rad))
+    return [f'{indent}<geom type="box" size="{_f(length_m / 2)} {_f(fraction * r)} {_f(t)}" '
+            f'pos="{_f(-length_m / 2)} {_f(d * down[0])} {_f(d * down[1])}" quat="{_quat_rx(-roll_rad)}" '
+            f'mass="0" rgba="0.3 0.3 0.3 1"/>']
+
+
 def _f(x: float) -> str:
     return f"{float(x):.17g}"
 
@@ -98,7 +114,9 @@ def build_mjcf(robot, params: SimParams, scene_xml: str = "", assets_xml: str = 
         '      <site name="base_link"/>',
         f'      <site name="head_link" pos="{_f(-H)} 0 0" quat="{_quat_rx(np.pi / 2)}"/>',
         f'      <geom name="head" fromto="0 0 0 {_f(-H)} 0 0" mass="{_f(masses[0] + masses[1])}"/>',
+        *_flat_belly(H, r, phys.flat_belly_fraction, 0.0, "      "),
     ]
+    roll = np.pi / 2
     indent = "      "
     parent_pos, parent_quat = f"{_f(-H)} 0 0", _quat_rx(np.pi / 2)
     for i in range(n):
@@ -109,8 +127,10 @@ def build_mjcf(robot, params: SimParams, scene_xml: str = "", assets_xml: str = 
             f'range="{_f(lower[i])} {_f(upper[i])}"/>',
             f'{indent}  <geom name="{name}" fromto="0 0 0 {_f(-L)} 0 0" '
             f'mass="{_f(masses[i + 2])}"/>',
+            *_flat_belly(L, r, phys.flat_belly_fraction, roll, indent + "  "),
             f'{indent}  <site name="{name}" pos="{_f(-L)} 0 0" quat="{_quat_rx(twists[i])}"/>',
         ]
+        roll += twists[i]
         indent += "  "
         parent_pos, parent_quat = f"{_f(-L)} 0 0", _quat_rx(twists[i])
     for i in reversed(range(n)):

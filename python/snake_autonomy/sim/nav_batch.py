@@ -19,6 +19,7 @@ gait cycle; an instant 0.5 rad jump of every lateral joint whips the body).
 Joint targets: gait.joint_angles(t, kappa) every control period (100 Hz) straight to the plant: the
 driver's path (C++ gait library, `curvature` steering law, issue 11) replaces this when it lands.
 """
+import dataclasses
 import json
 import math
 from dataclasses import dataclass, field
@@ -52,6 +53,7 @@ class NavRunSpec:
     command_period_s: float = 0.5
     kappa_slew_per_m_s: float = 1.0
     keep_frames: bool = True
+    flat_belly_fraction: Optional[float] = None   # None: nav.yaml plant.flat_belly_fraction
 
 
 @dataclass
@@ -145,6 +147,10 @@ class NavRun:
         ry = robot_yaml(spec.robot)
         self.robot = _core.RobotModel.from_yaml(str(ry))
         sim_cfg = SimConfig.from_yaml(spec.sim_config or str(config_path("sim.yaml")))
+        belly = self.cfg.plant.flat_belly_fraction if spec.flat_belly_fraction is None else spec.flat_belly_fraction
+        if belly != sim_cfg.physics.flat_belly_fraction:
+            sim_cfg = dataclasses.replace(sim_cfg, physics=dataclasses.replace(sim_cfg.physics,
+                                                                               flat_belly_fraction=belly))
         self.params = sim_cfg.draw(seed=spec.seed, num_joints=self.robot.num_joints)
         scene = build_scene(spec.world)
         self.plant = ScaledPlant(self.robot, self.params, spec.world.start_rad,
@@ -154,6 +160,7 @@ class NavRun:
         self.planner = NavPlanner(self.cfg.intrinsics, head_width_m(ry), self.cfg.sampler,
                                   RecedingHorizonFollower(self.cfg.follower))
         self.rollover_deg = sim_cfg.monitor.rollover_tilt_deg
+        self.flat_belly_fraction = belly
         if spec.perception == "depth":
             from ..perception.depth_traversability import DepthTraversability
             from ..planning.rectilinear.config import T_ground_camera
@@ -231,5 +238,6 @@ class NavRun:
                    "path_length_m": round(path_len, 4), "replans": len(replans),
                    "stops_no_free_arc": sum(1 for r in replans if r.path_world is None),
                    "rolled_over": rolled, "robot": self.robot.name, "perception": spec.perception,
-                   "seed": spec.seed, "world": world.source or world.name}
+                   "seed": spec.seed, "world": world.source or world.name,
+                   "flat_belly_fraction": self.flat_belly_fraction}
         return NavResult(metrics, np.array(traj), replans, frames, world)

@@ -11,6 +11,10 @@
                            [--time-limit S] [--classifier FILE] --out DIR
                                                     the closed loop in batch (sim/nav_batch.py):
                                                     DIR/metrics.json, topview.png, frames/
+    snake_autonomy nav experiment --worlds N --seeds 0-4 [--perception depth|mono|both]
+                           [--robot R] [--engine dask|threads|serial] [--scheduler ADDR] --out DIR
+                                                    random solvable corridors (sim/nav_experiment.py)
+                                                    on Dask: DIR/runs.csv, summary.json, table.md
 """
 import json
 import sys
@@ -42,7 +46,20 @@ def add_arguments(parser):
     run.add_argument("--time-limit", type=float, default=1200.0, metavar="S")
     run.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono)")
     run.add_argument("--out", required=True, metavar="DIR")
-    for p in (tr, ev, run):
+    run.add_argument("--flat-belly", type=float, default=None, metavar="F",
+                     help="plant option: flat belly F x the link diameter wide (default nav.yaml plant:)")
+    ex = sub.add_parser("experiment", help="random solvable corridors x seeds: success rate, collisions, time")
+    ex.add_argument("--worlds", type=int, default=20, help="random corridors 0..N-1 (sim/nav_experiment.py)")
+    ex.add_argument("--first-world", type=int, default=0)
+    ex.add_argument("--seeds", default="0-4", help="plant seeds: 0-4 or 0,2,3")
+    ex.add_argument("--perception", choices=("depth", "mono", "both"), default="depth")
+    ex.add_argument("--time-limit", type=float, default=300.0, metavar="S")
+    ex.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono, both)")
+    ex.add_argument("--keep-runs", action="store_true", help="each run's figures under DIR/runs/")
+    ex.add_argument("--out", required=True, metavar="DIR")
+    from ...sim.gait_map_cli import add_engine_arguments
+    add_engine_arguments(ex)
+    for p in (tr, ev, run, ex):
         p.add_argument("--robot", default="cobra", help="robot name (config/robots/NAME.yaml) or YAML file")
         p.add_argument("--config", default=None, help="nav config (default config/nav.yaml)")
 
@@ -154,10 +171,68 @@ def main(args) -> int:
             return 1
         result = NavRun(NavRunSpec(world, robot=args.robot, perception=args.perception, seed=args.seed,
                                    time_limit_s=args.time_limit, classifier=args.classifier,
-                                   nav_config=args.config)).run()
+                                   nav_config=args.config, flat_belly_fraction=args.flat_belly)).run()
         result.write(args.out)
         print(json.dumps(result.metrics))
         return 0
-    print("usage: snake_autonomy nav {check-world FILE...|train-classifier --out FILE|eval-perception|run}",
+    if args.nav_command == "experiment":
+        return _experiment(args)
+    print("usage: snake_autonomy nav {check-world FILE...|train-classifier --out FILE|eval-perception|run|"
+          "experiment}",
           file=sys.stderr)
     return 2
+
+
+def parse_seeds(text: str):
+    """'0-4' -> [0..4]; '0,2,5' -> [0, 2, 5]."""
+    try:
+        if "-" in text.strip("-"):
+            a, b = text.split("-", 1)
+            seeds = list(range(int(a), int(b) + 1))
+        else:
+            seeds = [int(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        seeds = []
+    if not seeds:
+        raise ValueError(f"--seeds: expected FIRST-LAST or a comma list of integers, got {text!r}")
+    return seeds
+
+
+def _experiment(args) -> int:
+    from ...sim.gait_map_cli import write_csv
+    from ...sim.nav_experiment import (experiment_tasks, markdown_table, random_corridor, run_nav_task,
+                                       summarise)
+    from ...sim.sweep_runner import open_executor, run_tasks
+    from .config import head_width_m
+    seeds = parse_seeds(args.seeds)
+    perceptions = ("depth", "mono") if args.perception == "both" else (args.perception,)
+    if "mono" in perceptions and not args.classifier:
+        print("nav experiment: perception mono/both needs --classifier FILE (snake_autonomy nav "
+              "train-classifier --out FILE)", file=sys.stderr)
+        return 1
+    if args.worlds < 1:
+        print(f"nav experiment: --worlds must be >= 1, got {args.worlds}", file=sys.stderr)
+        return 1
+    from ... import _core
+    ry = robot_yaml(args.robot)
+    body = max(head_width_m(ry), 2.0 * _core.RobotModel.from_yaml(str(ry)).link_radius_m)
+    worlds = [random_corridor(k, body_width_m=body) for k in range(args.first_world, args.first_world + args.worlds)]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    tasks = experiment_tasks(worlds, seeds, perceptions, robot=args.robot, time_limit_s=args.time_limit,
+                             classifier=args.classifier, nav_config=args.config,
+                             out_dir=str(out / "runs") if args.keep_runs else None)
+    t0 = time.perf_counter()
+    with open_executor(args.engine, args.scheduler, args.workers) as ex:
+        rows = run_tasks(ex, run_nav_task, tasks, desc=f"nav experiment {args.robot}",
+                         progress=not args.no_progress)
+    summary = summarise(rows)
+    table = markdown_table(summary)
+    write_csv(rows, out / "runs.csv")
+    (out / "summary.json").write_text(json.dumps(
+        {"robot": args.robot, "worlds": [w.to_dict() for w in worlds], "seeds": seeds,
+         "perceptions": list(perceptions), "time_limit_s": args.time_limit, "engine": args.engine,
+         "wall_s": round(time.perf_counter() - t0, 1), "summary": summary}, indent=2) + "\n")
+    (out / "table.md").write_text(table + "\n")
+    print(table)
+    return 0

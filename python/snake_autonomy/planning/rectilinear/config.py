@@ -29,6 +29,17 @@ class ClassifierParams:
     svm_c: float = 10.0
 
 
+@dataclass(frozen=True)
+class PlantOptions:
+    """Simulator options of the navigation runs (nav.yaml `plant:`), over config/sim.yaml's."""
+    flat_belly_fraction: float = 0.0   # physics.flat_belly_fraction for nav runs (sim/mjcf.py)
+
+    def validate(self) -> List[str]:
+        if not 0.0 <= self.flat_belly_fraction <= 1.0:
+            return [f"flat_belly_fraction: must be in [0, 1], got {self.flat_belly_fraction}"]
+        return []
+
+
 @dataclass
 class NavConfig:
     intrinsics: CameraIntrinsics
@@ -39,6 +50,7 @@ class NavConfig:
     classifier: ClassifierParams
     replan_period_s: float = 10.0
     gait: RectilinearGait = RectilinearGait()
+    plant: PlantOptions = PlantOptions()
 
     @classmethod
     def from_yaml(cls, path=None) -> "NavConfig":
@@ -48,7 +60,7 @@ class NavConfig:
     @classmethod
     def from_dict(cls, data: Dict[str, Any], source: str = "nav.yaml") -> "NavConfig":
         problems: List[str] = []
-        known = ("camera", "depth_traversability", "sampler", "follower", "classifier", "gait")
+        known = ("camera", "depth_traversability", "sampler", "follower", "classifier", "gait", "plant")
         for key in data:
             if key not in known:
                 problems.append(f"{key}: unknown section; known: {', '.join(known)}")
@@ -70,6 +82,8 @@ class NavConfig:
             mount = CameraMount(tuple(float(x) for x in t), tuple(float(x) for x in rpy))
         follower_d = dict(data.get("follower") or {})
         replan = follower_d.pop("replan_period_s", 10.0)
+        if "gait_map" in follower_d:
+            follower_d.update(_gait_map_follower(follower_d.pop("gait_map"), source, problems))
         if not isinstance(replan, (int, float)) or replan <= 0:
             problems.append(f"follower.replan_period_s: must be > 0, got {replan!r}")
         depth = _section(DepthTraversabilityParams, data.get("depth_traversability"), "depth_traversability",
@@ -78,15 +92,36 @@ class NavConfig:
         follower = _section(FollowerParams, follower_d, "follower", problems)
         classifier = _section(ClassifierParams, data.get("classifier"), "classifier", problems)
         gait = _section(RectilinearGait, data.get("gait"), "gait", problems)
+        plant = _section(PlantOptions, data.get("plant"), "plant", problems)
         for key in ("amplitude_m", "wavelength_m", "frequency_hz"):
             if not getattr(gait, key) > 0:
                 problems.append(f"gait.{key}: must be > 0, got {getattr(gait, key)}")
-        for name, obj in (("sampler", sampler), ("follower", follower)):
+        for name, obj in (("sampler", sampler), ("follower", follower), ("plant", plant)):
             if obj is not None:
                 problems += [f"{name}.{p}" for p in obj.validate()]
         if problems:
             raise NavConfigError(source, problems)
-        return cls(intr, mount, depth, sampler, follower, classifier, float(replan), gait)
+        return cls(intr, mount, depth, sampler, follower, classifier, float(replan), gait, plant)
+
+
+def _gait_map_follower(name, source: str, problems: List[str]) -> Dict[str, Any]:
+    """follower.gait_map: a file of `snake_autonomy gait-map` (relative: to the nav config's folder,
+    then the package's config/); its `follower:` keys replace nav.yaml's."""
+    if not isinstance(name, str) or not name:
+        problems.append(f"follower.gait_map: expected a file name, got {name!r}")
+        return {}
+    path = Path(name)
+    if not path.is_absolute():
+        here = Path(source).parent / path
+        path = here if here.exists() else config_path(name)
+    if not path.exists():
+        problems.append(f"follower.gait_map: no such file {name!r} (run snake_autonomy gait-map --out DIR)")
+        return {}
+    follower = (load_yaml_file(path) or {}).get("follower")
+    if not isinstance(follower, dict):
+        problems.append(f"follower.gait_map: {name!r} has no follower: section")
+        return {}
+    return follower
 
 
 def _vec3(v) -> bool:

@@ -8,6 +8,10 @@ inverse of the gait map's linear fit omega(kappa) = omega_per_kappa * kappa + om
 to the gait's range. Without a fresh pose estimate the pose is predicted with the unicycle model
 from the last command.
 
+The commanded kappa is rate-limited (kappa_rate_per_m_s, from the last command's time): the paper's
+robot changes its curvature slowly; a kappa that jumps whips the body and rolls the round-linked
+simulated COBRA onto its side (bench/nav_roll). The unicycle prediction uses the limited kappa.
+
 No free arc: the follower stops forward motion and turns in place (mode TURN_IN_PLACE, towards
 `turn_direction`), and says so in the command's reason.
 """
@@ -33,6 +37,9 @@ class FollowerParams:
     turn_in_place_rad_s: float = 0.2      # turn rate the unicycle prediction assumes when turning
     kappa_turn_per_m: float = 3.0         # curvature commanded to turn in place (the gait's forward
                                           # speed is near zero there: bench/nav_gait)
+    kappa_rate_per_m_s: float = 0.0       # > 0: the commanded kappa changes at most this fast
+                                          # (1/m per s; slow body reshaping keeps the robot upright:
+                                          # bench/nav_roll); 0: no limit
 
     def validate(self) -> List[str]:
         p = []
@@ -44,6 +51,8 @@ class FollowerParams:
             p.append(f"omega_per_kappa: must be finite and non-zero, got {self.omega_per_kappa}")
         if self.k_heading < 0:
             p.append(f"k_heading: must be >= 0, got {self.k_heading}")
+        if not self.kappa_rate_per_m_s >= 0:
+            p.append(f"kappa_rate_per_m_s: must be >= 0, got {self.kappa_rate_per_m_s}")
         return p
 
     def kappa(self, omega_rad_s: float) -> float:
@@ -79,6 +88,7 @@ class RecedingHorizonFollower:
         self._t = None
         self._omega = 0.0
         self._v = 0.0
+        self._kappa = 0.0
 
     def set_path(self, path_world: np.ndarray, curvature_per_m: float) -> None:
         self.path = np.asarray(path_world, float)
@@ -93,20 +103,21 @@ class RecedingHorizonFollower:
 
     def update(self, t_s: float, pose=None) -> Command:
         """pose: a fresh (x, y, theta) estimate, or None to predict from the last command."""
+        elapsed = t_s - self._t if self._t is not None else None
         if pose is not None:
             self.pose = tuple(pose)
-        elif self.pose is not None and self._t is not None:
-            self.pose = predict(self.pose, self._v, self._omega, t_s - self._t)
+        elif self.pose is not None and elapsed is not None:
+            self.pose = predict(self.pose, self._v, self._omega, elapsed)
         self._t = t_s
         p = self.params
         if self.mode == TURN_IN_PLACE:
             self._v, self._omega = 0.0, self.turn_direction * p.turn_in_place_rad_s
             side = "left" if self.turn_direction > 0 else "right"
-            return Command(TURN_IN_PLACE, self.turn_direction * p.kappa_turn_per_m,
+            return Command(TURN_IN_PLACE, self._limit(self.turn_direction * p.kappa_turn_per_m, elapsed),
                            reason=f"no collision-free arc: stopped, turning in place {side}")
         if self.mode != FOLLOW or self.path is None or self.pose is None:
             self._v, self._omega = 0.0, 0.0
-            return Command(IDLE, 0.0, reason="no path")
+            return Command(IDLE, self._limit(0.0, elapsed), reason="no path")
         target = self.target(self.pose)
         omega_ff = p.speed_m_s * self.path_curvature
         x, y, th = self.pose
@@ -115,9 +126,18 @@ class RecedingHorizonFollower:
         at_end = math.hypot(self.path[-1, 0] - x, self.path[-1, 1] - y) <= p.lookahead_m
         # past the path's end (until the next replan): feedforward only, never turn back to it
         omega_fb = p.k_heading * wrap(bearing - th) if dist > 1e-3 and not at_end else 0.0
-        kappa = p.kappa(omega_ff + omega_fb)
+        kappa = self._limit(p.kappa(omega_ff + omega_fb), elapsed)
         self._v, self._omega = p.speed_m_s, p.omega(kappa)
         return Command(FOLLOW, kappa, omega_ff, omega_fb, tuple(target))
+
+    def _limit(self, kappa: float, elapsed) -> float:
+        """kappa moved from the last command's at most kappa_rate_per_m_s * elapsed."""
+        rate = self.params.kappa_rate_per_m_s
+        if rate > 0:
+            step = rate * max(0.0, elapsed) if elapsed is not None else 0.0
+            kappa = self._kappa + max(-step, min(step, kappa - self._kappa))
+        self._kappa = kappa
+        return kappa
 
     def target(self, pose) -> np.ndarray:
         """The furthest path point (in path order) within lookahead_m of pose; if none is, the

@@ -58,7 +58,8 @@ class NavPlanner:
 
     def replan(self, t_s: float, ground_image: np.ndarray, T_ground_camera: np.ndarray, pose,
                goal_xy=None) -> Replan:
-        checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera, self.head_width_m)
+        checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera,
+                                             self.head_width_m + 2.0 * self.sampler_params.lateral_margin_m)
         sampler = TrajectorySampler(checker, self.sampler_params)
         goal_g = None
         if goal_xy is not None:

@@ -8,8 +8,12 @@ free length is shorter than min_free_m is not a candidate; when none is, the res
 says so (no_free_arc) and the caller stops and turns in place.
 
 Optional goal bias (not in the paper, off by default): arcs whose free length is within
-goal_tie_m of the longest count as equally long, and among them the one ending closest in heading
-to the goal is taken before curvature decides.
+goal_tie_m of the longest count as equally long, and among them the one whose free prefix passes
+closest to the goal (to 1 cm) is taken before curvature decides; an arc free beyond the goal's
+distance counts as long enough (the far floor is often marked unsure at the horizon) (round 1 compared the heading at
+the prefix's end: with the goal nearer than the horizon every prefix ends past it and COBRA drove
+by the goal at 0.28 m). lateral_margin_m widens the checked footprint on each side (the body
+slips sideways and bends inside a turn: round 2's run touched the obstacle with its middle).
 """
 import math
 from dataclasses import dataclass, field
@@ -18,7 +22,7 @@ from typing import List, Optional, Tuple
 import numpy as np
 
 from .collision_check import PerceptionCollisionChecker, prefix_length
-from .unicycle import arc_poses, wrap
+from .unicycle import arc_poses
 
 
 @dataclass
@@ -30,6 +34,7 @@ class SamplerParams:
     min_free_m: float = 0.15              # shorter free prefixes: no candidate
     margin_m: float = 0.0                 # taken off every free prefix
     goal_tie_m: float = 0.0               # > 0: the goal bias above
+    lateral_margin_m: float = 0.0         # added to each side of the head footprint (planner.py)
 
     def validate(self) -> List[str]:
         p = []
@@ -38,6 +43,8 @@ class SamplerParams:
         for key in ("max_curvature_per_m", "horizon_m", "spacing_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
+        if self.lateral_margin_m < 0:
+            p.append(f"lateral_margin_m: must be >= 0, got {self.lateral_margin_m}")
         if self.min_free_m < 0 or self.goal_tie_m < 0 or self.margin_m < 0:
             p.append(f"min_free_m, goal_tie_m, margin_m: must be >= 0, got {self.min_free_m}, "
                      f"{self.goal_tie_m}, {self.margin_m}")
@@ -96,14 +103,19 @@ class TrajectorySampler:
             return Selection(arcs, None)
         longest = max(arcs[i].free_m for i in cands)
         tie = max(p.goal_tie_m, 0.5 * p.spacing_m)
-        best = [i for i in cands if arcs[i].free_m >= longest - tie]
+        enough = longest - tie
+        if goal_in_ground is not None and p.goal_tie_m > 0:
+            # an arc free beyond the goal's distance is long enough (the far floor is often unsure)
+            enough = min(enough, math.hypot(goal_in_ground[0], goal_in_ground[1]))
+        best = [i for i in cands if arcs[i].free_m >= enough]
 
         def key(i):
             a = arcs[i]
             goal_err = 0.0
             if goal_in_ground is not None and p.goal_tie_m > 0:
-                end = a.poses[np.searchsorted(a.s_m, a.free_m, side="right") - 1]
-                goal_err = abs(wrap(math.atan2(goal_in_ground[1] - end[1], goal_in_ground[0] - end[0])
-                                    - end[2]))
-            return (round(goal_err, 3), abs(a.curvature_per_m))
+                n = np.searchsorted(a.s_m, a.free_m, side="right")
+                prefix = a.poses[:max(1, n), :2]
+                goal_err = float(np.min(np.hypot(prefix[:, 0] - goal_in_ground[0],
+                                                 prefix[:, 1] - goal_in_ground[1])))
+            return (round(goal_err, 2), abs(a.curvature_per_m))
         return Selection(arcs, min(best, key=key))

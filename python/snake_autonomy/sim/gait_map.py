@@ -1,0 +1,186 @@
+"""Gait maps (Chang et al. fig. 2, issue 13): sweeps of the plant over the gait's amplitude A and
+the body curvature kappa (COBRA's sidewinding: amplitude and the steering delta) giving the steady
+body velocity xi = (xi_x, xi_y, xi_w); a linear fit omega(kappa) (its inverse is the follower's
+kappa(omega)) and the forward speed, written to YAML that config/nav.yaml's follower reads
+(`follower.gait_map: FILE`) and plotted.
+
+    points = gait_map_points("cobra", "rectilinear", amplitudes=[0.01, 0.02], kappas=[-1, 0, 1])
+    with open_executor("dask") as ex:
+        rows = run_tasks(ex, simulate_point, points)
+    summary = fit_gait_map(rows, nominal_amplitude=0.02)
+
+One point: the gait ramped in over ramp_s, settle_s more to reach the steady state, then measure_s
+(whole gait cycles) sampled once per cycle at the same phase (stroboscopic: the gait's own
+oscillation cancels). xi is the centroid's displacement of the kinematic frames in the body frame of
+the window's start (x: base_link's heading there, y: left) per second, and xi_w base_link's
+unwrapped yaw change per second. Every point is a pure function of its fields (seed included): the
+same points give the same numbers on any engine.
+"""
+import math
+from dataclasses import asdict, dataclass
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+GAITS = ("rectilinear", "sidewinding")
+
+
+@dataclass(frozen=True)
+class GaitPoint:
+    robot: str                   # config/robots/NAME.yaml or a YAML path
+    gait: str                    # rectilinear | sidewinding
+    amplitude: float             # rectilinear: A (m); sidewinding: yaw amplitude (deg)
+    kappa_per_m: float = 0.0     # rectilinear steering
+    delta_deg: float = 0.0       # sidewinding steering
+    seed: int = 0                # plant parameters drawn with this seed (config/sim.yaml)
+    randomize: bool = False      # False: the plant's nominal parameters
+    scales: bool = False
+    flat_belly_fraction: float = 0.0   # the plant option (nav runs use nav.yaml plant:)
+    wavelength_m: float = 1.0
+    frequency_hz: float = 0.4
+    ramp_s: float = 2.0
+    settle_cycles: int = 1
+    measure_cycles: int = 4
+
+
+def gait_map_points(robot: str, gait: str, amplitudes: Sequence[float], kappas: Sequence[float] = (0.0,),
+                    deltas: Sequence[float] = (0.0,), **kw) -> List[GaitPoint]:
+    if gait not in GAITS:
+        raise ValueError(f"gait: expected one of {', '.join(GAITS)}, got {gait!r}")
+    if gait == "rectilinear":
+        return [GaitPoint(robot, gait, float(a), kappa_per_m=float(k), **kw) for a in amplitudes for k in kappas]
+    return [GaitPoint(robot, gait, float(a), delta_deg=float(d), **kw) for a in amplitudes for d in deltas]
+
+
+def _joint_pattern(point: GaitPoint, robot):
+    if point.gait == "rectilinear":
+        from ..planning.rectilinear.gait import RectilinearGait
+        g = RectilinearGait(point.amplitude, point.wavelength_m, point.frequency_hz)
+        return (lambda t: g.joint_angles(robot, t, point.kappa_per_m)), point.frequency_hz
+    from .serpenoid import SIDEWINDING
+    g = SIDEWINDING.__class__(**{**asdict(SIDEWINDING), "yaw_amplitude_rad": math.radians(point.amplitude),
+                                 "delta_rad": math.radians(point.delta_deg)})
+    return (lambda t: g.joint_angles(robot, t)), g.frequency_hz
+
+
+def simulate_point(point: GaitPoint) -> Dict:
+    """The steady body velocity of one gait-map point (runs the plant; a module-level function so
+    that process-based engines can import it)."""
+    import dataclasses
+    from .. import _core
+    from ..paths import config_path
+    from ..planning.rectilinear.cli import robot_yaml
+    from .config import SimConfig
+    from .scales import ScaledPlant
+    robot = _core.RobotModel.from_yaml(str(robot_yaml(point.robot)))
+    cfg = SimConfig.from_yaml(str(config_path("sim.yaml")))
+    cfg = dataclasses.replace(cfg, scales=dataclasses.replace(cfg.scales, enabled=point.scales),
+                              physics=dataclasses.replace(cfg.physics,
+                                                          flat_belly_fraction=point.flat_belly_fraction))
+    params = cfg.draw(seed=point.seed, num_joints=robot.num_joints, randomize=point.randomize)
+    plant = ScaledPlant(robot, params, (0.0, 0.0, 0.0))
+    pattern, f = _joint_pattern(point, robot)
+    period, dt = 1.0 / f, 0.01
+    t, max_tilt = 0.0, 0.0
+    while t < point.ramp_s - 1e-9:
+        plant.set_joint_targets(pattern(0.0) * (t / point.ramp_s))
+        t += dt
+        plant.step_to(t)
+    samples = []
+    total = point.settle_cycles + point.measure_cycles
+    for cycle in range(total + 1):
+        t_end = point.ramp_s + cycle * period
+        while t < t_end - 1e-9:
+            plant.set_joint_targets(pattern(t - point.ramp_s))
+            t += dt
+            plant.step_to(t)
+            max_tilt = max(max_tilt, plant.base_tilt_deg())
+        if cycle >= point.settle_cycles:
+            T = plant.frame_transform("base_link")
+            samples.append((plant.frame_positions().mean(axis=0)[:2], math.atan2(T[1, 0], T[0, 0])))
+    yaws = np.unwrap([s[1] for s in samples])
+    c0, c1 = samples[0][0], samples[-1][0]
+    dur = point.measure_cycles * period
+    th = yaws[0]
+    d = c1 - c0
+    xi_x = (math.cos(th) * d[0] + math.sin(th) * d[1]) / dur
+    xi_y = (-math.sin(th) * d[0] + math.cos(th) * d[1]) / dur
+    xi_w = (yaws[-1] - yaws[0]) / dur
+    return {**asdict(point), "xi_x_m_s": float(xi_x), "xi_y_m_s": float(xi_y), "xi_w_rad_s": float(xi_w),
+            "max_tilt_deg": float(max_tilt), "rolled_over": bool(max_tilt > 60.0)}
+
+
+def fit_gait_map(rows: List[Dict], nominal_amplitude: Optional[float] = None) -> Dict:
+    """Per amplitude: omega = omega_per_kappa * kappa + omega_offset (least squares over the points
+    that did not roll over), its r^2, the forward speed (mean xi_x over those points, and at kappa
+    0). The follower's keys come from the nominal amplitude (default: the fastest straight one)."""
+    fits = []
+    for a in sorted({r["amplitude"] for r in rows}):
+        pts = [r for r in rows if r["amplitude"] == a and not r["rolled_over"]]
+        if not pts:
+            fits.append({"amplitude": a, "points": 0, "rolled_over": True})
+            continue
+        steer = np.array([r["kappa_per_m"] if r["gait"] == "rectilinear" else r["delta_deg"] for r in pts])
+        w = np.array([r["xi_w_rad_s"] for r in pts])
+        vx = np.array([r["xi_x_m_s"] for r in pts])
+        fit = {"amplitude": a, "points": len(pts), "rolled_over": False,
+               "speed_m_s": float(np.mean(vx)), "speed_min_m_s": float(np.min(vx)),
+               "speed_max_m_s": float(np.max(vx)), "steer_min": float(steer.min()),
+               "steer_max": float(steer.max())}
+        straight = [r["xi_x_m_s"] for r, s in zip(pts, steer) if s == 0.0]
+        if straight:
+            fit["speed_straight_m_s"] = float(straight[0])
+        if len(set(steer.tolist())) > 1:
+            slope, offset = np.polyfit(steer, w, 1)
+            resid = w - (slope * steer + offset)
+            ss = float(np.sum((w - w.mean()) ** 2))
+            fit.update(omega_per_steer=float(slope), omega_offset_rad_s=float(offset),
+                       r2=float(1.0 - np.sum(resid ** 2) / ss) if ss > 0 else 1.0)
+        fits.append(fit)
+    usable = [f for f in fits if "omega_per_steer" in f and f["speed_m_s"] > 0]
+    out = {"fits": fits}
+    if usable:
+        if nominal_amplitude is not None and any(f["amplitude"] == nominal_amplitude for f in usable):
+            nominal = next(f for f in usable if f["amplitude"] == nominal_amplitude)
+        else:
+            nominal = max(usable, key=lambda f: f.get("speed_straight_m_s", f["speed_m_s"]))
+        out["nominal_amplitude"] = nominal["amplitude"]
+        if rows and rows[0]["gait"] == "rectilinear":
+            out["follower"] = {"speed_m_s": nominal["speed_m_s"],
+                               "omega_per_kappa": nominal["omega_per_steer"],
+                               "omega_offset_rad_s": nominal["omega_offset_rad_s"],
+                               "kappa_max_per_m": max(abs(nominal["steer_min"]), abs(nominal["steer_max"]))}
+    return out
+
+
+def plot_gait_map(rows: List[Dict], summary: Dict, path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rect = rows[0]["gait"] == "rectilinear"
+    key, label = ("kappa_per_m", "body curvature kappa (1/m)") if rect else ("delta_deg", "steering delta (deg)")
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4))
+    for a in sorted({r["amplitude"] for r in rows}):
+        pts = sorted((r for r in rows if r["amplitude"] == a), key=lambda r: r[key])
+        s = [r[key] for r in pts]
+        name = f"A {a * 100:.1f} cm" if rect else f"amp {a:.0f} deg"
+        axes[0].plot(s, [1000 * r["xi_x_m_s"] for r in pts], "o-", label=name)
+        axes[1].plot(s, [1000 * r["xi_y_m_s"] for r in pts], "o-", label=name)
+        axes[2].plot(s, [math.degrees(r["xi_w_rad_s"]) for r in pts], "o-", label=name)
+        for ax, k in zip(axes, ("xi_x_m_s", "xi_y_m_s", "xi_w_rad_s")):
+            for r in pts:
+                if r["rolled_over"]:
+                    ax.plot(r[key], 1000 * r[k] if k != "xi_w_rad_s" else math.degrees(r[k]), "rx", ms=9)
+    for f in summary["fits"]:
+        if "omega_per_steer" in f:
+            s = np.linspace(f["steer_min"], f["steer_max"], 2)
+            axes[2].plot(s, np.degrees(f["omega_per_steer"] * s + f["omega_offset_rad_s"]), "k--", lw=0.8)
+    for ax, t in zip(axes, ("xi_x forward (mm/s)", "xi_y left (mm/s)", "xi_w turn rate (deg/s)")):
+        ax.set_xlabel(label)
+        ax.set_title(t)
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(loc="best", fontsize=8)
+    fig.suptitle(f"gait map: {rows[0]['robot']} {rows[0]['gait']} (x: rolled over)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)

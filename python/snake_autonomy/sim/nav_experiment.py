@@ -1,0 +1,119 @@
+"""The navigation experiment over random worlds (issue 13): random solvable corridors, the closed
+loop (sim/nav_batch.py) per world x seed x perception through the sweep runner (Dask by default),
+success rate, collisions and time in a table.
+
+    worlds = [random_corridor(k) for k in range(N)]
+    tasks = experiment_tasks(worlds, seeds=range(5), perceptions=("depth", "mono"), robot="cobra")
+    with open_executor("dask") as ex:
+        rows = run_tasks(ex, run_nav_task, tasks)
+    print(markdown_table(summarise(rows)))
+
+A random corridor (random_corridor(k), a pure function of k): 1-3 cylinders between the start
+and the goal, pairwise gaps >= 2 x the body width, one on the straight line.
+"""
+import math
+from dataclasses import dataclass
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+from .world_file import World
+
+
+def random_corridor(index: int, body_width_m: float = 0.09, gap_factor: float = 2.0,
+                    length_m: float = 1.4, half_width_m: float = 0.35, base_seed: int = 1300) -> World:
+    """World `index` (a pure function of it): start at the origin heading +x, the goal length_m
+    ahead, 1-3 cylinders (radius 5-9 cm) in the corridor x in [0.45, length - 0.35], |y| <=
+    half_width; the first within 5 cm of the straight line (the robot must go round it); every
+    pair's free gap >= gap_factor x body width (rejection sampling), so a way round exists on the
+    open floor beside the corridor too. No walls: the rectilinear gait bends the whole 1.5 m body
+    with kappa (the tail swings sideways, it does not follow the head's path), so walls along
+    the corridor would be hit by the tail, not by what the planner steers."""
+    rng = np.random.default_rng(base_seed + index)
+    gap = gap_factor * body_width_m
+    n = int(rng.integers(1, 4))
+    cyl = []
+    for k in range(n):
+        for _ in range(200):
+            r = float(rng.uniform(0.05, 0.09))
+            x = float(rng.uniform(0.45, length_m - 0.35))
+            y = float(rng.uniform(-0.05, 0.05)) if k == 0 else float(rng.uniform(-half_width_m, half_width_m))
+            if all(math.hypot(x - c[0], y - c[1]) - r - c[2] >= gap for c in cyl):
+                cyl.append((x, y, r))
+                break
+    obstacles = [{"type": "cylinder", "x": x, "y": y, "radius_m": r, "height_m": 0.3} for x, y, r in cyl]
+    data = {"name": f"corridor_{index:03d}", "start": [0.0, 0.0, 0.0], "goal": [length_m, 0.0],
+            "goal_radius_m": 0.2, "floor_texture": ["plain", "checker", "carpet", "tiles", "concrete"][index % 5],
+            "obstacles": obstacles}
+    return World.from_dict(data, f"random_corridor({index})")
+
+
+def min_gap_m(world: World) -> float:
+    """The smallest free gap between two cylinders (inf with one)."""
+    c = [(o.x_m, o.y_m, o.radius_m) for o in world.obstacles if o.kind == "cylinder"]
+    gaps = [math.hypot(a[0] - b[0], a[1] - b[1]) - a[2] - b[2] for i, a in enumerate(c) for b in c[i + 1:]]
+    return min(gaps) if gaps else math.inf
+
+
+@dataclass(frozen=True)
+class NavTask:
+    world: dict                   # World.to_dict() (picklable, engine independent)
+    robot: str = "cobra"
+    perception: str = "depth"
+    seed: int = 0
+    time_limit_s: float = 300.0
+    classifier: Optional[str] = None
+    nav_config: Optional[str] = None
+    out_dir: Optional[str] = None  # per-run figures and metrics (None: metrics only)
+
+
+def experiment_tasks(worlds: Sequence[World], seeds: Sequence[int], perceptions: Sequence[str],
+                     robot: str = "cobra", **kw) -> List[NavTask]:
+    return [NavTask(w.to_dict(), robot, p, int(s), **kw) for w in worlds for s in seeds for p in perceptions]
+
+
+def run_nav_task(task: NavTask) -> Dict:
+    """One closed-loop run; its metrics (module-level: process-based engines import it)."""
+    import time
+    from .nav_batch import NavRun, NavRunSpec
+    world = World.from_dict(task.world, task.world.get("name", "world"))
+    t0 = time.perf_counter()
+    spec = NavRunSpec(world, robot=task.robot, perception=task.perception, seed=task.seed,
+                      time_limit_s=task.time_limit_s, classifier=task.classifier,
+                      nav_config=task.nav_config, keep_frames=task.out_dir is not None)
+    result = NavRun(spec).run()
+    if task.out_dir:
+        from pathlib import Path
+        result.write(Path(task.out_dir) / f"{world.name}_{task.perception}_s{task.seed}")
+    return {**result.metrics, "world": world.name, "wall_s": round(time.perf_counter() - t0, 1)}
+
+
+def summarise(rows: List[Dict]) -> List[Dict]:
+    """Per (robot, perception): runs, success rate, runs with a collision, collisions, rolled over,
+    mean time of the successful runs."""
+    out = []
+    for key in sorted({(r["robot"], r["perception"]) for r in rows}):
+        rs = [r for r in rows if (r["robot"], r["perception"]) == key]
+        ok = [r for r in rs if r["goal_reached"] and r["collisions"] == 0]
+        out.append({"robot": key[0], "perception": key[1], "runs": len(rs),
+                    "worlds": len({r["world"] for r in rs}),
+                    "success": len(ok) / len(rs),
+                    "reached": sum(r["goal_reached"] for r in rs),
+                    "runs_with_collision": sum(r["collisions"] > 0 for r in rs),
+                    "collisions": sum(r["collisions"] for r in rs),
+                    "rolled_over": sum(bool(r.get("rolled_over")) for r in rs),
+                    "stops_no_free_arc": sum(r["stops_no_free_arc"] for r in rs),
+                    "mean_time_s": float(np.mean([r["time_s"] for r in ok])) if ok else math.nan})
+    return out
+
+
+def markdown_table(summary: List[Dict]) -> str:
+    lines = ["| robot | perception | worlds | runs | success (reached, 0 collisions) | reached | runs with "
+             "a collision | collisions | rolled over | stops (no free arc) | mean time of successes (s) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for s in summary:
+        t = "-" if math.isnan(s["mean_time_s"]) else f"{s['mean_time_s']:.0f}"
+        lines.append(f"| {s['robot']} | {s['perception']} | {s['worlds']} | {s['runs']} | "
+                     f"{100 * s['success']:.0f} % | {s['reached']} | {s['runs_with_collision']} | "
+                     f"{s['collisions']} | {s['rolled_over']} | {s['stops_no_free_arc']} | {t} |")
+    return "\n".join(lines)

@@ -1,0 +1,62 @@
+"""The navigation experiment (sim/nav_experiment.py, `snake_autonomy nav experiment`): random
+corridors are solvable by construction and reproducible; the command writes its table through the
+sweep runner."""
+import json
+import math
+
+from snake_autonomy.cli import main as cli_main
+from snake_autonomy.planning.rectilinear.cli import parse_seeds
+from snake_autonomy.sim.nav_experiment import min_gap_m, random_corridor, summarise
+
+import pytest
+
+
+def test_random_corridors_are_reproducible_solvable_and_block_the_straight_line():
+    for k in range(30):
+        w = random_corridor(k, body_width_m=0.09)
+        assert w.to_dict() == random_corridor(k, body_width_m=0.09).to_dict()
+        assert 1 <= len(w.obstacles) <= 3
+        assert min_gap_m(w) >= 2 * 0.09 - 1e-9
+        first = w.obstacles[0]
+        assert abs(first.y_m) <= 0.05 and 0.45 <= first.x_m <= w.goal[0] - 0.35
+        for ob in w.obstacles:   # the start and the goal stay clear
+            assert ob.distance_m(*w.start[:2]) > 0.3 and ob.distance_m(*w.goal) > 0.2
+    assert random_corridor(0).to_dict() != random_corridor(1).to_dict()
+
+
+def test_parse_seeds():
+    assert parse_seeds("0-4") == [0, 1, 2, 3, 4]
+    assert parse_seeds("1,3") == [1, 3]
+    with pytest.raises(ValueError, match="--seeds: expected FIRST-LAST"):
+        parse_seeds("a-b")
+
+
+def test_summarise_counts_success_only_without_collisions():
+    base = {"robot": "cobra", "perception": "depth", "world": "w0", "stops_no_free_arc": 0, "time_s": 100.0}
+    rows = [{**base, "goal_reached": True, "collisions": 0},
+            {**base, "goal_reached": True, "collisions": 2, "world": "w1"},
+            {**base, "goal_reached": False, "collisions": 0, "rolled_over": True, "world": "w2"}]
+    s = summarise(rows)[0]
+    assert s["runs"] == 3 and s["worlds"] == 3 and s["reached"] == 2
+    assert s["success"] == pytest.approx(1 / 3) and s["runs_with_collision"] == 1 and s["collisions"] == 2
+    assert s["rolled_over"] == 1 and s["mean_time_s"] == pytest.approx(100.0)
+
+
+def test_nav_experiment_writes_runs_summary_and_table(tmp_path):
+    out = tmp_path / "exp"
+    # contract only: 4 s of physics (the 2 s ramp and the first replan) per run, serial engine
+    assert cli_main(["nav", "experiment", "--worlds", "1", "--seeds", "0", "--time-limit", "4",
+                     "--engine", "serial", "--no-progress", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["seeds"] == [0] and len(summary["worlds"]) == 1
+    s = summary["summary"][0]
+    assert s["runs"] == 1 and s["perception"] == "depth" and s["collisions"] == 0
+    assert "| cobra | depth | 1 | 1 |" in (out / "table.md").read_text()
+    assert len((out / "runs.csv").read_text().splitlines()) == 2
+    assert math.isfinite(summary["wall_s"])
+
+
+def test_nav_experiment_mono_needs_a_classifier(tmp_path, capsys):
+    assert cli_main(["nav", "experiment", "--worlds", "1", "--perception", "both", "--engine", "serial",
+                     "--out", str(tmp_path / "e")]) == 1
+    assert "needs --classifier FILE" in capsys.readouterr().err
