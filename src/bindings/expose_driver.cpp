@@ -1,0 +1,180 @@
+// The driver's control loop (DriverController) and its configuration (DriverConfig): the batch
+// simulator runs the very same controller as driver_node, on a FakeServoBus.
+#include "bindings.hpp"
+
+#include "snake_autonomy/core/driver_config.hpp"
+#include "snake_autonomy/core/driver_controller.hpp"
+#include "snake_autonomy/core/gait_command.hpp"
+#include "snake_autonomy/dynamixel/control_table.hpp"
+#include "snake_autonomy/dynamixel/servo_bus.hpp"
+
+namespace snake_autonomy::bindings {
+
+using namespace snake_autonomy::core;
+namespace dx = snake_autonomy::dynamixel;
+
+namespace {
+
+double yaw_of(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)); }
+
+}  // namespace
+
+void expose_driver(py::module_& m) {
+  py::class_<DriverConfig>(m, "DriverConfig", "Configuration of DriverController (config/driver.yaml documents every key).")
+      .def(py::init([](bool fast_sync_read, int max_failed_cycles, int status_every_cycles, int return_delay_time_us,
+                       const std::string& fault_action, const std::string& shutdown_action, bool torque_on_start,
+                       double max_joint_velocity_rad_s, double max_frequency_hz, double max_step_s,
+                       int plausible_margin_ticks, double pose_timeout_s, bool require_pose, double command_timeout_s,
+                       double pose_workspace_m, double quaternion_norm_tolerance) {
+             DriverConfig c;
+             std::vector<std::string> errors;
+             if (!parse_safe_action(fault_action, &c.fault_action))
+               errors.push_back("fault_action: '" + fault_action + "', expected 'hold' or 'torque_off'");
+             if (!parse_safe_action(shutdown_action, &c.shutdown_action))
+               errors.push_back("shutdown_action: '" + shutdown_action + "', expected 'hold' or 'torque_off'");
+             c.fast_sync_read = fast_sync_read;
+             c.max_failed_cycles = max_failed_cycles;
+             c.status_every_cycles = status_every_cycles;
+             c.return_delay_time_us = return_delay_time_us;
+             c.torque_on_start = torque_on_start;
+             c.max_joint_velocity_rad_s = max_joint_velocity_rad_s;
+             c.max_frequency_hz = max_frequency_hz;
+             c.max_step_s = max_step_s;
+             c.plausible_margin_ticks = plausible_margin_ticks;
+             c.pose_timeout_s = pose_timeout_s;
+             c.require_pose = require_pose;
+             c.command_timeout_s = command_timeout_s;
+             c.pose_workspace_m = pose_workspace_m;
+             c.quaternion_norm_tolerance = quaternion_norm_tolerance;
+             for (const auto& e : c.validate()) errors.push_back(e);
+             if (!errors.empty()) {
+               std::string what = "driver configuration:";
+               for (const auto& e : errors) what += "\n  " + e;
+               throw py::value_error(what);
+             }
+             return c;
+           }),
+           py::kw_only(), py::arg("fast_sync_read") = DriverConfig{}.fast_sync_read,
+           py::arg("max_failed_cycles") = DriverConfig{}.max_failed_cycles,
+           py::arg("status_every_cycles") = DriverConfig{}.status_every_cycles,
+           py::arg("return_delay_time_us") = DriverConfig{}.return_delay_time_us,
+           py::arg("fault_action") = std::string(to_string(DriverConfig{}.fault_action)),
+           py::arg("shutdown_action") = std::string(to_string(DriverConfig{}.shutdown_action)),
+           py::arg("torque_on_start") = DriverConfig{}.torque_on_start,
+           py::arg("max_joint_velocity_rad_s") = DriverConfig{}.max_joint_velocity_rad_s,
+           py::arg("max_frequency_hz") = DriverConfig{}.max_frequency_hz,
+           py::arg("max_step_s") = DriverConfig{}.max_step_s,
+           py::arg("plausible_margin_ticks") = DriverConfig{}.plausible_margin_ticks,
+           py::arg("pose_timeout_s") = DriverConfig{}.pose_timeout_s, py::arg("require_pose") = DriverConfig{}.require_pose,
+           py::arg("command_timeout_s") = DriverConfig{}.command_timeout_s,
+           py::arg("pose_workspace_m") = DriverConfig{}.pose_workspace_m,
+           py::arg("quaternion_norm_tolerance") = DriverConfig{}.quaternion_norm_tolerance,
+           "The defaults with keyword overrides; ValueError lists every problem (DriverConfig::validate).")
+      .def("validate", &DriverConfig::validate, "Every problem, naming key and value (empty when usable).")
+      .def_readwrite("fast_sync_read", &DriverConfig::fast_sync_read)
+      .def_readwrite("max_failed_cycles", &DriverConfig::max_failed_cycles)
+      .def_readwrite("status_every_cycles", &DriverConfig::status_every_cycles)
+      .def_readwrite("return_delay_time_us", &DriverConfig::return_delay_time_us)
+      .def_property_readonly("fault_action", [](const DriverConfig& c) { return std::string(to_string(c.fault_action)); },
+                             "'hold' or 'torque_off'")
+      .def_property_readonly("shutdown_action",
+                             [](const DriverConfig& c) { return std::string(to_string(c.shutdown_action)); },
+                             "'hold' or 'torque_off'")
+      .def_readwrite("torque_on_start", &DriverConfig::torque_on_start)
+      .def_readwrite("max_joint_velocity_rad_s", &DriverConfig::max_joint_velocity_rad_s)
+      .def_readwrite("max_frequency_hz", &DriverConfig::max_frequency_hz)
+      .def_readwrite("max_step_s", &DriverConfig::max_step_s)
+      .def_readwrite("plausible_margin_ticks", &DriverConfig::plausible_margin_ticks)
+      .def_readwrite("pose_timeout_s", &DriverConfig::pose_timeout_s)
+      .def_readwrite("require_pose", &DriverConfig::require_pose)
+      .def_readwrite("command_timeout_s", &DriverConfig::command_timeout_s)
+      .def_readwrite("pose_workspace_m", &DriverConfig::pose_workspace_m)
+      .def_readwrite("quaternion_norm_tolerance", &DriverConfig::quaternion_norm_tolerance);
+
+  py::class_<DriverController>(
+      m, "DriverController",
+      "The driver's control loop (src/core/driver_controller.cpp), the one driver_node runs: gait commands, CPG + "
+      "steering, stale-pose gating, slew limit, joint limits, faults, kinematics. Call start(), then update() at "
+      "the loop's rate; everything from one thread.")
+      .def(py::init<const RobotModel&, const GaitLibrary&, const dx::ControlTable&, dx::ServoBus&, const DriverConfig&>(),
+           py::arg("model"), py::arg("gaits"), py::arg("table"), py::arg("bus"), py::arg("config"),
+           py::keep_alive<1, 5>(),
+           "Checks everything (ConfigError lists every problem); keeps the bus alive as long as the controller.")
+      .def("start", &DriverController::start, py::arg("t_s"),
+           "Talks to every servo (model, mode, limits, errors, position); torque on and holding "
+           "(torque_on_start) or stopped; ConfigError lists every servo that fails.")
+      .def("update", &DriverController::update, py::arg("t_s"), py::arg("dt_s"),
+           "One cycle: read the servos, gait, CPG, goals, write, kinematics. False when the cycle failed.")
+      .def("shutdown", &DriverController::shutdown, "Leaves the servos as shutdown_action says; False when the bus failed.")
+      .def(
+          "command_gait",
+          [](DriverController& d, const std::string& gait, const std::vector<double>& amplitude,
+             const std::vector<double>& omega, const std::vector<double>& phase, const std::vector<double>& bias,
+             bool steer, double delta_rad) {
+            GaitCommandRequest r;
+            r.gait = gait;
+            r.amplitude = amplitude;
+            r.omega = omega;
+            r.phase = phase;
+            r.bias = bias;
+            r.steer = steer;
+            r.delta_rad = delta_rad;
+            return d.command_gait(r);
+          },
+          py::arg("gait") = "", py::arg("amplitude") = std::vector<double>{}, py::arg("omega") = std::vector<double>{},
+          py::arg("phase") = std::vector<double>{}, py::arg("bias") = std::vector<double>{}, py::arg("steer") = false,
+          py::arg("delta_rad") = 0.0,
+          "A gait command (msg/GaitCommand.msg), taken at the next update(). '' when accepted, else every reason.")
+      .def(
+          "set_base_pose",
+          [](DriverController& d, double t_s, const Eigen::Vector3d& position, const Eigen::Vector4d& orientation) {
+            return d.set_base_pose(t_s, position,
+                                   Eigen::Quaterniond(orientation(3), orientation(0), orientation(1), orientation(2)));
+          },
+          py::arg("t_s"), py::arg("position"), py::arg("orientation"),
+          "base_link pose at t_s (the loop's clock), orientation as (x, y, z, w). False (ignored, counted) when not "
+          "finite, outside pose_workspace_m or not a unit quaternion within quaternion_norm_tolerance.")
+      .def_property_readonly("state", [](const DriverController& d) { return std::string(to_string(d.state())); },
+                             "'stopped', 'holding', 'running' or 'fault'")
+      .def_property_readonly("fault_reason", [](const DriverController& d) { return std::string(d.fault_reason()); },
+                             "the active fault ('' when none)")
+      .def_property_readonly("commanded_gait", &DriverController::commanded_gait, "the gait of the last accepted command")
+      .def_property_readonly("hold_reason",
+                             [](const DriverController& d) {
+                               return std::string(d.state() == DriverState::kHolding ? to_string(d.hold_reason()) : "");
+                             },
+                             "why the driver holds ('' unless holding), e.g. the command lifetime expired")
+      .def_property_readonly("last_refusal", &DriverController::last_refusal, "why the last refused command was refused")
+      .def_property_readonly("commands_accepted", &DriverController::commands_accepted)
+      .def_property_readonly("commands_refused", &DriverController::commands_refused)
+      .def_property_readonly("ids", &DriverController::ids, "servo IDs in joint order")
+      .def_property_readonly("position_rad", [](const DriverController& d) { return Eigen::VectorXd(d.position_rad()); },
+                             "measured joint angles")
+      .def_property_readonly("goal_rad", [](const DriverController& d) { return Eigen::VectorXd(d.goal_rad()); },
+                             "joint goals of the last cycle (before rounding to ticks)")
+      .def_property_readonly("pose_fresh", &DriverController::pose_fresh, "the base pose is younger than pose_timeout_s")
+      .def_property_readonly("locomotion_gated", &DriverController::locomotion_gated,
+                             "running, but held for a stale base pose")
+      .def_property_readonly("cpg", &DriverController::cpg, py::return_value_policy::reference_internal,
+                             "the loop's CPG (read only)")
+      .def_property_readonly("kinematics", &DriverController::kinematics, py::return_value_policy::reference_internal,
+                             "KinematicState of the last cycle (base pose of the latest sample, measured joints)")
+      .def_property_readonly("com", [](const DriverController& d) { return Eigen::Vector3d(d.kinematics().com); },
+                             "(3,) centre of mass of the last cycle, world frame")
+      .def_property_readonly("vc_rotation",
+                             [](const DriverController& d) { return Eigen::Matrix3d(d.kinematics().vc_rotation); },
+                             "(3, 3) virtual chassis of the last cycle")
+      .def_property_readonly("com_yaw", [](const DriverController& d) { return yaw_of(d.kinematics().vc_rotation); },
+                             "yaw of the virtual chassis (rad), as com_pose carries it")
+      .def("ticks_to_joint_rad", &DriverController::ticks_to_joint_rad, py::arg("joint"), py::arg("ticks"),
+           "Servo ticks -> joint angle (direction, zero offset).")
+      .def(
+          "joint_rad_to_ticks",
+          [](const DriverController& d, int joint, double rad) -> py::object {
+            std::int32_t t = 0;
+            return d.joint_rad_to_ticks(joint, rad, &t) ? py::object(py::int_(t)) : py::object(py::none());
+          },
+          py::arg("joint"), py::arg("rad"), "Joint angle -> servo ticks (no clamping); None when not representable.");
+}
+
+}  // namespace snake_autonomy::bindings
