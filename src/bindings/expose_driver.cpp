@@ -2,6 +2,12 @@
 // simulator runs the very same controller as driver_node, on a FakeServoBus.
 #include "bindings.hpp"
 
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+
+#include "snake_autonomy/core/config_reader.hpp"
+
 #include "snake_autonomy/core/driver_config.hpp"
 #include "snake_autonomy/core/driver_controller.hpp"
 #include "snake_autonomy/core/gait_command.hpp"
@@ -17,59 +23,50 @@ namespace {
 
 double yaw_of(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)); }
 
+std::string join_keys() {
+  std::string out;
+  for (const auto& k : DriverConfig::keys()) out += (out.empty() ? "" : ", ") + k;
+  return out;
+}
+
 }  // namespace
 
 void expose_driver(py::module_& m) {
   py::class_<DriverConfig>(m, "DriverConfig", "Configuration of DriverController (config/driver.yaml documents every key).")
-      .def(py::init([](bool fast_sync_read, int max_failed_cycles, int status_every_cycles, int return_delay_time_us,
-                       const std::string& fault_action, const std::string& shutdown_action, bool torque_on_start,
-                       double max_joint_velocity_rad_s, double max_frequency_hz, double max_step_s,
-                       int plausible_margin_ticks, double pose_timeout_s, bool require_pose, double command_timeout_s,
-                       double pose_workspace_m, double quaternion_norm_tolerance) {
-             DriverConfig c;
+      .def(py::init([](const py::kwargs& kwargs) {
+             // The keyword arguments as a YAML mapping, read by the one loader (DriverConfig::apply_yaml).
+             YAML::Node doc(YAML::NodeType::Map);
              std::vector<std::string> errors;
-             if (!parse_safe_action(fault_action, &c.fault_action))
-               errors.push_back("fault_action: '" + fault_action + "', expected 'hold' or 'torque_off'");
-             if (!parse_safe_action(shutdown_action, &c.shutdown_action))
-               errors.push_back("shutdown_action: '" + shutdown_action + "', expected 'hold' or 'torque_off'");
-             c.fast_sync_read = fast_sync_read;
-             c.max_failed_cycles = max_failed_cycles;
-             c.status_every_cycles = status_every_cycles;
-             c.return_delay_time_us = return_delay_time_us;
-             c.torque_on_start = torque_on_start;
-             c.max_joint_velocity_rad_s = max_joint_velocity_rad_s;
-             c.max_frequency_hz = max_frequency_hz;
-             c.max_step_s = max_step_s;
-             c.plausible_margin_ticks = plausible_margin_ticks;
-             c.pose_timeout_s = pose_timeout_s;
-             c.require_pose = require_pose;
-             c.command_timeout_s = command_timeout_s;
-             c.pose_workspace_m = pose_workspace_m;
-             c.quaternion_norm_tolerance = quaternion_norm_tolerance;
-             for (const auto& e : c.validate()) errors.push_back(e);
-             if (!errors.empty()) {
-               std::string what = "driver configuration:";
-               for (const auto& e : errors) what += "\n  " + e;
-               throw py::value_error(what);
+             const auto& known = DriverConfig::keys();
+             for (const auto& item : kwargs) {
+               const std::string key = py::str(item.first);
+               const py::handle v = item.second;
+               if (std::find(known.begin(), known.end(), key) == known.end())
+                 errors.push_back(key + ": unknown key (known: " + join_keys() + ")");
+               else if (py::isinstance<py::bool_>(v))
+                 doc[key] = v.cast<bool>();
+               else if (py::isinstance<py::int_>(v))
+                 doc[key] = v.cast<long long>();
+               else if (py::isinstance<py::float_>(v))
+                 doc[key] = v.cast<double>();
+               else
+                 doc[key] = std::string(py::str(v));
              }
+             DriverConfig c;
+             c.apply_yaml(doc, &errors);
+             for (const auto& e : c.validate()) errors.push_back(e);
+             throw_if_errors(errors, "DriverConfig", "driver configuration");
              return c;
            }),
-           py::kw_only(), py::arg("fast_sync_read") = DriverConfig{}.fast_sync_read,
-           py::arg("max_failed_cycles") = DriverConfig{}.max_failed_cycles,
-           py::arg("status_every_cycles") = DriverConfig{}.status_every_cycles,
-           py::arg("return_delay_time_us") = DriverConfig{}.return_delay_time_us,
-           py::arg("fault_action") = std::string(to_string(DriverConfig{}.fault_action)),
-           py::arg("shutdown_action") = std::string(to_string(DriverConfig{}.shutdown_action)),
-           py::arg("torque_on_start") = DriverConfig{}.torque_on_start,
-           py::arg("max_joint_velocity_rad_s") = DriverConfig{}.max_joint_velocity_rad_s,
-           py::arg("max_frequency_hz") = DriverConfig{}.max_frequency_hz,
-           py::arg("max_step_s") = DriverConfig{}.max_step_s,
-           py::arg("plausible_margin_ticks") = DriverConfig{}.plausible_margin_ticks,
-           py::arg("pose_timeout_s") = DriverConfig{}.pose_timeout_s, py::arg("require_pose") = DriverConfig{}.require_pose,
-           py::arg("command_timeout_s") = DriverConfig{}.command_timeout_s,
-           py::arg("pose_workspace_m") = DriverConfig{}.pose_workspace_m,
-           py::arg("quaternion_norm_tolerance") = DriverConfig{}.quaternion_norm_tolerance,
-           "The defaults with keyword overrides; ValueError lists every problem (DriverConfig::validate).")
+           "The defaults with keyword overrides (the keys of config/driver.yaml); ConfigError (a ValueError) "
+           "lists every problem.")
+      .def_static("from_yaml", &DriverConfig::from_yaml_file, py::arg("path"),
+                  "The controller's keys of a driver YAML (config/driver.yaml), the node's own ignored; "
+                  "ConfigError lists every problem.")
+      .def_static("from_yaml_string", &DriverConfig::from_yaml_string, py::arg("text"),
+                  py::arg("source") = "<string>", "Same as from_yaml, from YAML text.")
+      .def_property_readonly_static("keys", [](const py::object&) { return DriverConfig::keys(); },
+                                    "the YAML keys, the field names")
       .def("validate", &DriverConfig::validate, "Every problem, naming key and value (empty when usable).")
       .def_readwrite("fast_sync_read", &DriverConfig::fast_sync_read)
       .def_readwrite("max_failed_cycles", &DriverConfig::max_failed_cycles)
