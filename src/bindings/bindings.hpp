@@ -28,6 +28,7 @@ void expose_gaits(py::module_& m);
 void expose_kinematics(py::module_& m);
 void expose_dynamixel(py::module_& m);        // creates the submodule `dynamixel`
 void expose_fake_servo_bus(py::module_& m);   // into `dynamixel`; after expose_dynamixel
+void expose_transmission(py::module_& m);     // after expose_robot_model and expose_dynamixel
 void expose_driver(py::module_& m);           // after expose_fake_servo_bus
 
 // Helpers shared by several areas (helpers.cpp).

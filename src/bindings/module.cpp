@@ -17,5 +17,6 @@ PYBIND11_MODULE(_core, m) {
   sb::expose_dynamixel(m);
   sb::expose_fake_servo_bus(m);
   // sb::expose_servo_model(m);  // the one simulated servo (src/bindings/expose_servo_model.cpp)
+  sb::expose_transmission(m);
   sb::expose_driver(m);
 }

@@ -133,7 +133,7 @@ class LockStepDriver:
         dx = _core.dynamixel
         self.table = dx.ControlTable.from_yaml(control_table or str(CONFIG / "dynamixel" / f"{robot.servo_model}.yaml"))
         self.ids = [int(i) for i in robot.servo_ids]
-        self.backend = MujocoServoBackend(plant)
+        self.backend = MujocoServoBackend(plant, table=self.table)
         self.bus = dx.FakeServoBus(self.table, self.ids)
         self.bus.set_follow_goal(False)
         self.controller = _core.DriverController(robot, library, self.table, self.bus, config)
