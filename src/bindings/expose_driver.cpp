@@ -107,7 +107,7 @@ void expose_driver(py::module_& m) {
           "command_gait",
           [](DriverController& d, const std::string& gait, const std::vector<double>& amplitude,
              const std::vector<double>& omega, const std::vector<double>& phase, const std::vector<double>& bias,
-             bool steer, double delta_rad) {
+             bool steer, double delta_rad, bool curve, double kappa_per_m) {
             GaitCommandRequest r;
             r.gait = gait;
             r.amplitude = amplitude;
@@ -116,11 +116,13 @@ void expose_driver(py::module_& m) {
             r.bias = bias;
             r.steer = steer;
             r.delta_rad = delta_rad;
+            r.curve = curve;
+            r.kappa_per_m = kappa_per_m;
             return d.command_gait(r);
           },
           py::arg("gait") = "", py::arg("amplitude") = std::vector<double>{}, py::arg("omega") = std::vector<double>{},
           py::arg("phase") = std::vector<double>{}, py::arg("bias") = std::vector<double>{}, py::arg("steer") = false,
-          py::arg("delta_rad") = 0.0,
+          py::arg("delta_rad") = 0.0, py::arg("curve") = false, py::arg("kappa_per_m") = 0.0,
           "A gait command (msg/GaitCommand.msg), taken at the next update(). '' when accepted, else every reason.")
       .def(
           "set_base_pose",

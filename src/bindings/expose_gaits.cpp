@@ -1,6 +1,7 @@
 // GaitLibrary (config/gaits.yaml) and amplitude-modulation Steering.
 #include "bindings.hpp"
 
+#include "snake_autonomy/core/curvature_steering.hpp"
 #include "snake_autonomy/core/gait_library.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
 #include "snake_autonomy/core/steering.hpp"
@@ -34,8 +35,28 @@ void expose_gaits(py::module_& m) {
           "steerable", [](const GaitLibrary& lib, const std::string& name) { return lib.spec(name).steerable; },
           py::arg("name"))
       .def(
+          "steering",
+          [](const GaitLibrary& lib, const std::string& name) { return std::string(to_string(lib.spec(name).steering)); },
+          py::arg("name"), "'amplitude_modulation', 'curvature' or 'none'")
+      .def(
           "description", [](const GaitLibrary& lib, const std::string& name) { return lib.spec(name).description; },
           py::arg("name"));
+
+  py::class_<CurvatureSteering>(m, "CurvatureSteering", "Body-curvature steering: yaw-joint bias = kappa x spacing.")
+      .def(py::init<const RobotModel&>(), py::arg("model"))
+      .def(
+          "modify_biases",
+          [](const CurvatureSteering& s, py::object nominal, double kappa_per_m) {
+            if (!std::isfinite(kappa_per_m))
+              throw py::value_error("kappa_per_m: must be finite, got " + std::to_string(kappa_per_m));
+            const Eigen::VectorXd b = checked_vector(nominal, s.num_joints(), "nominal");
+            Eigen::VectorXd out = b;
+            s.modify_biases(b, kappa_per_m, out);
+            return out;
+          },
+          py::arg("nominal"), py::arg("kappa_per_m"), "Yaw-joint biases bent by kappa, clamped to the joint limits.")
+      .def_property_readonly("spacing_m", &CurvatureSteering::spacing_m)
+      .def_property_readonly("yaw_joints", &CurvatureSteering::yaw_joints);
 
   py::class_<Steering>(m, "Steering", "Amplitude-modulation steering (eq. 3.26-3.29).")
       .def(py::init<const RobotModel&>(), py::arg("model"))
