@@ -106,8 +106,7 @@ DriverController::DriverController(const RobotModel& model, const GaitLibrary& g
 
   const auto nz = static_cast<std::size_t>(n_);
   for (int id : model.servos.ids) ids_.push_back(static_cast<std::uint8_t>(id));
-  directions_ = model.servos.directions;
-  zero_offsets_ = model.servos.zero_offsets_ticks;
+  tx_ = driver::Transmission::for_robot(model, table);
   feedback_.assign(nz * dxl::kFeedbackBytes, 0);
   status_.assign(nz * std::max<std::uint16_t>(status_bytes_, 1), 0);
   goals_.assign(nz * dxl::kGoalPositionBytes, 0);
@@ -125,7 +124,7 @@ DriverController::DriverController(const RobotModel& model, const GaitLibrary& g
     const auto lo = goal_entry.has_range ? static_cast<std::int32_t>(goal_entry.min) : 0;
     const auto hi = goal_entry.has_range ? static_cast<std::int32_t>(goal_entry.max) : 4095;
     set_limits(j, lo, hi);
-    diag_[j].present_ticks = diag_[j].goal_ticks = scales_.centre_ticks + zero_offsets_[j];
+    diag_[j].present_ticks = diag_[j].goal_ticks = tx_[j].centre_ticks() + tx_[j].zero_offset_ticks();
   }
   nominal_ = effective_ = pending_gait_ = resolver_.nominal();
   copy_message(gait_name_, "hold");
@@ -134,38 +133,23 @@ DriverController::DriverController(const RobotModel& model, const GaitLibrary& g
 void DriverController::set_limits(int j, std::int32_t servo_min, std::int32_t servo_max) noexcept {
   servo_min_ticks_[j] = servo_min;
   servo_max_ticks_[j] = servo_max;
-  const double rpt = scales_.rad_per_tick;
-  const double c = scales_.centre_ticks + zero_offsets_[j];
-  const double lower = model_.joint_lower_rad[j], upper = model_.joint_upper_rad[j];
   // Joint limits in ticks, rounded inwards: the clamp never lets a goal out of the joint's range.
-  double lo, hi;
-  if (directions_[j] > 0) {
-    lo = c + std::ceil(lower / rpt - 1e-9);
-    hi = c + std::floor(upper / rpt + 1e-9);
-  } else {
-    lo = c + std::ceil(-upper / rpt - 1e-9);
-    hi = c + std::floor(-lower / rpt + 1e-9);
-  }
+  std::int32_t lo = 0, hi = 0;
+  tx_[j].joint_range_to_ticks(model_.joint_lower_rad[j], model_.joint_upper_rad[j], &lo, &hi);
   auto& d = diag_[j];
-  d.min_ticks = static_cast<std::int32_t>(std::max<double>(lo, servo_min));
-  d.max_ticks = static_cast<std::int32_t>(std::min<double>(hi, servo_max));
+  d.min_ticks = std::max(lo, servo_min);
+  d.max_ticks = std::min(hi, servo_max);
   const double a = ticks_to_joint_rad(j, d.min_ticks), b = ticks_to_joint_rad(j, d.max_ticks);
   lo_rad_[j] = std::min(a, b);
   hi_rad_[j] = std::max(a, b);
 }
 
 double DriverController::ticks_to_joint_rad(int joint, std::int32_t ticks) const noexcept {
-  return directions_[joint] * static_cast<double>(ticks - scales_.centre_ticks - zero_offsets_[joint]) *
-         scales_.rad_per_tick;
+  return tx_[joint].ticks_to_joint_rad(ticks);
 }
 
 bool DriverController::joint_rad_to_ticks(int joint, double rad, std::int32_t* ticks) const noexcept {
-  const auto t = dxl::rad_to_ticks(directions_[joint] * rad, scales_);
-  if (!t) return false;
-  const std::int64_t v = static_cast<std::int64_t>(*t) + zero_offsets_[joint];
-  if (v < INT32_MIN || v > INT32_MAX) return false;
-  *ticks = static_cast<std::int32_t>(v);
-  return true;
+  return tx_[joint].joint_rad_to_ticks(rad, ticks);
 }
 
 std::int32_t DriverController::clamp_goal(int joint, std::int32_t ticks) const noexcept {
@@ -438,8 +422,8 @@ bool DriverController::read_feedback() noexcept {
       } else {
         d.present_ticks = fb.position_ticks;
         position_[j] = ticks_to_joint_rad(j, fb.position_ticks);
-        velocity_[j] = directions_[j] * fb.velocity_rad_s;
-        effort_[j] = directions_[j] * fb.current_a;
+        velocity_[j] = tx_[j].shaft_to_joint_sense(fb.velocity_rad_s);
+        effort_[j] = tx_[j].shaft_to_joint_sense(fb.current_a);
         d.stale = false;
         d.consecutive_misses = 0;
         if (r.status == dxl::Status::kHardwareError || (r.error & dxl::kAlertBit)) d.hardware_error = true;

@@ -12,6 +12,7 @@ constexpr double kMaxPhaseRad = 1000.0;
 // Bound of |δ| (rad): beyond a half turn a steering value means nothing; within it the steering
 // clips δ to the robot's delta_limit.
 constexpr double kMaxDeltaRad = M_PI;
+constexpr double kMaxKappaPerM = 100.0;
 
 // Checks one explicit vector: empty or n finite values within [lower_i, upper_i] (`what` names the
 // range in the message).
@@ -52,7 +53,7 @@ void assign(const std::vector<double>& v, Eigen::VectorXd& out) {
 
 GaitCommandResolver::GaitCommandResolver(const RobotModel& model, const GaitLibrary& gaits, double max_frequency_hz,
                                          const std::string& initial_gait)
-    : model_(model), gaits_(gaits), steering_(model), max_omega_rad_s_(2.0 * M_PI * max_frequency_hz) {
+    : model_(model), gaits_(gaits), steering_(model), curvature_(model), max_omega_rad_s_(2.0 * M_PI * max_frequency_hz) {
   if (!gaits_.contains(initial_gait)) throw ConfigError("initial gait '" + initial_gait + "' is not in the gait library");
   name_ = base_name_ = initial_gait;
   nominal_ = gaits_.parameters(initial_gait, model_);
@@ -91,7 +92,20 @@ std::string GaitCommandResolver::resolve(const GaitCommandRequest& command, Gait
     }
     const std::string& base = named ? command.gait : base_name_;
     if (gaits_.contains(base) && !gaits_.spec(base).steerable)
-      errors.push_back("steer: gait '" + base + "' is not steerable (only gaits marked steerable in gaits.yaml are)");
+      errors.push_back("steer: gait '" + base + "' is not steerable (steering: " +
+                       to_string(gaits_.spec(base).steering) + "; steer needs amplitude_modulation)");
+  }
+  if (command.curve) {
+    if (!std::isfinite(command.kappa_per_m) || std::abs(command.kappa_per_m) > kMaxKappaPerM) {
+      std::ostringstream s;
+      s << "kappa: " << command.kappa_per_m
+        << (std::isfinite(command.kappa_per_m) ? " is outside [-100, 100] 1/m" : " is not a finite number");
+      errors.push_back(s.str());
+    }
+    const std::string& base = named ? command.gait : base_name_;
+    if (gaits_.contains(base) && gaits_.spec(base).steering != SteeringLaw::kCurvature)
+      errors.push_back("kappa: gait '" + base + "' does not steer by curvature (steering: " +
+                       to_string(gaits_.spec(base).steering) + ")");
   }
   if (!errors.empty()) {
     std::string what;
@@ -108,6 +122,8 @@ std::string GaitCommandResolver::resolve(const GaitCommandRequest& command, Gait
   GaitParameters result = nominal;
   if (command.steer && !steering_.modify_amplitudes(nominal.amplitude, command.delta_rad, result.amplitude))
     return "steer: steering refused the amplitudes";  // unreachable after the checks above
+  if (command.curve && !curvature_.modify_biases(nominal.bias, command.kappa_per_m, result.bias))
+    return "kappa: curvature steering refused the biases";  // unreachable after the checks above
 
   const std::string base = named ? command.gait : base_name_;
   const bool custom = !command.amplitude.empty() || !command.omega.empty() || !command.phase.empty() ||

@@ -84,11 +84,36 @@ GaitLibrary GaitLibrary::from_yaml_string(const std::string& text, const std::st
     read_wave(n, "pitch", where, &g.pitch, &errors);
     read_wave(n, "yaw", where, &g.yaw, &errors);
     r.scalar(r.child(n, "steerable", where + ".steerable", false), where + ".steerable", &g.steerable);
+    if (g.steerable) g.steering = SteeringLaw::kAmplitudeModulation;
+    std::string law;
+    if (r.scalar(r.child(n, "steering", where + ".steering", false), where + ".steering", &law)) {
+      if (law == "amplitude_modulation") {
+        g.steering = SteeringLaw::kAmplitudeModulation;
+      } else if (law == "curvature" && !g.steerable) {
+        g.steering = SteeringLaw::kCurvature;
+      } else if (law == "none" && !g.steerable) {
+        g.steering = SteeringLaw::kNone;
+      } else if (law == "curvature" || law == "none") {
+        errors.push_back(where + ".steering: '" + law + "' contradicts steerable: true (amplitude_modulation)");
+      } else {
+        errors.push_back(where + ".steering: '" + law + "', expected amplitude_modulation, curvature or none");
+      }
+    }
+    g.steerable = g.steering == SteeringLaw::kAmplitudeModulation;
     lib.gaits_[g.name] = g;
   }
   if (lib.gaits_.empty()) errors.push_back("gaits: no gait defined");
   throw_if_errors(errors, source, "gait library");
   return lib;
+}
+
+const char* to_string(SteeringLaw law) noexcept {
+  switch (law) {
+    case SteeringLaw::kNone: return "none";
+    case SteeringLaw::kAmplitudeModulation: return "amplitude_modulation";
+    case SteeringLaw::kCurvature: return "curvature";
+  }
+  return "?";
 }
 
 GaitLibrary GaitLibrary::from_yaml_file(const std::string& path) {

@@ -406,6 +406,8 @@ class DriverNode {
     c.bias = msg->bias;
     c.steer = msg->steer;
     c.delta_rad = msg->delta;
+    c.curve = msg->curve;
+    c.kappa_per_m = msg->kappa;
     const std::string why = controller_.command_gait(c);
     if (why.empty()) {
       ROS_DEBUG("gait command accepted: %s", controller_.commanded_gait().c_str());

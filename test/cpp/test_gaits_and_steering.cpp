@@ -1,5 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
+#include "snake_autonomy/core/curvature_steering.hpp"
+#include "snake_autonomy/core/gait_command.hpp"
 #include "snake_autonomy/core/gait_library.hpp"
 #include "snake_autonomy/core/steering.hpp"
 #include "test_helpers.hpp"
@@ -103,4 +107,76 @@ TEST(Steering, ClampsDeltaAndAmplitudes) {
   Eigen::VectorXd untouched = nominal;
   EXPECT_FALSE(st.modify_amplitudes(nominal, std::nan(""), untouched));
   EXPECT_EQ(untouched, nominal);
+}
+
+// --- steering laws per gait (config/gaits.yaml `steering:`) ---------------------------------------
+
+TEST(SteeringLaw, GaitsNameTheirLawAndSteerableReadsAsAmplitudeModulation) {
+  const auto lib = snake_autonomy::core::GaitLibrary::from_yaml_string(
+      "gaits:\n"
+      "  old: {frequency_hz: 0.3, steerable: true, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 0}}\n"
+      "  am: {frequency_hz: 0.3, steering: amplitude_modulation, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 0}}\n"
+      "  rect: {frequency_hz: 0.3, steering: curvature, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 0}}\n"
+      "  plain: {frequency_hz: 0.3, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 0}}\n");
+  using snake_autonomy::core::SteeringLaw;
+  EXPECT_EQ(lib.spec("old").steering, SteeringLaw::kAmplitudeModulation);
+  EXPECT_EQ(lib.spec("am").steering, SteeringLaw::kAmplitudeModulation);
+  EXPECT_TRUE(lib.spec("am").steerable);
+  EXPECT_EQ(lib.spec("rect").steering, SteeringLaw::kCurvature);
+  EXPECT_FALSE(lib.spec("rect").steerable);
+  EXPECT_EQ(lib.spec("plain").steering, SteeringLaw::kNone);
+  try {
+    snake_autonomy::core::GaitLibrary::from_yaml_string("gaits:\n  g: {frequency_hz: 0.3, steering: wiggle, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 0}}\n", "g.yaml");
+    FAIL() << "accepted";
+  } catch (const snake_autonomy::core::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("gaits.g.steering: 'wiggle'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SteeringLaw, CurvatureBiasesTheLateralJointsByKappaTimesSpacingWithinTheLimits) {
+  const auto model = snake_autonomy::test::cobra();
+  const snake_autonomy::core::CurvatureSteering c(model);
+  const auto yaw = model.yaw_joints();
+  ASSERT_FALSE(yaw.empty());
+  const Eigen::VectorXd nominal = Eigen::VectorXd::Zero(model.num_joints);
+  Eigen::VectorXd out = nominal;
+  ASSERT_TRUE(c.modify_biases(nominal, 0.5, out));
+  for (std::size_t k = 0; k < yaw.size(); ++k) {
+    EXPECT_NEAR(out(yaw[k]), 0.5 * c.spacing_m()[k], 1e-12);
+    EXPECT_GT(c.spacing_m()[k], 0.0);
+  }
+  for (int p : model.pitch_joints()) EXPECT_EQ(out(p), 0.0);
+  ASSERT_TRUE(c.modify_biases(nominal, 100.0, out));  // huge curvature: clamped to the upper limits
+  for (int j : yaw) EXPECT_DOUBLE_EQ(out(j), model.joint_upper_rad[j]);
+  EXPECT_FALSE(c.modify_biases(nominal, std::nan(""), out));
+}
+
+TEST(SteeringLaw, ASteeringValueTheGaitDoesNotAcceptIsRefusedWithTheReason) {
+  const auto model = snake_autonomy::test::cobra();
+  const auto lib = snake_autonomy::core::GaitLibrary::from_yaml_string(
+      "gaits:\n"
+      "  hold: {frequency_hz: 0, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 0}}\n"
+      "  am: {frequency_hz: 0.3, steering: amplitude_modulation, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 30, lag_deg: 30}}\n"
+      "  rect: {frequency_hz: 0.3, steering: curvature, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 10, lag_deg: 30}}\n");
+  snake_autonomy::core::GaitCommandResolver r(model, lib, 2.0);
+  snake_autonomy::core::GaitParameters out = snake_autonomy::core::GaitParameters::zeros(model.num_joints);
+  snake_autonomy::core::GaitCommandRequest c;
+  c.gait = "am";
+  c.curve = true;
+  c.kappa_per_m = 1.0;
+  EXPECT_NE(r.resolve(c, out).find("kappa: gait 'am' does not steer by curvature (steering: amplitude_modulation)"),
+            std::string::npos);
+  c.gait = "rect";
+  c.curve = false;
+  c.steer = true;
+  EXPECT_NE(r.resolve(c, out).find("steer: gait 'rect' is not steerable (steering: curvature"), std::string::npos);
+  c.steer = false;
+  c.curve = true;
+  c.kappa_per_m = std::nan("");
+  EXPECT_NE(r.resolve(c, out).find("kappa: nan is not a finite number"), std::string::npos);
+  c.kappa_per_m = 0.5;
+  ASSERT_EQ(r.resolve(c, out), "");
+  const snake_autonomy::core::CurvatureSteering law(model);
+  const auto yaw = model.yaw_joints();
+  for (std::size_t k = 0; k < yaw.size(); ++k) EXPECT_NEAR(out.bias(yaw[k]), 0.5 * law.spacing_m()[k], 1e-12);
 }

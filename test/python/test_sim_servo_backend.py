@@ -6,7 +6,7 @@ import pytest
 
 from snake_autonomy import _core
 from snake_autonomy.sim.config import SimConfig
-from snake_autonomy.sim.mujoco_servo_backend import RAD_PER_TICK, MujocoServoBackend
+from snake_autonomy.sim.mujoco_servo_backend import MujocoServoBackend
 from snake_autonomy.sim.plant import Plant
 from snake_autonomy.sim.servo_backend import ServoBackend
 
@@ -33,6 +33,9 @@ def robot(cobra_yaml):
 def backend(robot, root):
     params = SimConfig.from_yaml(root / "config" / "sim.yaml").draw(seed=1)
     return MujocoServoBackend(Plant(robot, params))
+
+
+RAD_PER_TICK = 2 * math.pi / 4096          # XH540 reference value, independent of the code under test
 
 
 def ticks(shaft_rad):

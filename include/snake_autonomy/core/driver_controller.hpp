@@ -51,6 +51,7 @@
 #include "snake_autonomy/core/kinematics.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
 #include "snake_autonomy/core/safety_rules.hpp"
+#include "snake_autonomy/driver/transmission.hpp"
 #include "snake_autonomy/dynamixel/control_table.hpp"
 #include "snake_autonomy/dynamixel/servo_bus.hpp"
 
@@ -184,7 +185,7 @@ class DriverController {
   const char* fault_reason() const noexcept { return fault_reason_.data(); }
   HoldReason hold_reason() const noexcept { return hold_reason_; }
 
-  // Joint angle <-> servo ticks with the servo's direction and zero offset (no clamping).
+  // Joint angle <-> servo ticks with the servo's direction and zero offset (no clamping): tx_[joint].
   double ticks_to_joint_rad(int joint, std::int32_t ticks) const noexcept;
   bool joint_rad_to_ticks(int joint, double rad, std::int32_t* ticks) const noexcept;
 
@@ -236,7 +237,7 @@ class DriverController {
   DriverConfig config_;
   int n_;
   std::vector<std::uint8_t> ids_;
-  std::vector<int> directions_, zero_offsets_;
+  std::vector<driver::Transmission> tx_;  // one per joint: the only tick <-> radian conversion
   std::uint16_t addr_torque_ = 0, addr_hw_error_ = 0, addr_mode_ = 0, addr_min_pos_ = 0, addr_max_pos_ = 0;
   std::uint16_t addr_return_delay_ = 0;
   std::vector<std::string> start_notes_;

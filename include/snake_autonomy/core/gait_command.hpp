@@ -11,7 +11,9 @@
 //   phase      |φ| > 1000 rad; accepted phases are wrapped to (−π, π] (only differences matter)
 //   bias       outside the joint limits [lower, upper]
 //   delta      non-finite or |δ| > π (within, Steering clips it to the robot's delta_limit)
-// and steering of a gait that is not steerable. The resolver remembers the nominal (unsteered) parameters of the last
+//   kappa      non-finite or |kappa| > 100 1/m (within, the biases are clamped to the joint limits)
+// and a steering value the gait does not accept (steer on a gait without amplitude_modulation,
+// curve on a gait without curvature, both at once). The resolver remembers the nominal (unsteered) parameters of the last
 // accepted command: steering applies to one command at a time, it does not accumulate.
 //
 // Not real-time: resolve() allocates. It runs in the caller's thread (a ROS callback), never in the
@@ -22,6 +24,7 @@
 #include <vector>
 
 #include "snake_autonomy/core/cpg.hpp"
+#include "snake_autonomy/core/curvature_steering.hpp"
 #include "snake_autonomy/core/gait_library.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
 #include "snake_autonomy/core/steering.hpp"
@@ -36,6 +39,8 @@ struct GaitCommandRequest {
   std::vector<double> bias;        // rad
   bool steer = false;              // amplitude-modulation steering with delta_rad
   double delta_rad = 0.0;
+  bool curve = false;              // curvature steering (gaits with steering: curvature) with kappa_per_m
+  double kappa_per_m = 0.0;        // body curvature, 1/m
 };
 
 class GaitCommandResolver {
@@ -56,6 +61,7 @@ class GaitCommandResolver {
   RobotModel model_;
   GaitLibrary gaits_;
   Steering steering_;
+  CurvatureSteering curvature_;
   double max_omega_rad_s_;
   std::string name_;
   std::string base_name_;  // the library gait under the custom vectors

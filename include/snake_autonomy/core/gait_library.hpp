@@ -23,13 +23,19 @@ struct WaveSpec {
   double bias_rad = 0.0;
 };
 
+// How a gait may be steered (gaits.yaml `steering:`; the old `steerable: true` reads as
+// amplitude_modulation). A command with a steering value the gait does not accept is refused.
+enum class SteeringLaw { kNone, kAmplitudeModulation, kCurvature };
+const char* to_string(SteeringLaw law) noexcept;  // "none", "amplitude_modulation", "curvature"
+
 struct GaitSpec {
   std::string name;
   std::string description;
   double frequency_hz = 0.0;
   WaveSpec pitch;
   WaveSpec yaw;
-  bool steerable = false;  // amplitude-modulation steering (eq. 3.26) applies to this gait
+  SteeringLaw steering = SteeringLaw::kNone;
+  bool steerable = false;  // steering == kAmplitudeModulation (eq. 3.26 applies to this gait)
 };
 
 class GaitLibrary {

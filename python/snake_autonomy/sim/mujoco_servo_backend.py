@@ -1,9 +1,10 @@
 """The MuJoCo plant behind the mocked servo bus: ServoBackend in servo units, by Dynamixel ID.
 
-Servo shaft angle (rad from tick 2048) and joint angle q (eq. 3.4) are related by the robot YAML's
-servo direction d (+1/-1) and zero offset z (ticks at q = 0, from 2048):
+Servo shaft angle (rad from the servo's centre tick) and joint angle q (eq. 3.4) are related by the
+robot YAML's servo direction d (+1/-1) and zero offset z (ticks at q = 0, from the centre), with the
+control table's resolution: the C++ Transmission (_core.Transmission, the only place that converts)
 
-    ticks = 2048 + z + d * q / (2 pi / 4096)   <=>   shaft_rad = z * 2 pi / 4096 + d * q
+    ticks = centre + z + d * q / rad_per_tick   <=>   shaft_rad = z * rad_per_tick + d * q
 
 Present Current is the servo's torque over servo.torque_constant_nm_per_a (2.25 N m/A assumed:
 the XH540-W270's 9.9 N m stall torque at 4.4 A stall current, gearbox included; no-load current
@@ -16,25 +17,29 @@ world is taken to have paused too, the excess is added to `paused_s`, and the ph
 max_catch_up_s. For lock-step use (batch runs), pass the simulation time itself as now_s.
 Thread-safe: the mocked bus may call from its own thread.
 """
-import math
 import threading
+from pathlib import Path
+
+from snake_autonomy import _core
 
 from .plant import Plant
 from .servo_backend import ServoBackend, ShaftState
 
-TICKS_PER_REV = 4096
-RAD_PER_TICK = 2 * math.pi / TICKS_PER_REV
+CONFIG = Path(__file__).resolve().parents[3] / "config"
 
 
 class MujocoServoBackend(ServoBackend):
-    def __init__(self, plant: Plant, max_catch_up_s: float = 1.0):
+    def __init__(self, plant: Plant, max_catch_up_s: float = 1.0, table=None):
+        """table: the servos' _core.dynamixel.ControlTable (default config/dynamixel/<servo model>.yaml)."""
         self.plant = plant
         robot = plant.robot
         self.max_catch_up_s = max_catch_up_s
         self.torque_constant_nm_per_a = plant.params.config.servo.torque_constant_nm_per_a
         self._index = {int(sid): i for i, sid in enumerate(robot.servo_ids)}
-        self._direction = [float(d) for d in robot.servo_directions]
-        self._zero_rad = [z * RAD_PER_TICK for z in robot.servo_zero_offsets_ticks]
+        if table is None:
+            table = _core.dynamixel.ControlTable.from_yaml(str(CONFIG / "dynamixel" / f"{robot.servo_model}.yaml"))
+        self.transmissions = _core.Transmission.for_robot(robot, table)
+        self._direction = [float(t.direction) for t in self.transmissions]
         self._clock_offset_s = None        # plant time = now_s - offset
         self.paused_s = 0.0
         self._lock = threading.Lock()
@@ -53,10 +58,10 @@ class MujocoServoBackend(ServoBackend):
                            f"(IDs {sorted(self._index)})") from None
 
     def shaft_from_joint(self, joint_index: int, q_rad: float) -> float:
-        return self._zero_rad[joint_index] + self._direction[joint_index] * q_rad
+        return self.transmissions[joint_index].joint_rad_to_shaft_rad(q_rad)
 
     def joint_from_shaft(self, joint_index: int, shaft_rad: float) -> float:
-        return self._direction[joint_index] * (shaft_rad - self._zero_rad[joint_index])
+        return self.transmissions[joint_index].shaft_rad_to_joint_rad(shaft_rad)
 
     # ---- ServoBackend --------------------------------------------------------------------------
     def ids(self) -> list:
