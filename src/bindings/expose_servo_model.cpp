@@ -27,27 +27,27 @@ class PyShaftHooks : public dx::ShaftHooks {
         before_read_(target_.attr("before_read")),
         on_goal_(target_.attr("on_goal")),
         on_torque_(target_.attr("on_torque")) {}
-  void before_write(dx::SimulatedServos&) noexcept override { call([&] { before_write_(); }); }
-  void before_read(dx::SimulatedServos&) noexcept override { call([&] { before_read_(); }); }
-  void on_goal(std::uint8_t id, std::int32_t ticks) noexcept override { call([&] { on_goal_(id, ticks); }); }
-  void on_torque(std::uint8_t id, bool on) noexcept override { call([&] { on_torque_(id, on); }); }
+  void before_write(dx::SimulatedServos&) noexcept override { call("before_write", [&] { before_write_(); }); }
+  void before_read(dx::SimulatedServos&) noexcept override { call("before_read", [&] { before_read_(); }); }
+  void on_goal(std::uint8_t id, std::int32_t ticks) noexcept override { call("on_goal", [&] { on_goal_(id, ticks); }); }
+  void on_torque(std::uint8_t id, bool on) noexcept override { call("on_torque", [&] { on_torque_(id, on); }); }
   std::uint64_t errors() const noexcept { return errors_; }
   const std::string& last_error() const noexcept { return last_error_; }
 
  private:
   template <typename F>
-  void call(F&& f) noexcept {
+  void call(const char* hook, F&& f) noexcept {
     try {
       f();
     } catch (py::error_already_set& e) {
       ++errors_;
-      last_error_ = e.what();
+      last_error_ = std::string(hook) + ": " + e.what();
     } catch (std::exception& e) {
       ++errors_;
-      last_error_ = e.what();
+      last_error_ = std::string(hook) + ": " + e.what();
     } catch (...) {
       ++errors_;
-      last_error_ = "unknown exception";
+      last_error_ = std::string(hook) + ": unknown exception";
     }
   }
   py::object target_, before_write_, before_read_, on_goal_, on_torque_;
@@ -127,6 +127,9 @@ void expose_servo_model(py::module_& top) {
           },
           py::arg("data"), "Feeds received bytes (any chunking); returns the bytes the servos send back.")
       .def("clear_input", [](S& s) { s.model.clear_input(); }, "Forgets a partly received packet.")
+      .def("pending_input",
+           [](const S& s) { return py::bytes(reinterpret_cast<const char*>(s.model.input()), s.model.input_size()); },
+           "The received bytes not decided yet (a packet still arriving).")
       .def(
           "inject",
           [](S& s, const std::string& kind, py::object ids, py::object count) {

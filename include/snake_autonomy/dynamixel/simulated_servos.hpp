@@ -100,6 +100,9 @@ class SimulatedServos {
   const std::uint8_t* output() const noexcept { return out_.data(); }
   std::size_t output_size() const noexcept { return out_size_; }
   void clear_input() noexcept { rx_size_ = 0; }
+  // The received bytes not decided yet (a packet still arriving).
+  const std::uint8_t* input() const noexcept { return rx_.data(); }
+  std::size_t input_size() const noexcept { return rx_size_; }
 
   // --- faults ---
   // Damages the next `count` replies (count < 0: until cleared) of the servos `ids` (empty: every
