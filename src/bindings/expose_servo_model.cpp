@@ -1,17 +1,16 @@
 // Python bindings of the one simulated servo chain (snake_autonomy._core.dynamixel):
 // SimulatedServos (the servo memory and rules, fed raw Protocol 2.0 bytes by the pty mock) and
 // FakeServoBus (the in-process bus over it). Names as in C++; fault kinds by their vocabulary names.
-#include <pybind11/pybind11.h>
-#include <pybind11/stl.h>
+#include "bindings.hpp"
 
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "snake_autonomy/dynamixel/fake_servo_bus.hpp"
 #include "snake_autonomy/dynamixel/simulated_servos.hpp"
 
-namespace py = pybind11;
+namespace snake_autonomy::bindings {
+
 namespace dx = snake_autonomy::dynamixel;
 
 namespace {
@@ -200,8 +199,6 @@ void expose_servo_model(py::module_& top) {
       .def("stats", [](const S& s) { return stats_dict(s.model); }, "Counts of what the servos received and sent.")
       .def("reset_stats", [](S& s) { s.model.reset_stats(); }, "Zero the counts and goal writes.");
 
-  using Fake = dx::FakeServoBus;
-  // The FakeServoBus' servos, seen from Python as a non-owning view with the same methods.
   py::class_<dx::SimulatedServos>(m, "SimulatedServosView",
                                   "The servos of a FakeServoBus (memory, faults, stats); owned by the bus.")
       .def("inject",
@@ -221,17 +218,6 @@ void expose_servo_model(py::module_& top) {
       .def("stats", [](const dx::SimulatedServos& s) { return stats_dict(s); })
       .def("reset_stats", &dx::SimulatedServos::reset_stats);
 
-  py::class_<Fake, dx::ServoBus>(m, "FakeServoBus",
-                                 "In-process ServoBus: Protocol2Bus over a loopback into SimulatedServos (tests, the "
-                                 "batch simulator).")
-      .def(py::init<const dx::ControlTable&, const std::vector<std::uint8_t>&>(), py::arg("table"), py::arg("ids"),
-           "Memory from the table's defaults; ConfigError for an ID outside 0..252 or a repeated one.")
-      .def_property_readonly("servos", py::overload_cast<>(&Fake::servos), py::return_value_policy::reference_internal,
-                             "The simulated servos: memory, faults, stats.")
-      .def("set_follow_goal", &Fake::set_follow_goal, py::arg("follow"),
-           "True (default): a goal position becomes the present position at once; False: present values are the "
-           "caller's.")
-      .def("set_bus_down", &Fake::set_bus_down, py::arg("down"), "Every call returns IO_ERROR (the port is gone).")
-      .def("clear_faults", &Fake::clear_faults, "Removes every fault of the servos; the bus back up.")
-      .def("reset_counters", &Fake::reset_counters, "Zero the counters.");
 }
+
+}  // namespace snake_autonomy::bindings

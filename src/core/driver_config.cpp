@@ -1,7 +1,12 @@
 #include "snake_autonomy/core/driver_config.hpp"
 
+#include <yaml-cpp/yaml.h>
+
 #include <cmath>
 #include <sstream>
+#include <type_traits>
+
+#include "snake_autonomy/core/config_reader.hpp"
 
 namespace snake_autonomy::core {
 
@@ -51,6 +56,76 @@ std::vector<std::string> DriverConfig::validate() const {
   if (!(quaternion_norm_tolerance > 0.0) || !(quaternion_norm_tolerance < 0.5))
     bad("quaternion_norm_tolerance", quaternion_norm_tolerance, "is not in (0, 0.5)");
   return errors;
+}
+
+namespace {
+
+// Every field once: its key and where it lives. Adding a field = one line here.
+template <typename Visit>
+void for_each_field(DriverConfig& c, Visit&& visit) {
+  visit("fast_sync_read", c.fast_sync_read);
+  visit("max_failed_cycles", c.max_failed_cycles);
+  visit("status_every_cycles", c.status_every_cycles);
+  visit("return_delay_time_us", c.return_delay_time_us);
+  visit("fault_action", c.fault_action);
+  visit("shutdown_action", c.shutdown_action);
+  visit("torque_on_start", c.torque_on_start);
+  visit("max_joint_velocity_rad_s", c.max_joint_velocity_rad_s);
+  visit("max_frequency_hz", c.max_frequency_hz);
+  visit("max_step_s", c.max_step_s);
+  visit("command_timeout_s", c.command_timeout_s);
+  visit("plausible_margin_ticks", c.plausible_margin_ticks);
+  visit("pose_timeout_s", c.pose_timeout_s);
+  visit("require_pose", c.require_pose);
+  visit("pose_workspace_m", c.pose_workspace_m);
+  visit("quaternion_norm_tolerance", c.quaternion_norm_tolerance);
+}
+
+}  // namespace
+
+const std::vector<std::string>& DriverConfig::keys() {
+  static const std::vector<std::string> k = [] {
+    std::vector<std::string> out;
+    DriverConfig c;
+    for_each_field(c, [&out](const char* key, auto&) { out.emplace_back(key); });
+    return out;
+  }();
+  return k;
+}
+
+void DriverConfig::apply_yaml(const YAML::Node& doc, std::vector<std::string>* errors, const std::string& prefix) {
+  ConfigReader r(errors);
+  if (!doc.IsMap()) {
+    if (doc && !doc.IsNull()) r.error(prefix + ": expected a mapping of driver keys, got '" + ConfigReader::dump(doc) + "'");
+    return;
+  }
+  for_each_field(*this, [&](const char* key, auto& field) {
+    const YAML::Node n = doc[key];
+    if (!n) return;
+    using T = std::decay_t<decltype(field)>;
+    const std::string path = prefix + key;
+    if constexpr (std::is_same_v<T, SafeAction>) {
+      std::string text;
+      if (r.scalar(n, path, &text) && !parse_safe_action(text, &field))
+        r.error(path + ": '" + text + "', expected 'hold' or 'torque_off'");
+    } else {
+      r.scalar(n, path, &field);
+    }
+  });
+}
+
+DriverConfig DriverConfig::from_yaml_string(const std::string& text, const std::string& source) {
+  DriverConfig c;
+  std::vector<std::string> errors;
+  const YAML::Node doc = text.find_first_not_of(" \t\r\n") == std::string::npos ? YAML::Node() : load_config_yaml(text, source);
+  c.apply_yaml(doc, &errors);
+  for (const auto& e : c.validate()) errors.push_back(e);
+  throw_if_errors(errors, source, "driver configuration");
+  return c;
+}
+
+DriverConfig DriverConfig::from_yaml_file(const std::string& path) {
+  return from_yaml_string(read_config_file(path, "driver configuration"), path);
 }
 
 }  // namespace snake_autonomy::core

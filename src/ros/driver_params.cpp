@@ -1,6 +1,7 @@
 #include "driver_params.hpp"
 
 #include <xmlrpcpp/XmlRpcValue.h>
+#include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <sstream>
@@ -50,12 +51,6 @@ class ParamReader {
       bad(key, v, "is not true or false");
     }
   }
-  void get(const std::string& key, core::SafeAction* out) {
-    std::string text = core::to_string(*out);
-    get(key, &text);
-    if (!core::parse_safe_action(text, out)) errors_.push_back("~" + key + ": '" + text + "' is not hold or torque_off");
-  }
-
  private:
   bool fetch(const std::string& key, XmlRpc::XmlRpcValue* v) { return nh_.getParam(key, *v); }
   void bad(const std::string& key, XmlRpc::XmlRpcValue& v, const char* what) {
@@ -64,6 +59,23 @@ class ParamReader {
   const ros::NodeHandle& nh_;
   std::vector<std::string>& errors_;
 };
+
+// The rosparams named like DriverConfig's keys, as the YAML mapping the core's loader reads.
+YAML::Node controller_params_as_yaml(const ros::NodeHandle& nh) {
+  YAML::Node doc(YAML::NodeType::Map);
+  for (const auto& key : core::DriverConfig::keys()) {
+    XmlRpc::XmlRpcValue v;
+    if (!nh.getParam(key, v)) continue;
+    switch (v.getType()) {
+      case XmlRpc::XmlRpcValue::TypeBoolean: doc[key] = static_cast<bool>(v); break;
+      case XmlRpc::XmlRpcValue::TypeInt: doc[key] = static_cast<int>(v); break;
+      case XmlRpc::XmlRpcValue::TypeDouble: doc[key] = static_cast<double>(v); break;
+      case XmlRpc::XmlRpcValue::TypeString: doc[key] = static_cast<std::string>(v); break;
+      default: doc[key] = v.toXml(); break;  // refused by the loader as the wrong type, value shown
+    }
+  }
+  return doc;
+}
 
 bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -121,23 +133,18 @@ DriverNodeConfig read_driver_params(const ros::NodeHandle& pnh, std::vector<std:
   r.get("diagnostics_period_s", &c.diagnostics_period_s);
   r.get("connect_timeout_s", &c.connect_timeout_s);
   r.get("service_timeout_s", &c.service_timeout_s);
-  auto& k = c.controller;
-  r.get("fast_sync_read", &k.fast_sync_read);
-  r.get("max_failed_cycles", &k.max_failed_cycles);
-  r.get("status_every_cycles", &k.status_every_cycles);
-  r.get("return_delay_time_us", &k.return_delay_time_us);
-  r.get("fault_action", &k.fault_action);
-  r.get("shutdown_action", &k.shutdown_action);
-  r.get("torque_on_start", &k.torque_on_start);
-  r.get("max_joint_velocity_rad_s", &k.max_joint_velocity_rad_s);
-  r.get("max_frequency_hz", &k.max_frequency_hz);
-  r.get("max_step_s", &k.max_step_s);
-  r.get("plausible_margin_ticks", &k.plausible_margin_ticks);
-  r.get("pose_timeout_s", &k.pose_timeout_s);
-  r.get("require_pose", &k.require_pose);
-  r.get("command_timeout_s", &k.command_timeout_s);
-  r.get("pose_workspace_m", &k.pose_workspace_m);
-  r.get("quaternion_norm_tolerance", &k.quaternion_norm_tolerance);
+  // The controller's keys: an optional file (~driver_config_file) read by the core's loader, then
+  // every rosparam of DriverConfig::keys() over it through the same loader (apply_yaml).
+  std::string controller_file;
+  r.get("driver_config_file", &controller_file);
+  if (!controller_file.empty()) {
+    try {
+      c.controller = core::DriverConfig::from_yaml_file(controller_file);
+    } catch (const std::exception& e) {
+      errors.push_back(std::string("~driver_config_file: ") + e.what());
+    }
+  }
+  c.controller.apply_yaml(controller_params_as_yaml(pnh), &errors, "~");
   if (c.gaits_file.empty()) c.gaits_file = c.config_dir + "/gaits.yaml";
   for (const auto& e : c.validate()) errors.push_back(e);
   return c;

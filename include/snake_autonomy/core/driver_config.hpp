@@ -1,10 +1,15 @@
 // Configuration of the driver's control loop (DriverController): a plain struct, validate()
-// collects every problem naming key and value. The ROS node fills it from rosparam
-// (config/driver.yaml documents every key); tests fill it directly.
+// collects every problem naming key and value. Read once, here, from YAML (config/driver.yaml
+// documents every key): driver_node (rosparam overrides go through apply_yaml too), the batch
+// simulator and Python (DriverConfig.from_yaml, DriverConfig(**keys)) all use from_yaml / apply_yaml.
 #pragma once
 
 #include <string>
 #include <vector>
+
+namespace YAML {
+class Node;
+}
 
 namespace snake_autonomy::core {
 
@@ -49,6 +54,18 @@ struct DriverConfig {
 
   // Every problem, naming key and value; empty when usable.
   std::vector<std::string> validate() const;
+
+  // The YAML keys, which are the field names above.
+  static const std::vector<std::string>& keys();
+  // Reads every key of keys() present in the mapping `doc` over the present values; other keys are
+  // ignored (driver.yaml also holds the node's own: port, rate_hz, frames). Appends a problem per
+  // wrong type or unknown fault/shutdown action, the key written as `prefix` + key ("~" for rosparam).
+  // Does not validate().
+  void apply_yaml(const YAML::Node& doc, std::vector<std::string>* errors, const std::string& prefix = "");
+  // The defaults with the keys of a YAML text / file over them, validated: throws ConfigError
+  // "<source>: invalid driver configuration (N problems):" naming every key and value.
+  static DriverConfig from_yaml_string(const std::string& text, const std::string& source = "<string>");
+  static DriverConfig from_yaml_file(const std::string& path);
 };
 
 }  // namespace snake_autonomy::core

@@ -114,19 +114,11 @@ def evaluate_vio_samples(samples, out_dir, plots: bool = True) -> Dict[str, Any]
             "folder": str(Path(out_dir))}
 
 
-# The controller's keys: the properties the binding gives DriverConfig, so a key added to the
-# binding is read from driver.yaml here without a second list.
-DRIVER_CONFIG_KEYS = tuple(k for k, v in vars(_core.DriverConfig).items() if isinstance(v, property))
-
-
 def load_driver_config(path: str):
-    """_core.DriverConfig from driver_node's YAML (config/driver.yaml): the controller's keys, the
-    node's own (port, rates, frames) ignored; ValueError lists every problem."""
-    from ..safe_yaml import load_yaml_file
-    raw = load_yaml_file(path) or {}
-    if not isinstance(raw, dict):
-        raise ValueError(f"{path}: expected a mapping of driver keys, got {type(raw).__name__}")
-    return _core.DriverConfig(**{k: raw[k] for k in DRIVER_CONFIG_KEYS if k in raw})
+    """_core.DriverConfig from driver_node's YAML (config/driver.yaml) by the C++ loader
+    (DriverConfig::from_yaml): the controller's keys, the node's own (port, rates, frames) ignored;
+    ValueError lists every problem."""
+    return _core.DriverConfig.from_yaml(str(path))
 
 
 class LockStepDriver:
