@@ -27,7 +27,8 @@ void expose_cpg(py::module_& m);
 void expose_gaits(py::module_& m);
 void expose_kinematics(py::module_& m);
 void expose_dynamixel(py::module_& m);        // creates the submodule `dynamixel`
-void expose_fake_servo_bus(py::module_& m);   // into `dynamixel`; after expose_dynamixel
+void expose_servo_model(py::module_& m);      // SimulatedServos into `dynamixel`; after expose_dynamixel
+void expose_fake_servo_bus(py::module_& m);   // into `dynamixel`; after expose_servo_model
 void expose_transmission(py::module_& m);     // after expose_robot_model and expose_dynamixel
 void expose_driver(py::module_& m);           // after expose_fake_servo_bus
 

@@ -15,8 +15,8 @@ PYBIND11_MODULE(_core, m) {
   sb::expose_gaits(m);
   sb::expose_kinematics(m);
   sb::expose_dynamixel(m);
+  sb::expose_servo_model(m);     // the one simulated servo chain
   sb::expose_fake_servo_bus(m);
-  // sb::expose_servo_model(m);  // the one simulated servo (src/bindings/expose_servo_model.cpp)
   sb::expose_transmission(m);
   sb::expose_driver(m);
 }

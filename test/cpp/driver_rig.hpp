@@ -83,8 +83,8 @@ struct Rig {
     c.gait = gait;
     return ctl->command_gait(c);
   }
-  std::int64_t goal(int id) const { return bus->get(static_cast<std::uint8_t>(id), "goal_position"); }
-  std::int64_t torque(int id) const { return bus->get(static_cast<std::uint8_t>(id), "torque_enable"); }
+  std::int64_t goal(int id) const { return bus->servos().get(static_cast<std::uint8_t>(id), "goal_position"); }
+  std::int64_t torque(int id) const { return bus->servos().get(static_cast<std::uint8_t>(id), "torque_enable"); }
 
  private:
   int cycles_since_beat_ = 0;

@@ -14,6 +14,7 @@
 
 using namespace snake_autonomy::core;
 using snake_autonomy::dynamixel::FakeServoBus;
+namespace dx = snake_autonomy::dynamixel;
 using snake_autonomy::test::kDeg;
 using snake_autonomy::test::kDt;
 using snake_autonomy::test::Rig;
@@ -64,7 +65,7 @@ TEST(DriverConfig, ValidateCollectsEveryProblem) {
 }
 
 TEST(DriverController, StartEnablesTorqueAndHoldsThePresentPosture) {
-  Rig rig({}, {}, [](FakeServoBus& b) { b.set(3, "present_position", 2048 + 300); });
+  Rig rig({}, {}, [](FakeServoBus& b) { b.servos().set(3, "present_position", 2048 + 300); });
   rig.start();
   EXPECT_EQ(rig.ctl->state(), DriverState::kHolding);
   for (int id = 1; id <= 11; ++id) EXPECT_EQ(rig.torque(id), 1) << id;
@@ -72,13 +73,13 @@ TEST(DriverController, StartEnablesTorqueAndHoldsThePresentPosture) {
   rig.step(20);
   EXPECT_EQ(rig.goal(3), 2048 + 300);
   EXPECT_NEAR(rig.ctl->position_rad()[2], 300 * 2 * M_PI / 4096, 1e-12);
-  EXPECT_EQ(rig.bus->refused_writes(), 0u);
+  EXPECT_EQ(rig.bus->servos().stats().rejected_writes, 0u);
 }
 
 TEST(DriverController, StartNamesEveryServoThatIsNotUsable) {
   Rig rig({}, {}, [](FakeServoBus& b) {
-    b.set_dead(5, true);
-    b.set(3, "operating_mode", 1);
+    b.servos().set_silent(5, true);
+    b.servos().set(3, "operating_mode", 1);
   });
   try {
     rig.start();
@@ -94,9 +95,9 @@ TEST(DriverController, StartNamesEveryServoThatIsNotUsable) {
 TEST(DriverController, StartWritesTheReturnDelayTimeAndTheBusAllowsForTheSlowestServo) {
   // Factory servos answer after 500 us (250 units): the driver writes 0 while torque is off.
   Rig rig;
-  ASSERT_EQ(rig.bus->get(4, "return_delay_time"), 250);
+  ASSERT_EQ(rig.bus->servos().get(4, "return_delay_time"), 250);
   rig.start();
-  for (int id = 1; id <= 11; ++id) EXPECT_EQ(rig.bus->get(static_cast<std::uint8_t>(id), "return_delay_time"), 0) << id;
+  for (int id = 1; id <= 11; ++id) EXPECT_EQ(rig.bus->servos().get(static_cast<std::uint8_t>(id), "return_delay_time"), 0) << id;
   EXPECT_EQ(rig.bus->return_delay_s(), 0.0);
   ASSERT_EQ(rig.ctl->start_notes().size(), 11u);
   EXPECT_NE(rig.ctl->start_notes()[0].find("servo 1 (joint_1): Return Delay Time 500 us -> 0 us"), std::string::npos)
@@ -106,12 +107,12 @@ TEST(DriverController, StartWritesTheReturnDelayTimeAndTheBusAllowsForTheSlowest
   // A servo whose torque is already on keeps its EEPROM locked: the driver carries on, says so,
   // and the reply deadlines allow for its 500 us.
   Rig locked({}, {}, [](FakeServoBus& b) {
-    for (int id = 1; id <= 11; ++id) b.set(static_cast<std::uint8_t>(id), "return_delay_time", 0);
-    b.set(7, "return_delay_time", 250);
-    b.set(7, "torque_enable", 1);
+    for (int id = 1; id <= 11; ++id) b.servos().set(static_cast<std::uint8_t>(id), "return_delay_time", 0);
+    b.servos().set(7, "return_delay_time", 250);
+    b.servos().set(7, "torque_enable", 1);
   });
   locked.start();
-  EXPECT_EQ(locked.bus->get(7, "return_delay_time"), 250);
+  EXPECT_EQ(locked.bus->servos().get(7, "return_delay_time"), 250);
   EXPECT_DOUBLE_EQ(locked.bus->return_delay_s(), 500e-6);
   ASSERT_EQ(locked.ctl->start_notes().size(), 1u);
   EXPECT_NE(locked.ctl->start_notes()[0].find("servo 7 (joint_7): Return Delay Time is 500 us"), std::string::npos)
@@ -124,7 +125,7 @@ TEST(DriverController, StartWritesTheReturnDelayTimeAndTheBusAllowsForTheSlowest
   leave.return_delay_time_us = -1;
   Rig as_found(leave);
   as_found.start();
-  EXPECT_EQ(as_found.bus->get(2, "return_delay_time"), 250);
+  EXPECT_EQ(as_found.bus->servos().get(2, "return_delay_time"), 250);
   EXPECT_DOUBLE_EQ(as_found.bus->return_delay_s(), 500e-6);
   EXPECT_TRUE(as_found.ctl->start_notes().empty());
 
@@ -169,7 +170,7 @@ TEST(DriverController, GaitCommandDrivesTheGoalsThroughTheCpg) {
     hi = std::max(hi, rig.goal(2));
   }
   EXPECT_GT(hi - lo, 600);  // yaw joint 2 swings about ±45 deg (±512 ticks)
-  EXPECT_EQ(rig.bus->goal_writes(2), rig.bus->sync_writes() - 1);  // every cycle wrote (all but the torque-on write)
+  EXPECT_EQ(rig.bus->servos().goal_writes(2), rig.bus->servos().stats().sync_write - 1);  // every cycle wrote (all but the torque-on write)
   DriverSnapshot snap = rig.ctl->make_snapshot();
   rig.ctl->fill_snapshot(snap);
   EXPECT_STREQ(snap.gait.data(), "sidewind");
@@ -186,7 +187,7 @@ TEST(DriverController, GoalsNeverLeaveTheJointOrServoLimits) {
       m.joint_lower_rad[j] = -20 * kDeg;
       m.joint_upper_rad[j] = 25 * kDeg;
     }
-  }, [](FakeServoBus& b) { b.set(4, "max_position_limit", 2100); });
+  }, [](FakeServoBus& b) { b.servos().set(4, "max_position_limit", 2100); });
   rig.start();
   GaitCommandRequest c;
   c.gait = "sidewind";
@@ -203,7 +204,7 @@ TEST(DriverController, GoalsNeverLeaveTheJointOrServoLimits) {
     }
   }
   EXPECT_EQ(rig.goal(4), 2100);  // pushed against the servo's own limit
-  EXPECT_EQ(rig.bus->refused_writes(), 0u);
+  EXPECT_EQ(rig.bus->servos().stats().rejected_writes, 0u);
 }
 
 TEST(DriverController, GoalsAreSlewLimited) {
@@ -332,11 +333,11 @@ TEST(DriverController, CrcErrorsAreCountedAndTheLastGoodStateKept) {
   Rig rig;
   rig.start();
   rig.bus->set_follow_goal(false);
-  rig.bus->set(4, "present_position", 2048 + 100);
+  rig.bus->servos().set(4, "present_position", 2048 + 100);
   rig.step();
   EXPECT_NEAR(rig.ctl->position_rad()[3], 100 * 2 * M_PI / 4096, 1e-12);
-  rig.bus->inject_crc_errors(4, 3);
-  rig.bus->set(4, "present_position", 2048 + 400);
+  rig.bus->servos().inject(dx::ReplyFault::kCorruptCrc, {4}, 3);
+  rig.bus->servos().set(4, "present_position", 2048 + 400);
   EXPECT_FALSE(rig.step());
   EXPECT_TRUE(rig.ctl->servos()[3].stale);
   EXPECT_NEAR(rig.ctl->position_rad()[3], 100 * 2 * M_PI / 4096, 1e-12);  // last good value
@@ -359,7 +360,7 @@ TEST(DriverController, DeadServoStopsLocomotionAfterNFailedCyclesAndHolds) {
   rig.start();
   ASSERT_EQ(rig.command("sidewind"), "");
   rig.step(200);
-  rig.bus->set_dead(5, true);
+  rig.bus->servos().set_silent(5, true);
   rig.step(4);
   EXPECT_EQ(rig.ctl->state(), DriverState::kRunning);
   rig.step();
@@ -376,14 +377,14 @@ TEST(DriverController, DeadServoStopsLocomotionAfterNFailedCyclesAndHolds) {
   EXPECT_EQ(rig.torque(3), 1);
   EXPECT_NE(rig.command("sidewind"), "");  // refused in a fault
   // Recovery: the servo answers again, enable torque checks everything and holds.
-  rig.bus->set_dead(5, false);
+  rig.bus->servos().set_silent(5, false);
   const RequestResult r = rig.request(DriverRequest::kEnableTorque);
   EXPECT_TRUE(r.success) << r.message;
   EXPECT_EQ(rig.ctl->state(), DriverState::kHolding);
   EXPECT_EQ(rig.command("sidewind"), "");
   rig.step(20);
   EXPECT_EQ(rig.ctl->state(), DriverState::kRunning);
-  EXPECT_EQ(rig.bus->refused_writes(), 0u);
+  EXPECT_EQ(rig.bus->servos().stats().rejected_writes, 0u);
 }
 
 TEST(DriverController, FaultActionTorqueOff) {
@@ -394,7 +395,7 @@ TEST(DriverController, FaultActionTorqueOff) {
   rig.start();
   ASSERT_EQ(rig.command("sidewind"), "");
   rig.step(50);
-  rig.bus->set_dead(2, true);
+  rig.bus->servos().set_silent(2, true);
   rig.step(3);
   ASSERT_EQ(rig.ctl->state(), DriverState::kFault);
   for (int id = 1; id <= 11; ++id) {
@@ -409,7 +410,7 @@ TEST(DriverController, HardwareErrorStopsAtOnceAndRebootRecovers) {
   rig.start();
   ASSERT_EQ(rig.command("sidewind"), "");
   rig.step(100);
-  rig.bus->set_hardware_error(6, 1 << 5);  // overload
+  rig.bus->servos().set_hardware_error(6, 1 << 5);  // overload
   rig.step();
   ASSERT_EQ(rig.ctl->state(), DriverState::kFault);
   const std::string why = rig.ctl->fault_reason();
@@ -462,7 +463,7 @@ TEST(DriverController, BusDownAndGarbageRepliesStopLocomotion) {
   {
     Rig rig(cfg);
     rig.start();
-    rig.bus->set_garbage(3, true);
+    rig.bus->servos().inject(dx::ReplyFault::kGarbageData, {3}, -1);
     rig.step(4);
     ASSERT_EQ(rig.ctl->state(), DriverState::kFault);
     EXPECT_EQ(rig.ctl->servos()[2].implausible, 4u);
@@ -491,11 +492,11 @@ TEST(DriverController, HoldDisableEnableRequests) {
   r = rig.request(DriverRequest::kHold);
   EXPECT_FALSE(r.success);
   // Someone bends joint 2 past its limit while limp: enabling torque is refused.
-  rig.bus->set(2, "present_position", 2048 + 1100);
+  rig.bus->servos().set(2, "present_position", 2048 + 1100);
   r = rig.request(DriverRequest::kEnableTorque);
   EXPECT_FALSE(r.success);
   EXPECT_NE(r.message.find("servo 2 (joint_2) at 96.7 deg is outside its limits"), std::string::npos) << r.message;
-  rig.bus->set(2, "present_position", 2048 + 1000);
+  rig.bus->servos().set(2, "present_position", 2048 + 1000);
   r = rig.request(DriverRequest::kEnableTorque);
   EXPECT_TRUE(r.success) << r.message;
   EXPECT_EQ(rig.goal(2), 2048 + 1000);
@@ -510,7 +511,7 @@ TEST(DriverController, ShutdownLeavesTheConfiguredState) {
     ASSERT_EQ(rig.command("sidewind"), "");
     rig.step(120);
     rig.bus->set_follow_goal(false);
-    rig.bus->set(1, "present_position", 2100);
+    rig.bus->servos().set(1, "present_position", 2100);
     EXPECT_TRUE(rig.ctl->shutdown());
     if (action == SafeAction::kHold) {
       EXPECT_EQ(rig.torque(1), 1);
@@ -528,7 +529,7 @@ TEST(DriverController, FastSyncReadWorksAndLosesTheCycleOnACorruptSharedPacket) 
   rig.start();
   ASSERT_EQ(rig.command("sidewind"), "");
   EXPECT_TRUE(rig.step(50));
-  rig.bus->inject_crc_errors(7, 1);
+  rig.bus->servos().inject(dx::ReplyFault::kCorruptCrc, {7}, 1);
   EXPECT_FALSE(rig.step());
   for (const auto& d : rig.ctl->servos()) EXPECT_TRUE(d.stale);
   EXPECT_TRUE(rig.step());
@@ -540,7 +541,7 @@ TEST(DriverController, StatusReadFillsVoltageAndTemperature) {
   Rig rig(cfg);
   rig.start();
   EXPECT_TRUE(std::isnan(rig.ctl->servos()[0].temperature_c));
-  rig.bus->set(9, "present_temperature", 61);
+  rig.bus->servos().set(9, "present_temperature", 61);
   rig.step(5);
   EXPECT_DOUBLE_EQ(rig.ctl->servos()[8].temperature_c, 61.0);
   EXPECT_NEAR(rig.ctl->servos()[8].voltage_v, 12.0, 1e-9);
@@ -552,13 +553,14 @@ TEST(DriverController, UpdateNeverAllocates) {
   ASSERT_EQ(rig.command("sidewind"), "");
   rig.step(2);
   DriverSnapshot snap = rig.ctl->make_snapshot();
+  const std::vector<std::uint8_t> servo_3{3};  // the test's own allocation, before counting
   g_allocations = 0;
   g_count_allocations = true;
   rig.step(100);                   // running, poses fed
-  rig.bus->inject_crc_errors(3, 2);  // failed cycles
+  rig.bus->servos().inject(dx::ReplyFault::kCorruptCrc, servo_3, 2);  // failed cycles
   rig.feed_pose = false;
   rig.step(100);                   // the pose goes stale: gating
-  rig.bus->set_dead(4, true);
+  rig.bus->servos().set_silent(4, true);
   rig.step(15);                    // fault: message formatting, hold
   rig.ctl->fill_snapshot(snap);
   g_count_allocations = false;

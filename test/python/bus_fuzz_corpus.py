@@ -108,7 +108,7 @@ def run(mock, n_inputs: int, seed: int, ping_every: int = 10) -> dict:
             replies += 1
         if k % ping_every == 0 or data != pkt:
             servo_id = IDS[k % len(IDS)]
-            pending = bytes(mock._rx)  # what the mock holds, undecided, before the PING
+            pending = mock.servos.pending_input()  # what the mock holds, undecided, before the PING
             if not answers_ping(mock, servo_id):
                 # Allowed only when the bytes themselves are ambiguous: the pending bytes and the
                 # PING's first ones form a span with a valid CRC (e.g. a packet that lost its last

@@ -75,19 +75,20 @@ def test_guard_turns_an_unexpected_exception_into_a_counted_drop(mock, monkeypat
     def boom(*_):
         raise ZeroDivisionError("injected")
 
-    monkeypatch.setattr(mock, "_refresh", boom)
+    monkeypatch.setattr(mock.backend, "state", boom)  # the backend fails while the servos refresh for a READ
     read = dx.encode_packet(5, I.READ, u16(132) + u16(4))
     with caplog.at_level(logging.ERROR, logger="snake_autonomy.sim.mock_servo_bus"):
-        assert mock.handle(read + dx.encode_packet(6, I.WRITE, u16(65) + b"\x01")) != b""  # the WRITE is answered
+        reply = mock.handle(read + dx.encode_packet(6, I.WRITE, u16(65) + b"\x01"))
+    assert [pid for pid, _err, _data in statuses(reply)] == [5, 6]  # both answered (the READ with the last values)
     assert mock.stats()["dropped"] == 1
-    assert any("ZeroDivisionError" in r.getMessage() and "READ" in r.getMessage() for r in caplog.records)
+    assert any("ZeroDivisionError" in r.getMessage() and "before_read" in r.getMessage() for r in caplog.records)
     monkeypatch.undo()
     assert answers_ping(mock)
 
 
 def test_control_commands_that_are_not_objects_are_refused_not_fatal(mock):
     for line in ("[1, 2]", '"stats"', "3", "null", '{"cmd": ["stats"]}', '{"cmd": "inject", "kind": "corrupt_crc", '
-                 '"ids": [[1]]}', '{"cmd": "hardware_error", "id": 1, "bits": 1.5}', "{", "\udcff"):
+                 '"ids": [[1]]}', '{"cmd": "set_hardware_error", "id": 1, "bits": 1.5}', "{", "\udcff"):
         reply = mock.control(line)
         assert reply["ok"] is False and reply["error"], line
     assert mock.control('{"cmd": "stats"}')["ok"]

@@ -166,7 +166,7 @@ def test_fault_injection_by_api_and_control_command(mock):
     assert mock.handle(read) == b""
     mock.clear_faults()
     mock.handle(dx.encode_packet(2, dx.instruction.WRITE, bytes([64, 0, 1])))
-    assert mock.control('{"cmd": "hardware_error", "id": 2, "bits": ["overload", "overheating"]}')["ok"]
+    assert mock.control('{"cmd": "set_hardware_error", "id": 2, "bits": ["overload", "overheating"]}')["ok"]
     pid, err, data = status_of(mock.handle(dx.encode_packet(2, dx.instruction.READ, bytes([70, 0, 1, 0]))))
     assert err == dx.ALERT_BIT and data == bytes([0x24])
     assert mock.state()["2"]["torque"] is False                        # the servo's shutdown
@@ -175,7 +175,7 @@ def test_fault_injection_by_api_and_control_command(mock):
     assert status_of(mock.handle(read))[1] == 0                         # cleared by the reboot
     bad = mock.control('{"cmd": "inject", "kind": "melt"}')
     assert not bad["ok"] and "melt" in bad["error"]
-    assert not mock.control('{"cmd": "silence", "id": 99}')["ok"]
+    assert not mock.control('{"cmd": "set_silent", "id": 99}')["ok"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -271,7 +271,7 @@ def test_serial_bus_cycle_and_faults_over_the_pty(cli_bus):
     bus = dx.SerialBus(link, baud_bps=1000000, latency_s=0.05)
     assert bus.low_latency_applied is False  # a pty rejects the serial ioctl: tolerated
     with MockBusClient(link + ".ctl") as ctl:
-        ctl.call("clear")
+        ctl.call("clear_faults")
         for sid in IDS:
             assert bus.ping(sid)[:2] == (S.OK, 1100)
         assert bus.sync_write(64, 1, IDS, bytes([1] * 11)) == S.OK
@@ -290,8 +290,8 @@ def test_serial_bus_cycle_and_faults_over_the_pty(cli_bus):
         bus.reset_counters()
         ctl.call("inject", kind="corrupt_crc", ids=[3], count=1)
         ctl.call("inject", kind="truncate_reply", ids=[7], count=1)
-        ctl.call("silence", id=5)
-        ctl.call("hardware_error", id=9, bits=["overload"])
+        ctl.call("set_silent", id=5)
+        ctl.call("set_hardware_error", id=9, bits=["overload"])
         ctl.call("inject", kind="garbage_before", ids=[1], count=1)
         status, data, per_servo = bus.sync_read(126, 10, IDS)
         want = {3: S.CRC_ERROR, 5: S.TIMEOUT, 7: S.MALFORMED, 9: S.HARDWARE_ERROR}
@@ -314,7 +314,7 @@ def test_serial_bus_cycle_and_faults_over_the_pty(cli_bus):
         assert bus.ping(1)[0] in (S.IO_ERROR, S.TIMEOUT)
         wait_for(lambda: bus.ping(1)[0] == S.IO_ERROR, what="I/O error on a closed pty")
         ctl.call("reopen_pty")
-        ctl.call("clear")
+        ctl.call("clear_faults")
         bus.reopen()
         assert bus.ping(1)[:2] == (S.OK, 1100)
 
@@ -353,9 +353,9 @@ def test_manual_vectors_through_the_bindings_and_the_mock(shared_dir):
         assert dx.encode_packet(pid, inst, params) == raw, v["name"]
     by_name = {v["name"]: bytes.fromhex(v["hex"]) for v in vectors}
     mock = MockServoBus(FixedBackend([1, 2], ShaftState(0.0, 0.0, 0.0)), [1, 2])
+    mock.servos.set_hooks(None)  # keep the manual's positions
     for sid, ticks in ((1, 166), (2, 2079)):
-        mock._servos[sid].memory[132:136] = ticks.to_bytes(4, "little")
-    mock._refresh = lambda: None  # keep the manual's positions
+        mock.servos.set(sid, "present_position", ticks)
     assert mock.handle(by_name["READ id1 addr132 len4"]) == by_name["READ id1 status value 166"]
     assert mock.handle(by_name["SYNC_READ addr132 len4 ids1,2"]) == (
         by_name["SYNC_READ status id1 (166)"] + by_name["SYNC_READ status id2 (2079)"])

@@ -92,7 +92,7 @@ def test_driver_controller_holds_on_stale_pose_and_keeps_goals_in_limits():
     robot, bus, drv = _controller(pose_timeout_s=0.5, command_timeout_s=0.0)  # one command for 6 s
     assert "torque is off" in drv.command_gait(gait="sidewind")      # refused before start
     drv.start(0.0)
-    assert drv.state == "holding" and all(bus.get(i, "torque_enable") == 1 for i in robot.servo_ids)
+    assert drv.state == "holding" and all(bus.servos.get(i, "torque_enable") == 1 for i in robot.servo_ids)
     assert drv.command_gait(gait="sidewind", steer=True, delta_rad=math.radians(20)) == ""
     assert "unknown gait" in drv.command_gait(gait="moonwalk")
     assert "not steerable" in drv.command_gait(gait="turn_left", steer=True, delta_rad=0.1)
@@ -108,7 +108,7 @@ def test_driver_controller_holds_on_stale_pose_and_keeps_goals_in_limits():
         goal = drv.goal_rad
         assert np.all(goal <= robot.joint_upper_rad + 1e-12) and np.all(goal >= robot.joint_lower_rad - 1e-12)
         assert np.all(np.abs(goal - prev) <= 4.5 * 0.01 + 1e-9)          # the slew limit
-        ticks = np.array([bus.get(i, "goal_position") for i in robot.servo_ids])
+        ticks = np.array([bus.servos.get(i, "goal_position") for i in robot.servo_ids])
         assert np.all(np.abs(np.array([drv.ticks_to_joint_rad(j, int(v)) for j, v in enumerate(ticks)]) - goal)
                       <= math.pi / 4096 + 1e-12)                          # written to the bus, rounded to ticks
         prev = goal
@@ -175,7 +175,7 @@ def test_driver_controller_binding_config_faults_and_lifetime():
     assert drv.com_yaw == pytest.approx(math.atan2(ref.vc_rotation[1, 0], ref.vc_rotation[0, 0]))
     robot2, bus2, drv2 = _controller(max_failed_cycles=3)
     drv2.start(0.0)
-    bus2.set_dead(robot2.servo_ids[4], True)
+    bus2.servos.set_silent(robot2.servo_ids[4], True)
     for k in range(1, 4):
         assert drv2.update(k * 0.01, 0.01) is False
     assert drv2.state == "fault" and "servo 5" in drv2.fault_reason

@@ -47,7 +47,7 @@ class DriverFaults(DriverTestCase):
     def test_3_dead_servo_stops_locomotion_and_holds(self):
         h = self.h
         self.run_gait()
-        h.mock.call("silence", id=5, silent=True)
+        h.mock.call("set_silent", id=5, silent=True)
         s = h.wait_diag(LOCO, lambda s: s.level == 2, 5.0, "the fault")
         self.assertIn("servo 5 (joint_5) timeout", s.message)
         self.assertIn("no reply", h.status(servo(5)).message)
@@ -58,13 +58,13 @@ class DriverFaults(DriverTestCase):
         r = h.enable(True)
         self.assertFalse(r.success)
         self.assertIn("servo 5 (joint_5) timeout", r.message)
-        h.mock.call("silence", id=5, silent=False)
+        h.mock.call("set_silent", id=5, silent=False)
         self.recover()
 
     def test_4_hardware_error_stops_at_once_and_reboot_recovers(self):
         h = self.h
         self.run_gait()
-        h.mock.call("hardware_error", id=6, bits=["overload"])
+        h.mock.call("set_hardware_error", id=6, bits=["overload"])
         s = h.wait_diag(LOCO, lambda s: s.level == 2, 5.0, "the fault")
         self.assertIn("servo 6 (joint_6): overload", s.message)
         h.wait_diag(servo(6), lambda s: s.level == 2, 5.0, "servo 6 in error")

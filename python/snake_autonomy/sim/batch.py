@@ -162,7 +162,7 @@ class LockStepDriver:
         if c.state == "running":
             raw = c.cpg.unclamped_output
             self.cpg_clamped += int(np.count_nonzero((raw < self.lower_rad) | (raw > self.upper_rad)))
-        get, set_goal, ticks_to_rad = self.bus.get, self.backend.set_goal, _core.dynamixel.ticks_to_rad
+        get, set_goal, ticks_to_rad = self.bus.servos.get, self.backend.set_goal, _core.dynamixel.ticks_to_rad
         for sid in self.ids:
             set_goal(sid, ticks_to_rad(get(sid, "goal_position")))
 
@@ -177,7 +177,7 @@ class LockStepDriver:
 
     def _write_states(self) -> None:
         dx = _core.dynamixel
-        bus_set, state = self.bus.set, self.backend.state
+        bus_set, state = self.bus.servos.set, self.backend.state
         rad_to_ticks, velocity, current = dx.rad_to_ticks, dx.rad_s_to_velocity, dx.amps_to_current
         for sid in self.ids:
             s = state(sid)

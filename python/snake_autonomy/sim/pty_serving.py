@@ -235,9 +235,9 @@ CONTROL_COMMANDS = {
     "reset_stats": lambda bus: bus.reset_stats(),
     "state": lambda bus: bus.state(),
     "inject": lambda bus, kind, ids=None, count=None: bus.inject(kind, ids, count),
-    "silence": lambda bus, id, silent=True: bus.set_silent(id, silent),  # noqa: A006
-    "hardware_error": lambda bus, id, bits: bus.set_hardware_error(id, bits),  # noqa: A006
-    "clear": lambda bus: bus.clear_faults(),
+    "set_silent": lambda bus, id, silent=True: bus.set_silent(id, silent),  # noqa: A006
+    "set_hardware_error": lambda bus, id, bits: bus.set_hardware_error(id, bits),  # noqa: A006
+    "clear_faults": lambda bus: bus.clear_faults(),
     "close_pty": lambda bus: bus.close_pty(),
     "reopen_pty": lambda bus: bus.reopen_pty(),
 }
