@@ -26,7 +26,8 @@ THIRD_PARTY = {
     "sensor_msgs": ("rosdep", "sensor_msgs"), "nav_msgs": ("rosdep", "nav_msgs"),
     "diagnostic_msgs": ("rosdep", "diagnostic_msgs"), "visualization_msgs": ("rosdep", "visualization_msgs"),
     "rosgraph_msgs": ("rosdep", "rosgraph_msgs"), "catkin_pkg": ("rosdep", "catkin"),
-    "diagnostic_updater": ("rosdep", "diagnostic_updater"),
+    "diagnostic_updater": ("rosdep", "diagnostic_updater"), "actionlib": ("rosdep", "actionlib"),
+    "actionlib_msgs": ("rosdep", "actionlib_msgs"), "rosgraph": ("rosdep", "rospy"),
     "mujoco": ("pypi", "mujoco"), "evo": ("pypi", "evo"), "rosbags": ("pypi", "rosbags"),
     "dynamixel_sdk": ("pypi", "dynamixel-sdk"), "shapely": ("pypi", "shapely"),
 }
