@@ -27,7 +27,8 @@ THIRD_PARTY = {
     "diagnostic_msgs": ("rosdep", "diagnostic_msgs"), "visualization_msgs": ("rosdep", "visualization_msgs"),
     "rosgraph_msgs": ("rosdep", "rosgraph_msgs"), "catkin_pkg": ("rosdep", "catkin"),
     "diagnostic_updater": ("rosdep", "diagnostic_updater"), "actionlib": ("rosdep", "actionlib"),
-    "actionlib_msgs": ("rosdep", "actionlib_msgs"), "rosgraph": ("rosdep", "rospy"),
+    "actionlib_msgs": ("rosdep", "actionlib_msgs"), "rosgraph": ("rosdep", "rospy"), "rosnode": ("rosdep", "rosnode"),
+    "cv2": ("pypi", "opencv-python-headless"), "sklearn": ("pypi", "scikit-learn"), "joblib": ("pypi", "scikit-learn"),
     "mujoco": ("pypi", "mujoco"), "evo": ("pypi", "evo"), "rosbags": ("pypi", "rosbags"),
     "dynamixel_sdk": ("pypi", "dynamixel-sdk"), "shapely": ("pypi", "shapely"),
 }
