@@ -45,6 +45,11 @@ std::vector<std::string> ControlTable::validate() const {
   if (model_number <= 0 || model_number > 0xFFFF) {
     errors.push_back("model_number: " + std::to_string(model_number) + " is not in 1..65535");
   }
+  if (!(torque_constant_nm_per_a >= 0.0) || !std::isfinite(torque_constant_nm_per_a)) {
+    std::ostringstream s;
+    s << "torque_constant_nm_per_a: " << torque_constant_nm_per_a << " is not a finite number >= 0";
+    errors.push_back(s.str());
+  }
   for (const auto& [name, bit] : hardware_error_bits) {
     if (bit < 0 || bit > 7) errors.push_back("hardware_error_bits." + name + ": bit " + std::to_string(bit) + " is not in 0..7");
   }
@@ -153,6 +158,9 @@ ControlTable ControlTable::from_yaml_string(const std::string& text, const std::
   r.scalar(r.child(root, "model", "model"), "model", &t.model);
   r.scalar(r.child(root, "model_number", "model_number"), "model_number", &t.model_number);
   if (root["position_centre_ticks"]) r.scalar(root["position_centre_ticks"], "position_centre_ticks", &t.position_centre_ticks);
+  if (root["torque_constant_nm_per_a"]) {
+    r.scalar(root["torque_constant_nm_per_a"], "torque_constant_nm_per_a", &t.torque_constant_nm_per_a);
+  }
   if (const auto bits = root["hardware_error_bits"]) {
     if (!bits.IsMap()) {
       errors.push_back("hardware_error_bits: expected a mapping name: bit, got '" + core::ConfigReader::dump(bits) + "'");

@@ -6,15 +6,19 @@
 //    controller.update() -> snapshot. It never allocates, never logs and never waits on a lock: it
 //    hands the snapshot over with try_lock (a missed handover is simply the next cycle's).
 //  - the publisher thread: takes each new snapshot and publishes joint_states, TF, com_pose,
-//    bound_state and, every diagnostics_period_s, /diagnostics; it also logs state changes and
+//    bound_state and, every diagnostics_period_s, /diagnostics (diagnostic_updater tasks: loop,
+//    locomotion, bus, one per servo, and the rate and stamps of joint_states and com_pose, the 100 Hz
+//    topics, as TopicDiagnostic); it also logs state changes and
 //    throttled overrun warnings. Publishing (serialisation, socket writes, their allocations) is kept
 //    off the loop thread: realtime_tools is not packaged for Debian, and a roscpp publish() from the
 //    loop would put its locks and allocations in the 100 Hz path. Messages are preallocated and
 //    reused; the snapshot is copied into storage of the same size (no allocation either).
 //  - two spinner threads for callbacks and services: they hand data to the controller through its
 //    try-lock mailboxes; a service waits (in its own thread) for the loop to run the request.
-#include <diagnostic_msgs/DiagnosticArray.h>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <diagnostic_updater/publisher.h>
 #include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <pthread.h>
 #include <ros/ros.h>
@@ -95,7 +99,10 @@ class DriverNode {
     const auto n = static_cast<std::size_t>(model_.num_joints);
     joint_states_.position.resize(n);
     joint_states_.velocity.resize(n);
-    joint_states_.effort.resize(n);
+    // JointState.effort in N*m (sensor_msgs, revolute joints): present current x the control table's
+    // torque constant (config/dynamixel/<model>.yaml says its source); none without a constant.
+    torque_constant_ = controller_.table().torque_constant_nm_per_a;
+    joint_states_.effort.resize(torque_constant_ > 0.0 ? n : 0);
     transforms_.resize(2);
     transforms_[0].header.frame_id = transforms_[1].header.frame_id = config_.world_frame;
     transforms_[0].child_frame_id = config_.base_frame;
@@ -106,7 +113,7 @@ class DriverNode {
     joint_states_pub_ = nh_.advertise<sensor_msgs::JointState>("joint_states", 10);
     com_pose_pub_ = nh_.advertise<geometry_msgs::PoseStamped>("com_pose", 10);
     bound_state_pub_ = nh_.advertise<snake_autonomy::BoundState>("bound_state", 10);
-    diagnostics_pub_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
+    setup_diagnostics();
     pose_sub_ = nh_.subscribe("base_pose", 10, &DriverNode::on_pose, this, ros::TransportHints().tcpNoDelay());
     gait_sub_ = nh_.subscribe("gait_command", 10, &DriverNode::on_gait_command, this);
     enable_srv_ = nh_.advertiseService("driver/enable_torque", &DriverNode::on_enable_torque, this);
@@ -190,7 +197,7 @@ class DriverNode {
       if (ros::WallTime::now() >= next_diag) {
         next_diag += ros::WallDuration(config_.diagnostics_period_s);
         if (next_diag < ros::WallTime::now()) next_diag = ros::WallTime::now() + ros::WallDuration(config_.diagnostics_period_s);
-        publish_diagnostics(stamp);
+        publish_diagnostics();
         reset_window_ = true;
       }
     }
@@ -203,9 +210,10 @@ class DriverNode {
     for (int j = 0; j < model_.num_joints; ++j) {
       joint_states_.position[j] = s.position_rad[j];
       joint_states_.velocity[j] = s.velocity_rad_s[j];
-      joint_states_.effort[j] = s.effort_a[j];
+      if (!joint_states_.effort.empty()) joint_states_.effort[j] = torque_constant_ * s.effort_a[j];
     }
     joint_states_pub_.publish(joint_states_);
+    joint_states_diag_->tick(stamp);
 
     auto set_tf = [&stamp](geometry_msgs::TransformStamped& t, const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
       t.header.stamp = stamp;
@@ -217,10 +225,10 @@ class DriverNode {
       t.transform.rotation.z = q.z();
       t.transform.rotation.w = q.w();
     };
-    // TF always (identity before the first pose: visualisation only).
+    // TF unless ~publish_tf is false (identity before the first pose: visualisation only).
     set_tf(transforms_[0], s.base_position, s.base_orientation);
     set_tf(transforms_[1], s.com, s.com_orientation);
-    tf_.sendTransform(transforms_);
+    if (config_.publish_tf) tf_.sendTransform(transforms_);
 
     // The centre of mass feeds the tracker: published only from a fresh base pose (ERRATA #7).
     if (!s.pose_fresh) return;
@@ -230,6 +238,7 @@ class DriverNode {
     com_pose_.pose.position.z = s.com.z();
     com_pose_.pose.orientation = transforms_[1].transform.rotation;
     com_pose_pub_.publish(com_pose_);
+    com_pose_diag_->tick(stamp);
     bound_state_.header.stamp = stamp;
     bound_state_.com_pose = com_pose_.pose;
     bound_state_.span.x = s.bbox_span.x();
@@ -275,23 +284,39 @@ class DriverNode {
            " s (command_timeout_s): send one on gait_command to resume";
   }
 
-  void publish_diagnostics(const ros::Time& stamp) {
-    const core::DriverSnapshot& s = published_.driver;
-    const core::LoopStats& l = published_.loop;
-    using diagnostic_msgs::DiagnosticStatus;
-    diagnostic_msgs::DiagnosticArray array;
-    array.header.stamp = stamp;
-    const std::string hw = "snake driver";
+  // ---- diagnostics (diagnostic_updater; the tasks run in the publisher thread, on published_) ----
+  // Names stay "snake_driver: ..." whatever the node is called (tools and tests filter on them).
+  void setup_diagnostics() {
+    ros::NodeHandle pnh("~");
+    updater_ = std::make_unique<diagnostic_updater::Updater>(nh_, pnh, "/snake_driver");
+    updater_->setHardwareID("snake driver");
+    updater_->add("loop", this, &DriverNode::diagnose_loop);
+    updater_->add("locomotion", this, &DriverNode::diagnose_locomotion);
+    updater_->add("bus", this, &DriverNode::diagnose_bus);
+    for (std::size_t j = 0; j < model_.servos.ids.size(); ++j) {
+      updater_->add("servo " + str(model_.servos.ids[j]) + " (joint_" + str(j + 1) + ")",
+                    [this, j](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose_servo(j, stat); });
+    }
+    // The 100 Hz topics: rate within 10 % of rate_hz over the last 10 s windows of ticks, stamps no
+    // older than 0.1 s. com_pose runs only from a fresh base pose: its rate drops while it is held.
+    rate_min_hz_ = rate_max_hz_ = config_.loop.rate_hz;
+    const diagnostic_updater::FrequencyStatusParam freq(&rate_min_hz_, &rate_max_hz_, 0.1, 10);
+    const diagnostic_updater::TimeStampStatusParam stamps(-0.1, 0.1);
+    joint_states_diag_ = std::make_unique<diagnostic_updater::TopicDiagnostic>("joint_states", *updater_, freq, stamps);
+    com_pose_diag_ = std::make_unique<diagnostic_updater::TopicDiagnostic>("com_pose", *updater_, freq, stamps);
+  }
 
-    DiagnosticStatus loop;
-    loop.name = "snake_driver: loop";
-    loop.hardware_id = hw;
+  void publish_diagnostics() { updater_->force_update(); }
+
+  void diagnose_loop(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    using diagnostic_msgs::DiagnosticStatus;
+    const core::LoopStats& l = published_.loop;
     const double rate = l.window_rate_hz();
     const bool rate_ok = std::abs(rate - config_.loop.rate_hz) <= 0.1 * config_.loop.rate_hz;
-    loop.level = (l.window_overruns > 0 || !rate_ok) ? DiagnosticStatus::WARN : DiagnosticStatus::OK;
-    loop.message = loop.level == DiagnosticStatus::OK ? "on time"
-                   : (l.window_overruns > 0 ? str(l.window_overruns) + " overruns" : "rate off by more than 10 %");
-    loop.values = {kv("target_rate_hz", fixed(config_.loop.rate_hz, 1)), kv("rate_hz", fixed(rate, 2)),
+    const bool ok = l.window_overruns == 0 && rate_ok;
+    stat.summary(ok ? DiagnosticStatus::OK : DiagnosticStatus::WARN,
+                 ok ? "on time" : (l.window_overruns > 0 ? str(l.window_overruns) + " overruns" : "rate off by more than 10 %"));
+    stat.values = {kv("target_rate_hz", fixed(config_.loop.rate_hz, 1)), kv("rate_hz", fixed(rate, 2)),
                    kv("period_mean_ms", fixed(l.window_period_mean_s() * 1e3, 3)),
                    kv("period_std_ms", fixed(l.window_period_std_s() * 1e3, 3)),
                    kv("period_max_ms", fixed(l.window_period_max_s * 1e3, 3)),
@@ -300,28 +325,24 @@ class DriverNode {
                    kv("work_max_ms", fixed(l.window_work_max_s * 1e3, 3)), kv("overruns", str(l.overruns)),
                    kv("window_overruns", str(l.window_overruns)), kv("skipped_deadlines", str(l.skipped_deadlines)),
                    kv("cycles", str(l.cycles))};
-    array.status.push_back(loop);
+  }
 
-    DiagnosticStatus loco;
-    loco.name = "snake_driver: locomotion";
-    loco.hardware_id = hw;
+  void diagnose_locomotion(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    using diagnostic_msgs::DiagnosticStatus;
+    const core::DriverSnapshot& s = published_.driver;
     if (s.state == core::DriverState::kFault) {
-      loco.level = DiagnosticStatus::ERROR;
-      loco.message = std::string("fault: ") + s.fault_reason.data();
+      stat.summary(DiagnosticStatus::ERROR, std::string("fault: ") + s.fault_reason.data());
     } else if (s.state == core::DriverState::kStopped) {
-      loco.level = DiagnosticStatus::WARN;
-      loco.message = "torque off";
+      stat.summary(DiagnosticStatus::WARN, "torque off");
     } else if (s.hold_reason == core::HoldReason::kCommandTimeout) {
-      loco.level = DiagnosticStatus::WARN;
-      loco.message = command_timeout_text();
+      stat.summary(DiagnosticStatus::WARN, command_timeout_text());
     } else if (s.locomotion_gated) {
-      loco.level = DiagnosticStatus::WARN;
-      loco.message = s.pose_received ? "base pose stale: locomotion held" : "no base pose yet: locomotion held";
+      stat.summary(DiagnosticStatus::WARN,
+                   s.pose_received ? "base pose stale: locomotion held" : "no base pose yet: locomotion held");
     } else {
-      loco.level = DiagnosticStatus::OK;
-      loco.message = core::to_string(s.state);
+      stat.summary(DiagnosticStatus::OK, core::to_string(s.state));
     }
-    loco.values = {kv("state", core::to_string(s.state)), kv("gait", s.gait.data()),
+    stat.values = {kv("state", core::to_string(s.state)), kv("gait", s.gait.data()),
                    kv("fault", s.fault_reason.data()), kv("last_fault", s.last_fault.data()),
                    kv("pose_received", s.pose_received ? "true" : "false"),
                    kv("pose_fresh", s.pose_fresh ? "true" : "false"),
@@ -333,44 +354,45 @@ class DriverNode {
                    kv("hold_reason", core::to_string(s.hold_reason)),
                    kv("command_age_s", fixed(s.command_age_s, 2)),
                    kv("command_timeout_s", fixed(config_.controller.command_timeout_s, 2)),
-                   kv("fault_action", core::to_string(config_.controller.fault_action))};
-    array.status.push_back(loco);
+                   kv("fault_action", core::to_string(config_.controller.fault_action)),
+                   kv("effort_unit", torque_constant_ > 0.0 ? "N*m (current x " + fixed(torque_constant_, 3) + " N*m/A)"
+                                                            : "none (no torque constant in the control table)")};
+  }
 
-    DiagnosticStatus bus;
-    bus.name = "snake_driver: bus";
-    bus.hardware_id = config_.serial.device;
-    bus.level = s.consecutive_failed_cycles > 0 ? DiagnosticStatus::WARN : DiagnosticStatus::OK;
-    bus.message = s.consecutive_failed_cycles > 0 ? str(s.consecutive_failed_cycles) + " consecutive failed cycles" : "ok";
+  void diagnose_bus(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    using diagnostic_msgs::DiagnosticStatus;
+    const core::DriverSnapshot& s = published_.driver;
+    stat.hardware_id = config_.serial.device;
+    stat.summary(s.consecutive_failed_cycles > 0 ? DiagnosticStatus::WARN : DiagnosticStatus::OK,
+                 s.consecutive_failed_cycles > 0 ? str(s.consecutive_failed_cycles) + " consecutive failed cycles" : "ok");
     const auto& c = s.bus;
-    bus.values = {kv("port", config_.serial.device), kv("baud", str(config_.serial.baud_bps)),
-                  kv("transactions", str(c.transactions)), kv("bytes_sent", str(c.bytes_sent)),
-                  kv("bytes_received", str(c.bytes_received)), kv("packets_received", str(c.packets_received)),
-                  kv("crc_errors", str(c.crc_errors)), kv("timeouts", str(c.timeouts)), kv("malformed", str(c.malformed)),
-                  kv("hardware_error_alerts", str(c.hardware_error_alerts)), kv("servo_errors", str(c.servo_errors)),
-                  kv("unexpected_packets", str(c.unexpected_packets)), kv("io_errors", str(c.io_errors)),
-                  kv("drains", str(c.drains)), kv("late_bytes", str(c.late_bytes)),
-                  kv("verify_mismatches", str(c.verify_mismatches)),
-                  kv("failed_cycles", str(s.failed_cycles)),
-                  kv("consecutive_failed_cycles", str(s.consecutive_failed_cycles))};
-    array.status.push_back(bus);
+    stat.values = {kv("port", config_.serial.device), kv("baud", str(config_.serial.baud_bps)),
+                   kv("transactions", str(c.transactions)), kv("bytes_sent", str(c.bytes_sent)),
+                   kv("bytes_received", str(c.bytes_received)), kv("packets_received", str(c.packets_received)),
+                   kv("crc_errors", str(c.crc_errors)), kv("timeouts", str(c.timeouts)), kv("malformed", str(c.malformed)),
+                   kv("hardware_error_alerts", str(c.hardware_error_alerts)), kv("servo_errors", str(c.servo_errors)),
+                   kv("unexpected_packets", str(c.unexpected_packets)), kv("io_errors", str(c.io_errors)),
+                   kv("drains", str(c.drains)), kv("late_bytes", str(c.late_bytes)),
+                   kv("verify_mismatches", str(c.verify_mismatches)),
+                   kv("failed_cycles", str(s.failed_cycles)),
+                   kv("consecutive_failed_cycles", str(s.consecutive_failed_cycles))};
+  }
 
-    for (std::size_t j = 0; j < s.servos.size(); ++j) {
-      const core::ServoDiagnostics& d = s.servos[j];
-      DiagnosticStatus st;
-      st.name = "snake_driver: servo " + str(int(d.id)) + " (joint_" + str(j + 1) + ")";
-      st.hardware_id = "dynamixel " + str(int(d.id));
-      const std::string bits = controller_.table().describe_hardware_error(d.hardware_error_bits);
-      if (d.hardware_error) {
-        st.level = DiagnosticStatus::ERROR;
-        st.message = "hardware error: " + bits;
-      } else if (d.stale) {
-        st.level = DiagnosticStatus::WARN;
-        st.message = "no reply for " + str(d.consecutive_misses) + " cycles";
-      } else {
-        st.level = DiagnosticStatus::OK;
-        st.message = "ok";
-      }
-      st.values = {kv("id", str(int(d.id))), kv("temperature_c", std::isnan(d.temperature_c) ? "unknown" : fixed(d.temperature_c, 0)),
+  void diagnose_servo(std::size_t j, diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    using diagnostic_msgs::DiagnosticStatus;
+    const core::DriverSnapshot& s = published_.driver;
+    if (j >= s.servos.size()) return;
+    const core::ServoDiagnostics& d = s.servos[j];
+    stat.hardware_id = "dynamixel " + str(model_.servos.ids[j]);
+    const std::string bits = controller_.table().describe_hardware_error(d.hardware_error_bits);
+    if (d.hardware_error) {
+      stat.summary(DiagnosticStatus::ERROR, "hardware error: " + bits);
+    } else if (d.stale) {
+      stat.summary(DiagnosticStatus::WARN, "no reply for " + str(d.consecutive_misses) + " cycles");
+    } else {
+      stat.summary(DiagnosticStatus::OK, "ok");
+    }
+    stat.values = {kv("id", str(int(d.id))), kv("temperature_c", std::isnan(d.temperature_c) ? "unknown" : fixed(d.temperature_c, 0)),
                    kv("voltage_v", std::isnan(d.voltage_v) ? "unknown" : fixed(d.voltage_v, 1)),
                    kv("hardware_error", d.hardware_error ? "true" : "false"),
                    kv("hardware_error_bits", str(int(d.hardware_error_bits))), kv("hardware_error_names", bits),
@@ -379,20 +401,19 @@ class DriverNode {
                    kv("implausible", str(d.implausible)), kv("other_errors", str(d.other_errors)),
                    kv("present_ticks", str(d.present_ticks)), kv("goal_ticks", str(d.goal_ticks)),
                    kv("goal_min_ticks", str(d.min_ticks)), kv("goal_max_ticks", str(d.max_ticks))};
-      array.status.push_back(st);
-    }
-    diagnostics_pub_.publish(array);
   }
 
   // ---- callbacks (spinner threads) ----
-  void on_pose(const geometry_msgs::PoseStamped::ConstPtr& msg) {
+  // base_pose: geometry_msgs/PoseWithCovarianceStamped (motion capture, the pose remapper). The
+  // covariance is not used: the safety rules gate on freshness and plausibility, not on uncertainty.
+  void on_pose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
     if (!msg->header.frame_id.empty() && msg->header.frame_id != config_.world_frame) {
       ROS_WARN_THROTTLE(5.0, "base_pose in frame '%s' ignored: the driver expects '%s' (~world_frame)",
                         msg->header.frame_id.c_str(), config_.world_frame.c_str());
       return;
     }
-    const auto& p = msg->pose.position;
-    const auto& q = msg->pose.orientation;
+    const auto& p = msg->pose.pose.position;
+    const auto& q = msg->pose.pose.orientation;
     if (!controller_.set_base_pose(now_s(), Eigen::Vector3d(p.x, p.y, p.z), Eigen::Quaterniond(q.w, q.x, q.y, q.z)))
       ROS_WARN_THROTTLE(5.0, "base_pose ignored: not finite, or a zero quaternion");
   }
@@ -462,12 +483,16 @@ class DriverNode {
   geometry_msgs::PoseStamped com_pose_;
   snake_autonomy::BoundState bound_state_;
   tf2_ros::TransformBroadcaster tf_;
+  double torque_constant_ = 0.0;  // N*m/A
   core::DriverState logged_state_ = core::DriverState::kStopped;
   std::string logged_fault_;
   bool logged_stale_ = false;
   std::uint64_t logged_overruns_ = 0;
 
-  ros::Publisher joint_states_pub_, com_pose_pub_, bound_state_pub_, diagnostics_pub_;
+  ros::Publisher joint_states_pub_, com_pose_pub_, bound_state_pub_;
+  std::unique_ptr<diagnostic_updater::Updater> updater_;
+  double rate_min_hz_ = 0.0, rate_max_hz_ = 0.0;  // the topic diagnostics keep pointers to these
+  std::unique_ptr<diagnostic_updater::TopicDiagnostic> joint_states_diag_, com_pose_diag_;
   ros::Subscriber pose_sub_, gait_sub_;
   ros::ServiceServer enable_srv_, hold_srv_, reboot_srv_;
 };

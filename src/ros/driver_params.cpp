@@ -130,6 +130,7 @@ DriverNodeConfig read_driver_params(const ros::NodeHandle& pnh, std::vector<std:
   r.get("world_frame", &c.world_frame);
   r.get("base_frame", &c.base_frame);
   r.get("com_frame", &c.com_frame);
+  r.get("publish_tf", &c.publish_tf);
   r.get("diagnostics_period_s", &c.diagnostics_period_s);
   r.get("connect_timeout_s", &c.connect_timeout_s);
   r.get("service_timeout_s", &c.service_timeout_s);

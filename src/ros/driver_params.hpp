@@ -27,6 +27,8 @@ struct DriverNodeConfig {
   std::string world_frame = "odom";
   std::string base_frame = "base_link";
   std::string com_frame = "com";
+  bool publish_tf = true;           // world_frame -> base_frame and -> com_frame on /tf; false when a
+                                    // localisation node owns that transform (REP 105)
   double diagnostics_period_s = 1.0;
   double connect_timeout_s = 10.0;  // wait this long for the port and the servos at start
   double service_timeout_s = 2.0;   // a service waits this long for the loop to run its request

@@ -74,6 +74,15 @@ TEST(ControlTable, LoadsXh540WithTheIssueAddresses) {
 
 TEST(ControlTable, MinimalTableIsValid) { EXPECT_EQ(load_error(table_with("", "")), ""); }
 
+// JointState.effort = current x torque constant: the XH540-W270's 12 V stall point, 10.6 N*m at 4.4 A.
+TEST(ControlTable, TorqueConstantOfTheXh540IsTheStallRatioAndOptional) {
+  const auto t = dx::ControlTable::from_yaml_file(kXh540);
+  EXPECT_NEAR(t.torque_constant_nm_per_a, 10.6 / 4.4, 1e-3);
+  EXPECT_EQ(dx::ControlTable::from_yaml_string(table_with("", ""), "t.yaml").torque_constant_nm_per_a, 0.0);
+  const std::string error = load_error("torque_constant_nm_per_a: -2.4\n" + table_with("", ""));
+  EXPECT_NE(error.find("torque_constant_nm_per_a: -2.4 is not a finite number >= 0"), std::string::npos) << error;
+}
+
 TEST(ControlTable, ErrorsNameKeyAndValue) {
   struct Case {
     std::string key, line, expected;

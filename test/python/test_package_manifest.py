@@ -27,6 +27,7 @@ THIRD_PARTY = {
     "diagnostic_msgs": ("rosdep", "diagnostic_msgs"), "visualization_msgs": ("rosdep", "visualization_msgs"),
     "rosgraph_msgs": ("rosdep", "rosgraph_msgs"), "catkin_pkg": ("rosdep", "catkin"),
     "diagnostic_updater": ("rosdep", "diagnostic_updater"), "trajectory_msgs": ("rosdep", "trajectory_msgs"),
+    "actionlib": ("rosdep", "actionlib"), "actionlib_msgs": ("rosdep", "actionlib_msgs"),
     "mujoco": ("pypi", "mujoco"), "evo": ("pypi", "evo"), "rosbags": ("pypi", "rosbags"),
     "dynamixel_sdk": ("pypi", "dynamixel-sdk"), "shapely": ("pypi", "shapely"),
     "cv2": ("pypi", "opencv-python-headless"), "sklearn": ("pypi", "scikit-learn"), "joblib": ("pypi", "joblib"),

@@ -239,3 +239,22 @@ def test_calibration_values_have_ranges(tmp_path):
                       "camera_in_head: {translation_m: [1.0e+300, 0, 0], quaternion_xyzw: [0, 0, 1.0e+200, 1.0e+200]}")
     assert "translation_m: each within +-1 m of the head, got [1e+300, 0.0, 0.0]" in message
     assert "quaternion_xyzw: not a unit quaternion (norm 1.41421e+200)" in message
+
+
+def test_base_covariance_moves_the_camera_covariance_over_the_lever_arm():
+    from snake_autonomy.estimation import base_covariance
+    # level camera at yaw 30 deg, base H ahead along the heading: position variance 0.01, rotation 0.04
+    yaw = 30 * DEG
+    camera = make_transform(rot_z(yaw), [1.0, 2.0, 0.0])
+    base_in_camera = translation(H, 0.0, 0.0)
+    C = np.diag([0.01, 0.01, 0.01, 0.04, 0.04, 0.04])
+    B = base_covariance(C.ravel().tolist(), camera, base_in_camera)
+    along = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+    across = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+    assert along @ B[:3, :3] @ along == pytest.approx(0.01)                  # a turn moves the base across only
+    assert across @ B[:3, :3] @ across == pytest.approx(0.01 + H * H * 0.04)  # yaw variance x lever arm^2
+    assert B[2, 2] == pytest.approx(0.01 + H * H * 0.04)                     # pitch lifts the base
+    assert B[3:, 3:] == pytest.approx(C[3:, 3:])                             # orientation unchanged
+    assert np.allclose(B, B.T) and np.all(np.linalg.eigvalsh(B) > 0)
+    # no lever arm: the covariance passes unchanged
+    assert base_covariance(C, camera, np.eye(4)) == pytest.approx(C)

@@ -6,7 +6,7 @@ import unittest
 
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import PoseStamped
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
 from sensor_msgs.msg import JointState
 from std_srvs.srv import SetBool, Trigger
 
@@ -43,7 +43,7 @@ class DriverHarness:
         self._beat = None         # the command re-sent every HEARTBEAT_PERIOD_S
         self.mock = wait_for(lambda: self._connect(port + ".ctl"), 20.0, "the mocked bus's control socket")
         self.gait_pub = rospy.Publisher("gait_command", GaitCommand, queue_size=10)
-        self.pose_pub = rospy.Publisher("base_pose", PoseStamped, queue_size=10)
+        self.pose_pub = rospy.Publisher("base_pose", PoseWithCovarianceStamped, queue_size=10)
         rospy.Subscriber("/diagnostics", DiagnosticArray, self._on_diag)
         rospy.Subscriber("joint_states", JointState, self._on_joints)
         rospy.Subscriber("com_pose", PoseStamped, self._on_com)
@@ -86,11 +86,11 @@ class DriverHarness:
                     self.gait_pub.publish(beat)
                     next_beat = time.monotonic() + self.HEARTBEAT_PERIOD_S
                 if self.pose_on:
-                    p = PoseStamped()
+                    p = PoseWithCovarianceStamped()
                     p.header.stamp = rospy.Time.now()
                     p.header.frame_id = "odom"
-                    p.pose.position.x = 1.0
-                    p.pose.orientation.w = 1.0
+                    p.pose.pose.position.x = 1.0
+                    p.pose.pose.orientation.w = 1.0
                     self.pose_pub.publish(p)
             except rospy.ROSException:  # the test is shutting down: topics closed
                 return

@@ -4,67 +4,24 @@
 The fake driver integrates a kinematic CoM at 50 Hz: sidewind moves 0.5 m/s along the yaw, turns
 rotate at 30 deg/s, hold stops. Checks: a bad mission is refused with every problem listed; a good
 one runs to the end, holds and writes its results; a stale pose holds and resumes; abort holds.
+These start missions through the services (mission/load, mission/start, mission/abort); the action
+(mission/run) has its own test, test_mission_action.py.
 """
 import glob
 import json
 import math
 import os
-import threading
 import time
 import unittest
 
 import rospy
 import rostest
-from geometry_msgs.msg import PoseStamped
 from std_srvs.srv import Trigger
 
-from snake_autonomy.msg import GaitCommand, TrackingStatus
+from snake_autonomy.msg import TrackingStatus
 from snake_autonomy.srv import LoadMission
 
-
-def wait_for(cond, timeout, what):
-    deadline = time.monotonic() + timeout
-    while not cond():
-        if time.monotonic() > deadline or rospy.is_shutdown():
-            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
-        time.sleep(0.01)
-
-
-class FakeDriver:
-    def __init__(self):
-        self.lock = threading.Lock()
-        self.x = self.y = self.yaw = 0.0
-        self.gait, self.publishing = "hold", True
-        self.commands = []
-        self.pub = rospy.Publisher("com_pose", PoseStamped, queue_size=10)
-        rospy.Subscriber("gait_command", GaitCommand, self.on_cmd)
-        threading.Thread(target=self.loop, daemon=True).start()
-
-    def on_cmd(self, msg):
-        with self.lock:
-            self.gait = msg.gait
-            self.commands.append(msg)
-
-    def loop(self):
-        dt = 0.02
-        while not rospy.is_shutdown():
-            with self.lock:
-                if self.gait == "sidewind":
-                    self.x += 0.5 * dt * math.cos(self.yaw)
-                    self.y += 0.5 * dt * math.sin(self.yaw)
-                elif self.gait.endswith("turn_left"):
-                    self.yaw += math.radians(30) * dt
-                elif self.gait.endswith("turn_right"):
-                    self.yaw -= math.radians(30) * dt
-                publishing = self.publishing
-                m = PoseStamped()
-                m.header.stamp = rospy.Time.now()
-                m.header.frame_id = "odom"
-                m.pose.position.x, m.pose.position.y = self.x, self.y
-                m.pose.orientation.z, m.pose.orientation.w = math.sin(self.yaw / 2), math.cos(self.yaw / 2)
-            if publishing:
-                self.pub.publish(m)
-            time.sleep(dt)
+from mission_test_helpers import FakeDriver, wait_for
 
 
 class MissionNodeTest(unittest.TestCase):

@@ -1,5 +1,7 @@
 #!/usr/bin/env python3
-"""rostest: odometry replayed into pose_remap_node; base_pose is eq. 3.1, bad poses never pass."""
+"""rostest: odometry replayed into pose_remap_node; base_pose is eq. 3.1 with the camera extrinsic read
+from TF (robot_state_publisher's head_link -> camera_link, generated from camera.yaml), carries the
+odometry's covariance moved to the base, bad poses never pass; the status is on /diagnostics."""
 import math
 import threading
 import time
@@ -7,12 +9,14 @@ import unittest
 
 import rospy
 import rostest
-from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import PoseStamped
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
 from std_srvs.srv import Trigger
 
 H = 0.1565
+STATUS = "pose_remapper: base pose"
 YAW = math.radians(30)
 
 
@@ -44,11 +48,17 @@ class PoseRemapReplay(unittest.TestCase):
         rospy.init_node("pose_remap_replay")
         cls.lock = threading.Lock()
         cls.poses, cls.states = [], []
-        rospy.Subscriber("base_pose", PoseStamped, lambda m: cls._add(cls.poses, m))
-        rospy.Subscriber("base_pose_status", DiagnosticStatus, lambda m: cls._add(cls.states, m))
+        rospy.Subscriber("base_pose", PoseWithCovarianceStamped, lambda m: cls._add(cls.poses, m))
+        rospy.Subscriber("/diagnostics", DiagnosticArray, cls.on_diagnostics)
         cls.pub = rospy.Publisher("odom", Odometry, queue_size=50)
         wait_for(lambda: cls.pub.get_num_connections() > 0, 15, "the remapper to subscribe to odom")
-        wait_for(lambda: cls.states, 15, "a first base_pose_status")
+        wait_for(lambda: cls.states, 15, "a first status on /diagnostics")
+
+    @classmethod
+    def on_diagnostics(cls, msg):
+        for s in msg.status:
+            if s.name == STATUS:
+                cls._add(cls.states, s)
 
     @classmethod
     def _add(cls, store, m):
@@ -67,18 +77,29 @@ class PoseRemapReplay(unittest.TestCase):
 
     def test_replay(self):
         self.assertEqual(self.last_state(), "waiting")
+        # the extrinsic comes from TF once robot_state_publisher's /tf_static arrived
+        wait_for(lambda: self.states and {kv.key: kv.value for kv in self.states[-1].values}.get("extrinsic", "")
+                 .startswith("TF head_link -> camera_link"), 15, "the extrinsic from TF")
         # 1. a good track: camera moving along its heading (30 deg), level
         track = [odom(0.01 * i * math.cos(YAW), 0.01 * i * math.sin(YAW)) for i in range(15)]
         self.send(track)
         wait_for(lambda: len(self.poses) >= 15, 10, "15 base poses")
-        last = self.poses[-1]
+        last_cov = np.asarray(self.poses[-1].pose.covariance).reshape(6, 6)
+        last = self.poses[-1].pose
         cx, cy = 0.14 * math.cos(YAW), 0.14 * math.sin(YAW)
         # eq. 3.1 with the level-camera calibration: the base is H ahead of the camera, same heading
         self.assertAlmostEqual(last.pose.position.x, cx + H * math.cos(YAW), places=6)
         self.assertAlmostEqual(last.pose.position.y, cy + H * math.sin(YAW), places=6)
         q = last.pose.orientation
         self.assertAlmostEqual(2 * math.atan2(q.z, q.w), YAW, places=6)
-        self.assertEqual(last.header.frame_id, "odom")
+        self.assertEqual(self.poses[-1].header.frame_id, "odom")
+        # covariance: 0.01 on the diagonal, moved over the lever arm H along the heading (level camera):
+        # the yaw variance adds H^2 x 0.01 across the heading, nothing along it
+        across = np.array([-math.sin(YAW), math.cos(YAW), 0.0])
+        along = np.array([math.cos(YAW), math.sin(YAW), 0.0])
+        self.assertAlmostEqual(float(across @ last_cov[:3, :3] @ across), 0.01 + H * H * 0.01, places=9)
+        self.assertAlmostEqual(float(along @ last_cov[:3, :3] @ along), 0.01, places=9)
+        self.assertAlmostEqual(last_cov[5, 5], 0.01, places=12)
         wait_for(lambda: self.last_state() == "ok", 5, "status ok")
 
         # 2. NaN, RTAB-Map's null pose (covariance 9999), a zero quaternion, a 2 m jump: none forwarded
@@ -105,6 +126,7 @@ class PoseRemapReplay(unittest.TestCase):
         # 4. silence: stale within the timeout (0.5 s) plus the 10 Hz check
         wait_for(lambda: self.last_state() == "stale", 3, "status stale")
         for p in self.poses:
+            p = p.pose
             self.assertTrue(all(math.isfinite(v) for v in (p.pose.position.x, p.pose.position.y, p.pose.position.z)))
         levels = {s.message.split(":")[0]: s.level for s in self.states}
         self.assertEqual(levels["ok"], DiagnosticStatus.OK)

@@ -19,7 +19,7 @@ import unittest
 import numpy as np
 import rospy
 import rostest
-from diagnostic_msgs.msg import DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from std_msgs.msg import String
 
@@ -50,7 +50,7 @@ class SimLaunchTest(unittest.TestCase):
         cls.status, cls.path, cls.sim_status, cls.state = [], [], None, ""
         rospy.Subscriber("tracking_status", TrackingStatus, cls.on_status)
         rospy.Subscriber("ground_truth/com_pose", PoseStamped, cls.on_com)
-        rospy.Subscriber("sim/status", DiagnosticStatus, cls.on_sim)
+        rospy.Subscriber("/diagnostics", DiagnosticArray, cls.on_sim)
         rospy.Subscriber("mission/state", String, cls.on_state)
         cls.mission = rospy.get_param("~mission")
         cls.seed = int(rospy.get_param("~seed", 0))
@@ -67,7 +67,9 @@ class SimLaunchTest(unittest.TestCase):
 
     @classmethod
     def on_sim(cls, msg):
-        cls.sim_status = {kv.key: kv.value for kv in msg.values}
+        for status in msg.status:
+            if status.name == "sim: simulated robot" and status.values:
+                cls.sim_status = {kv.key: kv.value for kv in status.values}
 
     @classmethod
     def on_state(cls, msg):
@@ -80,7 +82,7 @@ class SimLaunchTest(unittest.TestCase):
             status, path = list(self.status), np.array(self.path)
         reached = [s for s in status if s[2]]
         self.assertTrue(reached, "tracking_status never reported the waypoint reached")
-        wait_for(lambda: self.sim_status is not None, 5, "sim/status")
+        wait_for(lambda: self.sim_status is not None, 5, "the simulator's status on /diagnostics")
         self.assertEqual(self.sim_status["rolled_over"], "False")
         self.assertEqual(self.sim_status["limit_violations"], "0")
 

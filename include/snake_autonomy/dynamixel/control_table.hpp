@@ -32,6 +32,9 @@ struct ControlTable {
   std::string model;
   int model_number = 0;
   std::int32_t position_centre_ticks = 2048;
+  // Output torque per ampere of Present Current (N*m/A), for JointState.effort; 0 when the table
+  // gives none (the driver then publishes no effort). See torque_nm() for the model and its limits.
+  double torque_constant_nm_per_a = 0.0;
   std::vector<std::pair<std::string, int>> hardware_error_bits;  // name, bit (0-7)
   std::vector<ControlTableEntry> entries;                        // in file order
 

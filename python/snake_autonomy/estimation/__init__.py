@@ -1,6 +1,6 @@
 """snake_autonomy.estimation: camera odometry to base pose (eq. 3.1) and lost-tracking detection."""
-from .pose_remap import (GateParams, GateResult, PoseRemapper, TrackingGate, head_in_base, load_gate_params,
-                         load_camera_calibration)
+from .pose_remap import (GateParams, GateResult, PoseRemapper, TrackingGate, base_covariance, head_in_base,
+                         load_gate_params, load_camera_calibration)
 
-__all__ = ["PoseRemapper", "TrackingGate", "GateParams", "GateResult", "head_in_base",
+__all__ = ["PoseRemapper", "TrackingGate", "GateParams", "GateResult", "base_covariance", "head_in_base",
            "load_camera_calibration", "load_gate_params"]

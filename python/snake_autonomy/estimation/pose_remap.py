@@ -287,3 +287,22 @@ def load_gate_params(path) -> GateParams:
     if problems:
         raise ValueError(f"{path}: " + "; ".join("lost_tracking." + p for p in problems))
     return params
+
+
+def skew(v) -> np.ndarray:
+    x, y, z = (float(c) for c in v)
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def base_covariance(camera_covariance, camera_in_world: np.ndarray, base_in_camera: np.ndarray) -> np.ndarray:
+    """The 6x6 covariance of the base pose from the camera pose's (geometry_msgs/PoseWithCovariance
+    order: x, y, z, then small rotations about the world's fixed x, y, z axes; row-major 36 or 6x6).
+
+    The base is the camera moved by a fixed offset d = R_camera . t (base_in_camera's translation, in
+    the world): a small world-frame rotation dtheta of the camera moves the base by dtheta x d, and
+    turns it by the same dtheta. So Sigma_base = J Sigma_camera J^T with J = [[I, -[d]x], [0, I]]."""
+    C = np.asarray(camera_covariance, dtype=float).reshape(6, 6)
+    d = np.asarray(camera_in_world, dtype=float)[:3, :3] @ np.asarray(base_in_camera, dtype=float)[:3, 3]
+    J = np.eye(6)
+    J[:3, 3:] = -skew(d)
+    return J @ C @ J.T

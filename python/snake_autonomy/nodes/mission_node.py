@@ -2,19 +2,31 @@
 logic is missions.runner.MissionRunner, the log experiments.RunLog.
 
 Subscribes  com_pose (geometry_msgs/PoseStamped, the driver's CoM + virtual-chassis orientation),
-            base_pose_status (diagnostic_msgs/DiagnosticStatus, the pose remapper; optional),
-            and for the bag: base_pose, odom, bound_state, joint_states.
+            /diagnostics: the pose remapper's status ~pose_status_name (default "<ns>/pose_remapper:
+            base pose", optional; not OK holds the robot),
+            and for the bag: base_pose, odom, bound_state, joint_states and the standard topics
+            (experiments.recorded_topics: /tf, /tf_static, /diagnostics; the static transforms seen
+            before a run are written at its start, so each bag replays in rviz on its own).
 Publishes   gait_command (snake_autonomy/GaitCommand, every control step while a mission runs: the
             repeat is the driver's heartbeat, its command_timeout_s holds the robot when it stops),
             tracking_status (snake_autonomy/TrackingStatus),
-            mission/waypoints (geometry_msgs/PoseArray, latched), mission/state (std_msgs/String, latched).
-Services    mission/load (snake_autonomy/LoadMission), mission/start, mission/abort (std_srvs/Trigger).
+            mission/waypoints (geometry_msgs/PoseArray, latched), mission/state (std_msgs/String, latched:
+            a tool that joins late, and a run started by ~auto_start that no action client owns, still
+            show the node's state).
+Action      mission/run (snake_autonomy/RunMission): goal = a mission (name or file, YAML text, or inline
+            waypoints), feedback = every tracker decision, result = outcome and per-waypoint metrics,
+            cancel = abort (hold). A new goal while an action's mission runs preempts it; a goal while
+            a service- or auto-started mission runs is rejected.
+Services    mission/load (snake_autonomy/LoadMission), mission/start, mission/abort (std_srvs/Trigger),
+            kept beside the action: ~auto_start and `rosservice call` (the one-line stop of any run,
+            whoever started it) need no action client.
+Time        with use_sim_time the node waits for the first /clock before it loads or starts anything.
 Params      ~mission (file or provided name: loaded at start-up), ~auto_start (false), ~tracker_config
             (config/tracker.yaml), ~tracker_overrides (a YAML file whose `tracker:` section is merged
             over tracker_config, e.g. config/sim.yaml for the simulated robot; empty: none),
             ~gaits_config (config/gaits.yaml), ~rate_hz, ~pose_timeout_s, ~yaw_filter_window,
             ~heading_offset_deg (defaults from tracker_config + overrides), ~results_dir, ~record
-            (true), ~world_frame (odom).
+            (true), ~world_frame (odom), ~pose_status_name.
 """
 import math
 import os
@@ -24,22 +36,25 @@ import threading
 import time
 from pathlib import Path
 
+import actionlib
 import rospy
 import yaml
-from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import Pose, PoseArray, PoseStamped
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import Pose, PoseArray, PoseStamped, PoseWithCovarianceStamped
 from std_msgs.msg import String
 from std_srvs.srv import Trigger, TriggerResponse
 
 from snake_autonomy.transforms import yaw_of_quat
 from snake_autonomy.missions import MissionError, gait_library_names, load_defaults, load_mission, read_overrides
-from snake_autonomy.missions.runner import MissionRunner
-from snake_autonomy.msg import GaitCommand, TrackingStatus
+from snake_autonomy.experiments.recorded_topics import STATIC_TF_TOPIC, StaticTransforms, standard_topic_types
+from snake_autonomy.missions.runner import DONE, MissionRunner
+from snake_autonomy.msg import (GaitCommand, RunMissionAction, RunMissionFeedback, RunMissionResult, TrackingStatus,
+                                WaypointResult)
+from snake_autonomy.nodes.mission_action import DecisionSeries, fill_feedback, fill_result, mission_from_goal
 from snake_autonomy.srv import LoadMission, LoadMissionResponse
 
 RECORDED = {  # topic -> type, recorded into the run's bag besides com_pose and our own outputs
-    "base_pose": PoseStamped,
-    "base_pose_status": DiagnosticStatus,
+    "base_pose": PoseWithCovarianceStamped,
     # the simulator's ground truth (sim_node); nothing publishes them on the robot
     "ground_truth/base_pose": PoseStamped,
     "ground_truth/camera_pose": PoseStamped,
@@ -87,6 +102,8 @@ class MissionNode:
         self.results_dir = Path(rospy.get_param("~results_dir", default_results_dir()))
         self.record = bool(rospy.get_param("~record", True))
         self.world_frame = rospy.get_param("~world_frame", "odom")
+        self.pose_status_name = rospy.get_param("~pose_status_name",
+                                                rospy.resolve_name("pose_remapper")[1:] + ": base pose")
         if not (self.rate_hz > 0 and self.pose_timeout_s > 0 and self.yaw_window > 0):
             raise ValueError(f"~rate_hz ({self.rate_hz}), ~pose_timeout_s ({self.pose_timeout_s}) and "
                              f"~yaw_filter_window ({self.yaw_window}) must be positive")
@@ -104,24 +121,31 @@ class MissionNode:
         self.log = None
         self.run_dir = None
         self.source_ok, self.source_detail = True, ""
+        self.static_tf = StaticTransforms()
+        self.decisions = DecisionSeries()
+        self.run_ended = threading.Event()
+        self.last_result = None
+        self.waypoints_msg = None
 
         self.pub_cmd = rospy.Publisher("gait_command", GaitCommand, queue_size=10)
         self.pub_status = rospy.Publisher("tracking_status", TrackingStatus, queue_size=10)
         self.pub_wps = rospy.Publisher("mission/waypoints", PoseArray, queue_size=1, latch=True)
         self.pub_state = rospy.Publisher("mission/state", String, queue_size=1, latch=True)
         rospy.Subscriber("com_pose", PoseStamped, self.on_com_pose, queue_size=50)
-        rospy.Subscriber("base_pose_status", DiagnosticStatus, self.on_source_status, queue_size=10)
+        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=20)
         self._rec_subs = []
         if self.record:
             types = dict(RECORDED)
             types.update(_optional_types())
+            types.update(standard_topic_types())
             for topic, msg_type in types.items():
-                if topic == "base_pose_status":
-                    continue   # recorded in on_source_status
                 self._rec_subs.append(rospy.Subscriber(topic, msg_type, self._recorder(topic), queue_size=100))
         rospy.Service("mission/load", LoadMission, self.srv_load)
         rospy.Service("mission/start", Trigger, self.srv_start)
         rospy.Service("mission/abort", Trigger, self.srv_abort)
+        self.action = actionlib.SimpleActionServer("mission/run", RunMissionAction, execute_cb=self.execute,
+                                                   auto_start=False)
+        self.action.start()
         self.set_state("idle")
 
         mission_param = rospy.get_param("~mission", "")
@@ -153,8 +177,11 @@ class MissionNode:
 
     def _recorder(self, topic):
         resolved = self.resolved(topic)
+        static = resolved == STATIC_TF_TOPIC
 
         def cb(msg):
+            if static:
+                self.static_tf.keep(msg)
             log = self.log
             if log is not None:
                 log.write(resolved, msg, rospy.get_time())
@@ -178,6 +205,11 @@ class MissionNode:
                 self.log.write(self.resolved("com_pose"), msg, t)
                 self.log.add_pose(t, x, y)
 
+    def on_diagnostics(self, msg):
+        for status in msg.status:
+            if status.name == self.pose_status_name:
+                self.on_source_status(status)
+
     def on_source_status(self, msg):
         ok = msg.level == DiagnosticStatus.OK
         with self.lock:
@@ -186,21 +218,24 @@ class MissionNode:
             self.source_ok, self.source_detail = ok, msg.message
             if self.runner is not None:
                 self.runner.set_source_status(ok, msg.message)
-            if self.log is not None:
-                self.log.write(self.resolved("base_pose_status"), msg, rospy.get_time())
 
     # -- services ------------------------------------------------------------------------------------
     def load(self, path):
+        return self.install(lambda: load_mission(path, defaults=self.defaults, gait_library=self.gait_library),
+                            path)
+
+    def install(self, make_mission, what):
+        """Loads a mission (make_mission() builds it) unless one is running; (ok, message)."""
         with self.lock:
             if self.runner is not None and self.runner.running:
                 return False, f"mission {self.mission.name!r} is running: abort it first"
             try:
-                mission = load_mission(path, defaults=self.defaults, gait_library=self.gait_library)
+                mission = make_mission()
                 runner = self.make_runner(mission)
             except MissionError as exc:
                 return False, str(exc)
             except ValueError as exc:
-                return False, f"{path}: {exc}"
+                return False, f"{what}: {exc}"
             self.mission, self.runner = mission, runner
             runner.set_source_status(self.source_ok, self.source_detail)
             self.publish_waypoints()
@@ -222,8 +257,14 @@ class MissionNode:
                 self.runner = self.make_runner(self.mission)
                 self.runner.set_source_status(self.source_ok, self.source_detail)
             t = rospy.get_time()
+            self.decisions = DecisionSeries()
+            self.last_result = None
+            self.run_ended.clear()
             if self.record:
                 self.open_log(t)
+                self.static_tf.replay(self.log, t)
+                if self.waypoints_msg is not None:   # latched before the run: its bag gets a copy
+                    self.log.write(self.resolved("mission/waypoints"), self.waypoints_msg, t)
             self.runner.start(t)
             self.set_state(f"running: {self.mission.name}")
             msg = f"mission {self.mission.name!r} started" + (f", logging to {self.run_dir}" if self.log else "")
@@ -243,6 +284,45 @@ class MissionNode:
             self.runner.abort("operator request")
             self.finish(self.runner.final_decision(rospy.get_time()))
             return TriggerResponse(success=True, message=self.runner.outcome)
+
+    # -- the action ---------------------------------------------------------------------------------
+    def execute(self, goal):
+        """One RunMission goal, in actionlib's thread: load, start, wait for the end or a cancel."""
+        ok, message = self.install(lambda: mission_from_goal(goal, self.defaults, self.gait_library),
+                                   "RunMission goal")
+        if ok:
+            ok, message = self.start()
+        if not ok:
+            rospy.logerr(f"RunMission goal refused: {message}")
+            self.action.set_aborted(RunMissionResult(outcome=message, state="refused"), message)
+            return
+        cancelled = False
+        while not self.run_ended.wait(0.1):
+            if rospy.is_shutdown():
+                break
+            if self.action.is_preempt_requested() and not cancelled:
+                cancelled = True
+                with self.lock:
+                    if self.runner is not None and self.runner.running:
+                        self.runner.abort("RunMission goal cancelled")
+                        self.finish(self.runner.final_decision(rospy.get_time()))
+        result = self.last_result or RunMissionResult(outcome="node shutting down", state="aborted")
+        try:
+            if cancelled:
+                self.action.set_preempted(result, result.outcome)
+            elif result.state == DONE:
+                self.action.set_succeeded(result, result.outcome)
+            else:
+                self.action.set_aborted(result, result.outcome)
+        except rospy.ROSException as exc:   # shutting down: the status topic is closed
+            rospy.logerr(f"RunMission result not sent: {exc}")
+
+    def result_of_run(self, outcome):
+        m = self.runner
+        path_m = self.log._path_m if self.log is not None else float("nan")
+        metrics = self.decisions.metrics(self.mission.waypoints, outcome, m.t_start if m.t_start is not None else 0.0)
+        return fill_result(RunMissionResult(), WaypointResult, self.mission.name, m.state, outcome, metrics,
+                           path_length_m=path_m, run_dir=str(self.run_dir) if self.log is not None else "")
 
     # -- the control tick --------------------------------------------------------------------------------
     def on_tick(self, _event):
@@ -274,6 +354,9 @@ class MissionNode:
         status.header.frame_id = self.world_frame
         self.pub_cmd.publish(cmd)
         self.pub_status.publish(status)
+        self.decisions.add(decision.t_s, decision.status)
+        if self.action.is_active():
+            self.action.publish_feedback(fill_feedback(RunMissionFeedback(), decision.status))
         if self.log is not None:
             self.log.write(self.resolved("gait_command"), cmd, decision.t_s)
             self.log.write(self.resolved("tracking_status"), status, decision.t_s)
@@ -298,6 +381,7 @@ class MissionNode:
         outcome = self.runner.outcome or decision.outcome
         self.set_state(f"{self.runner.state}: {self.mission.name}: {outcome}")
         rospy.loginfo(f"mission {self.mission.name!r} ended: {outcome}")
+        self.last_result = self.result_of_run(outcome)
         if self.log is not None:
             log, self.log = self.log, None
             try:
@@ -309,6 +393,7 @@ class MissionNode:
         m = self.runner
         reached = m.tracker.waypoint_index
         rospy.loginfo(f"{reached}/{len(self.mission.waypoints)} waypoint(s) reached")
+        self.run_ended.set()
 
     def open_log(self, t):
         from snake_autonomy.experiments import RunLog
@@ -338,6 +423,7 @@ class MissionNode:
             p.orientation.z, p.orientation.w = math.sin(h / 2), math.cos(h / 2)
             msg.poses.append(p)
         self.pub_wps.publish(msg)
+        self.waypoints_msg = msg
 
     def on_shutdown(self, reason="node shutdown"):
         """SIGINT/SIGTERM/rosnode kill: hold and write what is known."""
@@ -352,10 +438,24 @@ class MissionNode:
                 self.log.close("shutdown")
 
 
+def wait_for_clock() -> bool:
+    """use_sim_time: rospy's time is zero until the first /clock; a mission started then would take
+    the simulator's first stamp for a jump of its whole time limit. False when shut down first."""
+    if rospy.get_time() == 0.0:
+        rospy.loginfo("waiting for the first /clock (use_sim_time)")
+    while rospy.get_time() == 0.0:
+        if rospy.is_shutdown():
+            return False
+        time.sleep(0.01)
+    return True
+
+
 def main():
     # Our own SIGINT/SIGTERM handlers: rospy closes every publisher before any shutdown hook runs, so
     # the final hold must go out (and the results be written) before rospy starts shutting down.
     rospy.init_node("mission", disable_signals=True)
+    if not wait_for_clock():
+        return 0
     try:
         node = MissionNode()
     except (ValueError, MissionError) as exc:

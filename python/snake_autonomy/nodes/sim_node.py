@@ -4,15 +4,16 @@ Hosts the mocked servo bus on a pty (~port) with the MuJoCo plant behind it: dri
 Protocol 2.0 to the simulated servos exactly as to real ones. Publishes the pose source the
 experiment uses and the ground truth:
 
-Publishes   base_pose (geometry_msgs/PoseStamped, motion capture of base_link, 100 Hz; feedback mocap)
+Publishes   base_pose (geometry_msgs/PoseWithCovarianceStamped, motion capture of base_link, 100 Hz,
+            covariance from sim.yaml's mocap noise; feedback mocap)
             odom (nav_msgs/Odometry, the simulated RTAB-Map: camera pose, 30 Hz, null pose with
             covariance 9999 while lost; feedback vio: pose_remap_node turns it into base_pose)
             ground_truth/base_pose (PoseStamped, 100 Hz), ground_truth/camera_pose (PoseStamped, with
             every odom message, same stamp), ground_truth/com_pose (PoseStamped, 10 Hz: centre of mass
-            and heading from the true base pose), sim/status (diagnostic_msgs/DiagnosticStatus, 1 Hz,
-            latched: simulated time, tilt, roll-over, joint goals beyond the limits),
+            and heading from the true base pose),
             /diagnostics (diagnostic_updater, every ~diagnostic_period (1 s): "sim: simulated robot"
-            with sim/status's level, message and values; "sim: base_pose topic status" (mocap) or
+            (simulated time, tilt, roll-over, joint goals beyond the limits: ERROR on roll-over or a
+            goal beyond a limit); "sim: base_pose topic status" (mocap) or
             "sim: odom topic status" (vio): the pose source's rate within 10 % of sim.yaml's),
             /clock (rosgraph_msgs/Clock, every physics step: the plant's time, starting at the wall
             time the simulation started; /use_sim_time:=true makes every node follow it, and then
@@ -31,7 +32,7 @@ import time
 import diagnostic_updater
 import rospy
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
-from geometry_msgs.msg import PoseStamped, WrenchStamped
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 
@@ -73,12 +74,17 @@ class SimNode:
         self.use_sim_time = bool(rospy.get_param("/use_sim_time", False))
         self.clock_epoch_s = time.time()
         self.pub_clock = rospy.Publisher("/clock", Clock, queue_size=10)
-        self.pub_base = rospy.Publisher("base_pose", PoseStamped, queue_size=20) if self.feedback == "mocap" else None
+        self.pub_base = (rospy.Publisher("base_pose", PoseWithCovarianceStamped, queue_size=20)
+                         if self.feedback == "mocap" else None)
+        p = self.sim.params
+        self.mocap_covariance = [0.0] * 36
+        for i in range(6):
+            std = p.mocap_position_noise_m if i < 3 else p.mocap_rotation_noise_rad
+            self.mocap_covariance[7 * i] = std * std
         self.pub_odom = rospy.Publisher("odom", Odometry, queue_size=20) if self.feedback == "vio" else None
         self.pub_gt_base = rospy.Publisher("ground_truth/base_pose", PoseStamped, queue_size=20)
         self.pub_gt_cam = rospy.Publisher("ground_truth/camera_pose", PoseStamped, queue_size=20)
         self.pub_gt_com = rospy.Publisher("ground_truth/com_pose", PoseStamped, queue_size=10)
-        self.pub_status = rospy.Publisher("sim/status", DiagnosticStatus, queue_size=2, latch=True)
         self.last_status = None
         self.updater = diagnostic_updater.Updater()
         self.updater.setHardwareID("mujoco")
@@ -128,7 +134,7 @@ class SimNode:
             k += 1
             if now - last_status >= 1.0:
                 last_status = now
-                self.publish_status()
+                self.refresh_status()
             if k % 20 == 0:
                 self.updater.update()   # publishes /diagnostics when its period (1 s) is due
             next_t += period
@@ -154,9 +160,10 @@ class SimNode:
             _pose(gt.pose, *out.truth_base)
             self.pub_gt_base.publish(gt)
             if self.pub_base is not None:
-                m = PoseStamped()
+                m = PoseWithCovarianceStamped()
                 m.header.stamp, m.header.frame_id = stamp, self.world_frame
-                _pose(m.pose, out.mocap.position_m, out.mocap.quat_xyzw)
+                _pose(m.pose.pose, out.mocap.position_m, out.mocap.quat_xyzw)
+                m.pose.covariance = self.mocap_covariance
                 self.pub_base.publish(m)
                 self.source_freq.tick()
         if out.vio is not None and self.pub_odom is not None:
@@ -178,7 +185,7 @@ class SimNode:
             _pose(c.pose, (x, y, 0.0), (0.0, 0.0, math.sin(h / 2), math.cos(h / 2)))
             self.pub_gt_com.publish(c)
 
-    def publish_status(self):
+    def refresh_status(self):
         s = self.sim.status()
         bad = s["rolled_over"] or s["limit_violations"]
         if s["rolled_over"]:
@@ -188,7 +195,6 @@ class SimNode:
             message=("rolled over" if s["rolled_over"] else
                      f"{s['limit_violations']} joint goals beyond the limits" if s["limit_violations"] else "running"),
             values=[KeyValue(k, f"{v:.3f}" if isinstance(v, float) else str(v)) for k, v in s.items()])
-        self.pub_status.publish(status)
         self.last_status = status
 
     def diagnose(self, stat):

@@ -1,0 +1,56 @@
+"""Shared by the mission node's rostests: a fake driver (a kinematic CoM that obeys gait_command,
+published on com_pose at 50 Hz: sidewind 0.5 m/s along the yaw, turns 30 deg/s, hold stops) and
+wait_for (a condition with a timeout)."""
+import math
+import threading
+import time
+
+import rospy
+from geometry_msgs.msg import PoseStamped
+
+from snake_autonomy.msg import GaitCommand
+
+
+def wait_for(cond, timeout, what):
+    deadline = time.monotonic() + timeout
+    while not cond():
+        if time.monotonic() > deadline or rospy.is_shutdown():
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+        time.sleep(0.01)
+
+
+class FakeDriver:
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.x = self.y = self.yaw = 0.0
+        self.gait, self.publishing = "hold", True
+        self.commands = []
+        self.pub = rospy.Publisher("com_pose", PoseStamped, queue_size=10)
+        rospy.Subscriber("gait_command", GaitCommand, self.on_cmd)
+        threading.Thread(target=self.loop, daemon=True).start()
+
+    def on_cmd(self, msg):
+        with self.lock:
+            self.gait = msg.gait
+            self.commands.append(msg)
+
+    def loop(self):
+        dt = 0.02
+        while not rospy.is_shutdown():
+            with self.lock:
+                if self.gait == "sidewind":
+                    self.x += 0.5 * dt * math.cos(self.yaw)
+                    self.y += 0.5 * dt * math.sin(self.yaw)
+                elif self.gait.endswith("turn_left"):
+                    self.yaw += math.radians(30) * dt
+                elif self.gait.endswith("turn_right"):
+                    self.yaw -= math.radians(30) * dt
+                publishing = self.publishing
+                m = PoseStamped()
+                m.header.stamp = rospy.Time.now()
+                m.header.frame_id = "odom"
+                m.pose.position.x, m.pose.position.y = self.x, self.y
+                m.pose.orientation.z, m.pose.orientation.w = math.sin(self.yaw / 2), math.cos(self.yaw / 2)
+            if publishing:
+                self.pub.publish(m)
+            time.sleep(dt)
