@@ -189,9 +189,12 @@ class DriverNode {
         published_.taken = shared_.taken;
         published_.seq = last_seq = shared_.seq;
       }
-      // The stamp of the cycle: now, minus the time since the loop took the snapshot.
-      const ros::Time stamp =
-          ros::Time::now() - ros::Duration(std::chrono::duration<double>(Clock::now() - published_.taken).count());
+      // The stamp of the cycle: now, minus the time since the loop took the snapshot. With use_sim_time
+      // and no /clock yet, now is zero: nothing can be stamped (and zero minus an age would throw).
+      const ros::Time now = ros::Time::now();
+      if (now.isZero()) continue;
+      const double age_s = std::chrono::duration<double>(Clock::now() - published_.taken).count();
+      const ros::Time stamp = (age_s > 0.0 && now.toSec() > age_s) ? now - ros::Duration(age_s) : now;
       publish(stamp);
       log_changes();
       if (ros::WallTime::now() >= next_diag) {

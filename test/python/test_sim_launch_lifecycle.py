@@ -65,11 +65,16 @@ class Launch:
 
     def wait_line(self, text, timeout_s, start=0):
         """Index of the first line from `start` on that contains `text`; AssertionError on timeout."""
+        return self.wait_line_any((text,), timeout_s, start)
+
+    def wait_line_any(self, texts, timeout_s, start=0):
+        """Index of the first line from `start` on that contains one of `texts`."""
         def found():
-            return next((i for i in range(start, len(self.lines)) if text in self.lines[i]), None)
+            return next((i for i in range(start, len(self.lines)) if any(t in self.lines[i] for t in texts)), None)
         with self._cond:
             if not self._cond.wait_for(lambda: found() is not None, timeout_s):
-                raise AssertionError(f"no line with {text!r} within {timeout_s} s:\n" + "".join(self.lines[-40:]))
+                raise AssertionError(f"no line with any of {texts!r} within {timeout_s} s:\n" +
+                                     "".join(self.lines[-40:]))
             return found()
 
     def close(self):
@@ -134,6 +139,9 @@ def test_sigkill_of_roslaunch_stops_the_robot_through_the_command_lifetime(tmp_p
         started = launch.wait_line("mission 'sim_far' started", 60)
         pid_line = launch.lines[launch.wait_line("process[mission-", 5)]
         mission_pid = int(re.search(r"pid \[(\d+)\]", pid_line).group(1))
+        # Kill only once the mission's gait commands run the driver (the pose comes first; killed
+        # before that, the driver never ran and has no command lifetime to expire) or it faulted.
+        launch.wait_line_any(("driver: running", "driver: locomotion stopped"), 60, start=started)
         os.kill(launch.proc.pid, signal.SIGKILL)    # roslaunch alone: its nodes are left behind
         gone = launch.wait_line("is gone: ending the mission", 10, start=started)
         deadline = time.monotonic() + 15
