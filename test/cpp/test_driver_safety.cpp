@@ -14,8 +14,15 @@ namespace snake_autonomy::core {
 struct CpgTestAccess {
   static void corrupt_phase(Cpg& cpg, int joint) { cpg.theta_(joint) = std::nan(""); }
 };
+}  // namespace snake_autonomy::core
+namespace snake_autonomy::driver {
+struct GaitSourceTestAccess {
+  static core::Cpg& cpg(GaitSource& g) { return g.cpg_; }
+};
+}  // namespace snake_autonomy::driver
+namespace snake_autonomy::core {
 struct DriverControllerTestAccess {
-  static Cpg& cpg(DriverController& d) { return d.cpg_; }
+  static Cpg& cpg(DriverController& d) { return driver::GaitSourceTestAccess::cpg(d.gait_); }
 };
 }  // namespace snake_autonomy::core
 
