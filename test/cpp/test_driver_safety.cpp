@@ -8,19 +8,10 @@
 
 #include "driver_rig.hpp"
 #include "snake_autonomy/core/safety_rules.hpp"
+#include "test_access.hpp"
 
 namespace snake_autonomy::core {
-// Test hooks (friends of Cpg and DriverController): the only way to reach a state no input can make.
-struct CpgTestAccess {
-  static void corrupt_phase(Cpg& cpg, int joint) { cpg.theta_(joint) = std::nan(""); }
-};
-}  // namespace snake_autonomy::core
-namespace snake_autonomy::driver {
-struct GaitSourceTestAccess {
-  static core::Cpg& cpg(GaitSource& g) { return g.cpg_; }
-};
-}  // namespace snake_autonomy::driver
-namespace snake_autonomy::core {
+// Test hook (friend of DriverController): reaches the gait source's CPG (test_access.hpp).
 struct DriverControllerTestAccess {
   static Cpg& cpg(DriverController& d) { return driver::GaitSourceTestAccess::cpg(d.gait_); }
 };
