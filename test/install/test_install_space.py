@@ -186,7 +186,10 @@ def _launch_until_joint_states(ws, args, expect_nodes, also_topics=(), timeout_s
         deadline = time.monotonic() + timeout_s
         echo = None
         while time.monotonic() < deadline:
-            assert proc.poll() is None, f"roslaunch exited {proc.returncode}: see {log.name}"
+            if proc.poll() is not None:
+                log.flush()
+                tail = "".join(Path(log.name).read_text(errors="replace").splitlines(True)[-40:])
+                pytest.fail(f"roslaunch exited {proc.returncode}; the end of {log.name}:\n{tail}")
             try:
                 echo = ws.run(["rostopic", "echo", "-n", "1", "--noarr", "/joint_states"], timeout=15)
             except subprocess.TimeoutExpired:

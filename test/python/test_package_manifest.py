@@ -119,3 +119,11 @@ def test_catkin_lint_is_clean(tmp_path):
     r = subprocess.run(["catkin_lint", "-W2", "--strict", str(link)], capture_output=True, text=True, env=env,
                        timeout=120)
     assert r.returncode == 0 and "found 0 problems" in r.stderr + r.stdout, r.stdout + r.stderr
+
+
+def test_only_paths_py_locates_files_from_its_own_location():
+    """Config files are found through snake_autonomy.paths.config_path (source tree or install space);
+    a module computing the source tree from __file__ breaks in the install space (lib/python3/...)."""
+    offenders = [str(p.relative_to(ROOT)) for p in (ROOT / "python" / "snake_autonomy").rglob("*.py")
+                 if p.name != "paths.py" and "__file__" in p.read_text()]
+    assert offenders == [], f"use snake_autonomy.paths.config_path instead of __file__ in: {offenders}"

@@ -18,14 +18,12 @@ max_catch_up_s. For lock-step use (batch runs), pass the simulation time itself 
 Thread-safe: the mocked bus may call from its own thread.
 """
 import threading
-from pathlib import Path
 
 from snake_autonomy import _core
+from snake_autonomy.paths import config_path
 
 from .plant import Plant
 from .servo_backend import ServoBackend, ShaftState
-
-CONFIG = Path(__file__).resolve().parents[3] / "config"
 
 
 class MujocoServoBackend(ServoBackend):
@@ -37,7 +35,7 @@ class MujocoServoBackend(ServoBackend):
         self.torque_constant_nm_per_a = plant.params.config.servo.torque_constant_nm_per_a
         self._index = {int(sid): i for i, sid in enumerate(robot.servo_ids)}
         if table is None:
-            table = _core.dynamixel.ControlTable.from_yaml(str(CONFIG / "dynamixel" / f"{robot.servo_model}.yaml"))
+            table = _core.dynamixel.ControlTable.from_yaml(str(config_path("dynamixel", f"{robot.servo_model}.yaml")))
         self.transmissions = _core.Transmission.for_robot(robot, table)
         self._direction = [float(t.direction) for t in self.transmissions]
         self._clock_offset_s = None        # plant time = now_s - offset
