@@ -82,13 +82,24 @@ void DriverSupervisor::hold_here() noexcept {
   goal_ = hold_;
 }
 
-void DriverSupervisor::take_off(const char* why) noexcept {
-  if (active_) active_->deactivate(why);
+const char* to_string(StopCause cause) noexcept {
+  switch (cause) {
+    case StopCause::kFault: return "fault";
+    case StopCause::kTorqueOff: return "torque off";
+    case StopCause::kHoldRequest: return "hold request";
+    case StopCause::kOtherSource: return "another command source took over";
+    case StopCause::kShutdown: return "shutdown";
+  }
+  return "?";
+}
+
+void DriverSupervisor::take_off(StopCause cause) noexcept {
+  if (active_) active_->deactivate(cause);
   active_ = nullptr;
 }
 
 void DriverSupervisor::hold(HoldReason reason) noexcept {
-  take_off(to_string(reason));
+  take_off(reason == HoldReason::kShutdown ? StopCause::kShutdown : StopCause::kHoldRequest);
   hold_here();
   hold_reason_ = reason;
   set_state(DriverState::kHolding);
@@ -96,7 +107,7 @@ void DriverSupervisor::hold(HoldReason reason) noexcept {
 
 void DriverSupervisor::enter_fault(const char* reason) noexcept {
   if (state() == DriverState::kFault) return;
-  take_off(reason);
+  take_off(StopCause::kFault);
   copy_message(fault_reason_, reason);
   last_fault_ = fault_reason_;
   if (fault_action_ == SafeAction::kHold) {
@@ -125,7 +136,7 @@ bool DriverSupervisor::command(JointCommandSource& source, double t_s, bool pose
   if (s != DriverState::kHolding && s != DriverState::kRunning) return false;  // accepted just before: dropped
   // Another source running: it ends, and the new one starts from the goals where they are.
   if (s == DriverState::kRunning) {
-    take_off("another command source took over");
+    take_off(StopCause::kOtherSource);
     hold_ = goal_;
   }
   const char* why = "";
@@ -158,7 +169,14 @@ bool DriverSupervisor::drive(double t_s, double dt_s, bool pose_fresh) noexcept 
     const SourceStatus st = active_->update(t_s, dt_s, view(pose_fresh), target_);
     if (st.code == SourceStatus::kHold) {
       active_ = nullptr;  // finished by itself: nothing to tell it
-      hold(st.hold_reason);
+      if (st.hold_at_goal) {  // at the source's last goal (clamped); the goals continue from where they are
+        for (int j = 0; j < hold_.size(); ++j) hold_[j] = std::isfinite(target_[j]) ? target_[j] : goal_[j];
+        chain_.clamp(hold_);
+        hold_reason_ = st.hold_reason;
+        set_state(DriverState::kHolding);
+      } else {
+        hold(st.hold_reason);
+      }
     } else if (st.code == SourceStatus::kFault) {
       enter_fault(st.reason);
     }
@@ -208,7 +226,7 @@ bool DriverSupervisor::count_cycle(bool read_ok, bool write_ok) noexcept {
 bool DriverSupervisor::shutdown() noexcept {
   if (!started_) return true;
   if (shutdown_action_ == SafeAction::kTorqueOff) {
-    take_off("shutdown");
+    take_off(StopCause::kShutdown);
     const bool ok = chain_.write_torque(false);
     set_state(DriverState::kStopped);
     return ok;
@@ -294,7 +312,7 @@ void DriverSupervisor::run_request(const PendingRequest& r) noexcept {
       return;
     }
     case DriverRequest::kDisableTorque: {
-      take_off("torque disabled");
+      take_off(StopCause::kTorqueOff);
       const bool ok = chain_.write_torque(false);
       fault_reason_[0] = '\0';
       set_state(DriverState::kStopped);

@@ -21,6 +21,7 @@ using snake_autonomy::driver::JointStateView;
 using snake_autonomy::driver::RequestResult;
 using snake_autonomy::driver::ServoChain;
 using snake_autonomy::driver::SourceStatus;
+using snake_autonomy::driver::StopCause;
 using snake_autonomy::test::kDt;
 using snake_autonomy::test::Rig;
 
@@ -33,7 +34,7 @@ struct ScriptedSource : JointCommandSource {
   Eigen::VectorXd target;
   SourceStatus next;
   Eigen::VectorXd activated_at;
-  std::string deactivated;
+  std::string deactivated;  // to_string(StopCause) of the last deactivate()
   int updates = 0;
   bool activate(double, const JointStateView&, const Eigen::VectorXd& posture, const char**) noexcept override {
     activated_at = posture;
@@ -44,7 +45,7 @@ struct ScriptedSource : JointCommandSource {
     goal = target;
     return next;
   }
-  void deactivate(const char* why) noexcept override { deactivated = why; }
+  void deactivate(StopCause cause) noexcept override { deactivated = to_string(cause); }
 };
 
 // A chain + supervisor on the rig's bus (the rig's own controller is not started).
@@ -124,7 +125,7 @@ TEST(DriverSupervisor, FaultAfterMaxFailedCyclesNamesTheServoAndHolds) {
   ASSERT_EQ(s.sup.state(), DriverState::kFault);
   const std::string why = s.sup.fault_reason().data();
   EXPECT_TRUE(contains(why, "4 consecutive cycles with missing replies: servo 7 (joint_7) timeout for 4 cycles")) << why;
-  EXPECT_TRUE(contains(src.deactivated, "missing replies")) << src.deactivated;  // the source was taken off
+  EXPECT_EQ(src.deactivated, "fault");  // the source was taken off
   EXPECT_EQ(s.sup.active(), nullptr);
   // fault action hold: the others keep torque and their goals stay put.
   const auto goal = s.rig.goal(2);
@@ -183,7 +184,7 @@ TEST(DriverSupervisor, HoldRequestAndAnotherSourceTakeTheActiveSourceOff) {
   const Eigen::VectorXd goals = s.sup.goal_rad();
   ASSERT_TRUE(s.command(b));
   EXPECT_EQ(s.sup.active(), &b);
-  EXPECT_FALSE(a.deactivated.empty());
+  EXPECT_EQ(a.deactivated, "another command source took over");
   EXPECT_TRUE(b.activated_at.isApprox(goals, 1e-12));
   // A repeated command for the active source keeps it (the caller applies it).
   bool was_active = false;
@@ -195,7 +196,7 @@ TEST(DriverSupervisor, HoldRequestAndAnotherSourceTakeTheActiveSourceOff) {
   EXPECT_EQ(s.sup.state(), DriverState::kHolding);
   EXPECT_EQ(s.sup.hold_reason(), HoldReason::kHoldRequest);
   EXPECT_EQ(s.sup.active(), nullptr);
-  EXPECT_FALSE(b.deactivated.empty());
+  EXPECT_EQ(b.deactivated, "hold request");
   const int updates = b.updates;
   s.cycle();
   EXPECT_EQ(b.updates, updates);  // a source taken off is never updated
@@ -218,6 +219,23 @@ TEST(DriverSupervisor, ASourceThatFinishesHoldsAndOneThatFaultsFaults) {
   s.cycle();
   EXPECT_EQ(s.sup.state(), DriverState::kFault);
   EXPECT_STREQ(s.sup.fault_reason().data(), "the source's state is not finite");
+}
+
+TEST(DriverSupervisor, ASourceEndingAtItsLastGoalIsHeldThereNotWhereTheRobotIs) {
+  DriverConfig cfg;
+  cfg.max_joint_velocity_rad_s = 1.0;
+  Stack s(cfg);
+  s.rig.bus->set_follow_goal(false);  // the shafts stay at the centre: measured posture zero
+  ScriptedSource last = source_towards(0.3);
+  last.next.code = SourceStatus::kHold;
+  last.next.hold_reason = HoldReason::kNone;
+  last.next.hold_at_goal = true;
+  ASSERT_TRUE(s.command(last));
+  s.cycle();
+  EXPECT_EQ(s.sup.state(), DriverState::kHolding);
+  for (int k = 0; k < 100; ++k) s.cycle();  // 1 s at 1 rad/s: the goals reach the last point
+  for (int j = 0; j < 11; ++j) EXPECT_NEAR(s.sup.goal_rad()[j], 0.3, 1e-12) << j;
+  EXPECT_LT(s.chain.position_rad().cwiseAbs().maxCoeff(), 1e-9);
 }
 
 TEST(DriverSupervisor, DisableTorqueStopsAndRefusesCommands) {

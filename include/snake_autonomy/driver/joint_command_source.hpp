@@ -35,8 +35,20 @@ struct SourceStatus {
   };
   Code code = kActive;
   core::HoldReason hold_reason = core::HoldReason::kNone;
+  // kHold: hold at this cycle's goal_rad (a trajectory's last point) instead of the measured posture.
+  bool hold_at_goal = false;
   const char* reason = "";
 };
+
+// Why the supervisor took an active source off before it finished.
+enum class StopCause : std::uint8_t {
+  kFault,        // the driver faulted (the fault reason says why)
+  kTorqueOff,    // a disable-torque request
+  kHoldRequest,  // a hold request
+  kOtherSource,  // a command for another source took over
+  kShutdown,     // the driver exits
+};
+const char* to_string(StopCause cause) noexcept;
 
 class JointCommandSource {
  public:
@@ -49,9 +61,8 @@ class JointCommandSource {
   // value keeps the joint's previous goal).
   virtual SourceStatus update(double t_s, double dt_s, const JointStateView& state,
                               Eigen::Ref<Eigen::VectorXd> goal_rad) noexcept = 0;
-  // The supervisor took this source off before it finished (a fault, a hold or stop request, another
-  // source's command); why is a static text. The source must not resume by itself.
-  virtual void deactivate(const char* why) noexcept { (void)why; }
+  // The supervisor took this source off before it finished; it must not resume by itself.
+  virtual void deactivate(StopCause cause) noexcept { (void)cause; }
 };
 
 }  // namespace snake_autonomy::driver

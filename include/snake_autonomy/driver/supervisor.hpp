@@ -107,7 +107,7 @@ class DriverSupervisor {
     return {chain_.position_rad(), chain_.velocity_rad_s(), goal_, chain_.lower_rad(), chain_.upper_rad(), pose_fresh};
   }
   void hold_here() noexcept;  // hold posture = measured positions clamped to the limits; goals = it
-  void take_off(const char* why) noexcept;  // the active source is taken off (deactivate)
+  void take_off(StopCause cause) noexcept;  // the active source is taken off (deactivate)
   void set_state(DriverState s) noexcept { state_.store(s, std::memory_order_release); }
   void run_request(const PendingRequest& request) noexcept;
   bool enable_torque(Message& why) noexcept;
