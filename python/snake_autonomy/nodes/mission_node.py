@@ -102,6 +102,10 @@ class MissionNode:
         self.results_dir = Path(rospy.get_param("~results_dir", default_results_dir()))
         self.record = bool(rospy.get_param("~record", True))
         self.world_frame = rospy.get_param("~world_frame", "odom")
+        # Scout stops (missions/scout.py): the FBSR planner for this robot, trajectories to the driver.
+        self.robot = rospy.get_param("~robot", "cobra")
+        self.scout_config = rospy.get_param("~scout_config", "") or None
+        self._scout_parts = None
         self.pose_status_name = rospy.get_param("~pose_status_name",
                                                 rospy.resolve_name("pose_remapper")[1:] + ": base pose")
         if not (self.rate_hz > 0 and self.pose_timeout_s > 0 and self.yaw_window > 0):
@@ -166,8 +170,20 @@ class MissionNode:
 
     # -- helpers -----------------------------------------------------------------------------------
     def make_runner(self, mission):
+        planner = executor = None
+        if mission.scouts:
+            planner, executor = self.scout_parts()
         return MissionRunner(mission, self.pose_timeout_s, self.yaw_window,
-                             heading_offset_rad=self.heading_offset_rad)
+                             heading_offset_rad=self.heading_offset_rad, scout_planner=planner, executor=executor)
+
+    def scout_parts(self):
+        """The scout planner (FBSR, ~robot) and the executor that publishes driver/joint_trajectory,
+        made once, when the first mission with a scout stop is loaded."""
+        if self._scout_parts is None:
+            from snake_autonomy.missions.scout import fbsr_scout_planner
+            from snake_autonomy.nodes.scout_trajectory import TopicTrajectoryExecutor
+            self._scout_parts = (fbsr_scout_planner(self.robot, self.scout_config), TopicTrajectoryExecutor())
+        return self._scout_parts
 
     def set_state(self, text):
         self.pub_state.publish(String(data=text))
@@ -338,6 +354,7 @@ class MissionNode:
             decision = self.runner.step(rospy.get_time())
             if decision is None:
                 return
+            self.log_scouts(decision.t_s)
             if decision.status["pose_stale"]:
                 rospy.logwarn_throttle(5.0, f"{self.mission.name}: {decision.status['note']}")
             if decision.finished:
@@ -352,18 +369,31 @@ class MissionNode:
         status = TrackingStatus(**decision.status)
         status.header.stamp = now
         status.header.frame_id = self.world_frame
-        self.pub_cmd.publish(cmd)
+        # While a scout trajectory owns the joints no gait command goes out: one would end it (the
+        # driver holds the trajectory's last point afterwards, the hold of a finished mission included).
+        if not decision.trajectory_active:
+            self.pub_cmd.publish(cmd)
         self.pub_status.publish(status)
         self.decisions.add(decision.t_s, decision.status)
         if self.action.is_active():
             self.action.publish_feedback(fill_feedback(RunMissionFeedback(), decision.status))
         if self.log is not None:
-            self.log.write(self.resolved("gait_command"), cmd, decision.t_s)
+            if not decision.trajectory_active:
+                self.log.write(self.resolved("gait_command"), cmd, decision.t_s)
             self.log.write(self.resolved("tracking_status"), status, decision.t_s)
             s = decision.status
             self.log.add_decision(decision.t_s, s["waypoint_index"], s["waypoint_index"] - int(s["waypoint_reached"]),
                                   s["waypoint_reached"], s["distance"], s["yaw_error_abs"], s["yaw_error_rel"],
                                   s["yaw_error"], s["pose_stale"])
+
+    def log_scouts(self, t_s):
+        """Each finished scout stop as a run event (metrics.json `scouts`, as in the batch simulator)."""
+        records = self.runner.scout_log
+        if self.log is not None:
+            for record in records[getattr(self.runner, "_scouts_logged", 0):]:
+                self.log.event({"event": "scout", **record.as_dict()}, t_s)
+                rospy.loginfo(f"scout at waypoint {record.waypoint_index}: {record.outcome}")
+        self.runner._scouts_logged = len(records)
 
     def send_hold(self, why):
         hold = self.runner.hold_gait if self.runner is not None else self.defaults["gaits"]["stop"]
@@ -379,6 +409,7 @@ class MissionNode:
         except rospy.ROSException as exc:   # shutting down: topics already closed
             rospy.logerr(f"could not send the final hold: {exc}")
         outcome = self.runner.outcome or decision.outcome
+        self.log_scouts(decision.t_s)
         self.set_state(f"{self.runner.state}: {self.mission.name}: {outcome}")
         rospy.loginfo(f"mission {self.mission.name!r} ended: {outcome}")
         self.last_result = self.result_of_run(outcome)
@@ -391,6 +422,7 @@ class MissionNode:
             else:
                 rospy.loginfo(f"results in {self.run_dir}")
         m = self.runner
+        m.close()
         reached = m.tracker.waypoint_index
         rospy.loginfo(f"{reached}/{len(self.mission.waypoints)} waypoint(s) reached")
         self.run_ended.set()
