@@ -343,6 +343,18 @@ TEST(DriverTrajectory, EndsOnAHoldRequestAGaitCommandTorqueOffOrAFault) {
     EXPECT_LT((rig.ctl->goal_rad() - held).norm(), 0.01) << "the fault holds: the trajectory no longer moves";
   }
   {
+    Rig rig;  // accepted, then torque went off before the loop took it: taken and ended, nothing moves
+    rig.start();
+    ASSERT_EQ(rig.ctl->command_trajectory(cobra_pose(40 * kDeg, 3.0, "late")), "");
+    const auto ticket = rig.ctl->post(DriverRequest::kDisableTorque, 0);
+    rig.step();  // the request runs before the trajectory is taken
+    snake_autonomy::core::RequestResult result;
+    ASSERT_TRUE(rig.ctl->take_result(ticket, &result));
+    EXPECT_EQ(rig.ctl->trajectory_progress().phase, TrajectoryPhase::kAborted);
+    EXPECT_EQ(rig.ctl->trajectory_progress().abort, TrajectoryAbort::kNotAllowed);
+    EXPECT_EQ(rig.ctl->state(), DriverState::kStopped);
+  }
+  {
     Rig rig;  // a newer trajectory takes over from the goals commanded now
     running(rig);
     ASSERT_EQ(rig.ctl->command_trajectory(cobra_pose(-20 * kDeg, 3.0, "second")), "");
