@@ -350,7 +350,7 @@ bool TrajectorySource::update(double t_s, Eigen::VectorXd& goal_rad) noexcept {
   }
   const int k = segment_;
   const double t_a = k == 0 ? 0.0 : active_.t_s[k - 1], h = active_.t_s[k] - t_a;
-  const double s = (tau - t_a) / h;
+  const double s = std::clamp((tau - t_a) / h, 0.0, 1.0);
   for (int j = 0; j < n_; ++j) {
     const std::size_t i1 = static_cast<std::size_t>(k) * n_ + j;
     const double p0 = k == 0 ? start_[j] : active_.q[i1 - n_], m0 = k == 0 ? 0.0 : active_.v[i1 - n_];
