@@ -2,7 +2,8 @@
 """rostest: driver_node on the mocked servo bus executes driver/joint_trajectory (issue 11): a valid
 trajectory reaches its final posture in joint_states and driver/trajectory_status says done (the
 driver then holds it: HoldReason trajectory done); a refused one leaves the posture where it was,
-and every reason is on the status topic and in /diagnostics.
+and every reason is on the status topic and in /diagnostics; a planned FBSR raise sent by the mission's
+TopicTrajectoryExecutor is followed to its end through the status topic.
 
 Tolerance on the final posture: 2 servo ticks (2 x 0.088 deg = 0.0031 rad). The goal is rounded
 to a whole tick (<= 0.5 tick), the mock's shafts converge on their goals exponentially (a first-order
@@ -17,6 +18,9 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from driver_test_helpers import LOCO, DriverTestCase, wait_for
 from snake_autonomy.msg import TrajectoryStatus
+from snake_autonomy.nodes.scout_trajectory import TopicTrajectoryExecutor
+from snake_autonomy.planning.fbsr.cli import build_planner
+from snake_autonomy.planning.fbsr.trajectory import driver_velocity_limit, lead_in_s, plan_points
 
 TRAJ = "snake_driver: trajectory"
 TICK_RAD = 2 * math.pi / 4096
@@ -97,6 +101,27 @@ class DriverTrajectory(DriverTestCase):
         self.assertEqual(h.goals(), before_goals)
         self.assertLessEqual(max(abs(a - b) for a, b in zip(self.positions(), before)), TICK_RAD)
         self.assertEqual(h.value(LOCO, "state"), "holding")
+
+    def test_3_planned_raise_through_the_mission_executor(self):
+        planner = build_planner("cobra")[0]
+        plan = planner.plan(max_active=2, seed=0)
+        now = self.positions()
+        traj = plan_points(plan, 0.05, lead_in_s(now, planner.chain.q_lying, driver_velocity_limit()))
+        executor = TopicTrajectoryExecutor()
+        wait_for(lambda: executor.pub.get_num_connections() > 0, 10.0, "the executor's publisher to connect")
+        self.assertEqual(executor.execute(traj, rospy.get_time()), "")
+        self.assertFalse(executor.finished(rospy.get_time()))
+        wait_for(lambda: executor.finished(rospy.get_time()), traj.duration_s + 10.0, "the raise to finish")
+        self.assertEqual(executor.aborted, "")
+        final = traj.final_positions_rad
+        wait_for(lambda: max(abs(a - b) for a, b in zip(self.positions(), final)) <= 2 * TICK_RAD, 5.0,
+                 "joint_states within 2 ticks of the plan's last posture")
+        # A refused one ends at once, with the driver's reasons.
+        traj.points[0] = traj.points[0].__class__(-1.0, traj.points[0].positions_rad, traj.points[0].velocities_rad_s)
+        self.assertEqual(executor.execute(traj, rospy.get_time()), "")
+        wait_for(lambda: executor.finished(rospy.get_time()), 5.0, "the refusal")
+        self.assertIn("refused", executor.aborted)
+        self.assertIn("points[0].time_from_start: -1 s, must be > 0", executor.aborted)
 
 
 if __name__ == "__main__":
