@@ -933,7 +933,7 @@ void DriverController::fill_snapshot(DriverSnapshot& out) const noexcept {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Joint trajectory execution (driver::TrajectorySource as the goal source)
+// ---- Joint trajectory execution (driver::TrajectorySource as the goal source; issue 11) ----
 
 std::string DriverController::command_trajectory(const driver::JointTrajectoryRequest& request) {
   std::string why;
@@ -993,5 +993,9 @@ void DriverController::trajectory_yields_to_gait() noexcept {
     set_state(DriverState::kHolding);
   }
 }
+// Hooks elsewhere in this file: the constructor and start() (limits), update() (take_trajectory,
+// no command lifetime or CPG step while it runs, step_trajectory), compute_goals() (its goals),
+// take_gait() (trajectory_yields_to_gait), shutdown() and fill_snapshot().
+// ---- end of joint trajectory execution ----
 
 }  // namespace snake_autonomy::core
