@@ -37,6 +37,27 @@ void append(Message& out, const char* fmt, ...) {
 
 double deg(double rad) { return rad * 180.0 / M_PI; }
 
+// The trajectory source's limits: the joints' (refined to the goal clamp once the servos are known),
+// a tolerance of one servo tick (the clamp is the joint limits rounded inwards to whole ticks: a point
+// on a joint limit is within a tick of it, and the clamp applies), the slew limit, the capacity.
+driver::TrajectoryLimits trajectory_limits(const RobotModel& model, const dxl::ControlTable& table,
+                                           const DriverConfig& config) {
+  driver::TrajectoryLimits l;
+  const auto n = static_cast<std::size_t>(std::max(model.num_joints, 0));
+  const bool sized = model.joint_lower_rad.size() == n && model.joint_upper_rad.size() == n;  // else validate() says
+  l.lower_rad = l.upper_rad = Eigen::VectorXd::Zero(model.num_joints);
+  for (std::size_t j = 0; sized && j < n; ++j) {
+    l.lower_rad[j] = model.joint_lower_rad[j];
+    l.upper_rad[j] = model.joint_upper_rad[j];
+  }
+  l.limit_tolerance_rad = table.unit_scales().rad_per_tick;
+  // Usable values in place of invalid ones: the constructor's validate() reports those, naming them.
+  const double v = config.max_joint_velocity_rad_s;
+  l.max_velocity_rad_s = v > 0.0 && std::isfinite(v) ? v : 1.0;
+  l.max_points = std::clamp(config.max_trajectory_points, 1, 1000000);
+  return l;
+}
+
 }  // namespace
 
 const char* to_string(DriverState state) noexcept {
@@ -73,7 +94,8 @@ DriverController::DriverController(const RobotModel& model, const GaitLibrary& g
       cpg_(model),
       kinematics_(model),
       kin_state_(model.num_frames()),
-      resolver_(model, gaits, config.max_frequency_hz > 0.0 ? config.max_frequency_hz : 1.0, "hold") {
+      resolver_(model, gaits, config.max_frequency_hz > 0.0 ? config.max_frequency_hz : 1.0, "hold"),
+      trajectory_(model.num_joints, trajectory_limits(model, table, config)) {
   std::vector<std::string> errors = config.validate();
   for (const auto& e : model.validate()) errors.push_back("robot: " + e);
   for (const auto& e : table.validate()) errors.push_back("control table: " + e);
@@ -128,6 +150,8 @@ DriverController::DriverController(const RobotModel& model, const GaitLibrary& g
   }
   nominal_ = effective_ = pending_gait_ = resolver_.nominal();
   copy_message(gait_name_, "hold");
+  trajectory_.set_joint_limits(lo_rad_, hi_rad_);
+  trajectory_goal_ = Eigen::VectorXd::Zero(n_);
 }
 
 void DriverController::set_limits(int j, std::int32_t servo_min, std::int32_t servo_max) noexcept {
@@ -243,6 +267,7 @@ void DriverController::start(double t_s) {
     }
   }
   bus_.set_return_delay_s(max_delay_us * 1e-6);
+  trajectory_.set_joint_limits(lo_rad_, hi_rad_);  // the goal clamp, with the servos' own limits
   if (problems.empty() && !read_feedback()) {
     for (int j = 0; j < n_; ++j) {
       if (diag_[j].stale)
@@ -313,6 +338,7 @@ int DriverController::settle_return_delay(int j, const std::string& name, std::v
 
 bool DriverController::shutdown() noexcept {
   if (!started_) return true;
+  trajectory_.abort(driver::TrajectoryAbort::kShutdown);
   if (config_.shutdown_action == SafeAction::kTorqueOff) {
     const bool ok = write_torque(false);
     set_state(DriverState::kStopped);
@@ -341,8 +367,10 @@ bool DriverController::update(double t_s, double dt_s) noexcept {
 
   take_request();
   take_gait();
+  take_trajectory(t_s);
   take_pose(t_s);
-  if (state() == DriverState::kRunning && command_expired(t_s, last_command_t_s_, config_.command_timeout_s))
+  if (state() == DriverState::kRunning && !trajectory_.running() &&
+      command_expired(t_s, last_command_t_s_, config_.command_timeout_s))
     hold_for(HoldReason::kCommandTimeout);
 
   const bool read_ok = read_feedback();
@@ -357,7 +385,8 @@ bool DriverController::update(double t_s, double dt_s) noexcept {
     apply_gait();
   }
 
-  if (state() == DriverState::kRunning) step_cpg(dt_s);
+  if (state() == DriverState::kRunning && !trajectory_.running()) step_cpg(dt_s);
+  step_trajectory(t_s);
   bool write_ok = true;
   const DriverState s = state();
   if (s == DriverState::kRunning || s == DriverState::kHolding ||
@@ -493,7 +522,7 @@ void DriverController::step_cpg(double dt_s) noexcept {
 
 void DriverController::compute_goals(double dt_s) noexcept {
   const bool running = state() == DriverState::kRunning;
-  const Eigen::VectorXd& target = running ? cpg_.output() : hold_rad_;
+  const Eigen::VectorXd& target = running ? (trajectory_.running() ? trajectory_goal_ : cpg_.output()) : hold_rad_;
   const double max_move = config_.max_joint_velocity_rad_s * dt_s;
   for (int j = 0; j < n_; ++j) {
     const double t = std::isfinite(target[j]) ? target[j] : goal_rad_[j];
@@ -581,6 +610,7 @@ void DriverController::take_gait() noexcept {
   gait_mutex_.unlock();
   if (!pending) return;
   last_command_t_s_ = t_s_;  // a repeated command is the caller's heartbeat: it refreshes the lifetime
+  trajectory_yields_to_gait();
   const DriverState s = state();
   if (s == DriverState::kHolding) {
     if (!start_locomotion()) return;
@@ -880,7 +910,7 @@ void DriverController::fill_snapshot(DriverSnapshot& out) const noexcept {
   out.gait = gait_name_;
   out.pose_received = pose_received_;
   out.pose_fresh = pose_fresh_;
-  out.locomotion_gated = out.state == DriverState::kRunning && gated_;
+  out.locomotion_gated = out.state == DriverState::kRunning && gated_ && !trajectory_.running();
   out.hold_reason = out.state == DriverState::kHolding ? hold_reason_ : HoldReason::kNone;
   out.command_age_s = t_s_ - last_command_t_s_;
   out.pose_refusal = pose_refusal_;
@@ -899,6 +929,73 @@ void DriverController::fill_snapshot(DriverSnapshot& out) const noexcept {
   out.consecutive_failed_cycles = consecutive_failed_;
   out.commands_applied = commands_applied_;
   out.poses_refused = poses_refused_.load();
+  out.trajectory = trajectory_.progress();
 }
+
+// ---------------------------------------------------------------------------------------------
+// ---- Joint trajectory execution (driver::TrajectorySource as the goal source; issue 11) ----
+
+std::string DriverController::command_trajectory(const driver::JointTrajectoryRequest& request) {
+  std::string why;
+  const DriverState s = state();
+  if (s == DriverState::kStopped || s == DriverState::kFault) {
+    why = s == DriverState::kStopped ? "torque is off: enable it first (driver/enable_torque)"
+                                     : "in a fault (see /diagnostics): recover with driver/enable_torque";
+    const std::string more = trajectory_.check(request);
+    if (!more.empty()) why += "\n" + more;
+  } else {
+    why = trajectory_.submit(request);
+  }
+  if (why.empty()) {
+    ++trajectories_accepted_;
+  } else {
+    ++trajectories_refused_;
+    std::lock_guard<std::mutex> lock(trajectory_refusal_mutex_);
+    last_trajectory_refusal_ = why;
+  }
+  return why;
+}
+
+std::string DriverController::last_trajectory_refusal() const {
+  std::lock_guard<std::mutex> lock(trajectory_refusal_mutex_);
+  return last_trajectory_refusal_;
+}
+
+void DriverController::take_trajectory(double t_s) noexcept {
+  const DriverState s = state();
+  const bool allowed = s == DriverState::kHolding || s == DriverState::kRunning;
+  // From the goals commanded now (continuous: no step in the command); refused at take: untouched.
+  if (!trajectory_.take(t_s, goal_rad_, allowed) || !trajectory_.running()) return;
+  hold_reason_ = HoldReason::kNone;
+  set_state(DriverState::kRunning);  // the CPG is not stepped while the trajectory runs
+}
+
+void DriverController::step_trajectory(double t_s) noexcept {
+  if (!trajectory_.running()) return;
+  const DriverState s = state();
+  if (s != DriverState::kRunning) {
+    trajectory_.abort(s == DriverState::kFault     ? driver::TrajectoryAbort::kFault
+                      : s == DriverState::kStopped ? driver::TrajectoryAbort::kTorqueOff
+                                                   : driver::TrajectoryAbort::kHoldRequest);
+    return;
+  }
+  if (trajectory_.update(t_s, trajectory_goal_)) return;
+  hold_rad_ = trajectory_.final_rad().cwiseMax(lo_rad_).cwiseMin(hi_rad_);  // done: hold the last point
+  hold_reason_ = HoldReason::kTrajectoryDone;
+  set_state(DriverState::kHolding);
+}
+
+void DriverController::trajectory_yields_to_gait() noexcept {
+  if (!trajectory_.running()) return;
+  trajectory_.abort(driver::TrajectoryAbort::kGaitCommand);
+  if (state() == DriverState::kRunning) {
+    hold_rad_ = goal_rad_;  // locomotion starts from the goals commanded now
+    set_state(DriverState::kHolding);
+  }
+}
+// Hooks elsewhere in this file: the constructor and start() (limits), update() (take_trajectory,
+// no command lifetime or CPG step while it runs, step_trajectory), compute_goals() (its goals),
+// take_gait() (trajectory_yields_to_gait), shutdown() and fill_snapshot().
+// ---- end of joint trajectory execution ----
 
 }  // namespace snake_autonomy::core

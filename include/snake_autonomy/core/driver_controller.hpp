@@ -28,6 +28,13 @@
 // and a non-finite value never becomes a command. Inputs are range-checked before they reach the
 // loop: gait commands by GaitCommandResolver, base poses by check_base_pose (safety_rules.hpp).
 //
+// Joint trajectories (command_trajectory, driver::TrajectorySource): taken while Holding or Running,
+// a trajectory becomes the goal source (state kRunning, the CPG no longer stepped: waves off; no
+// command lifetime and no pose gate: it ends by itself), its goals through the same slew limit and
+// clamp as the gait's. A fault, torque off, a hold request, a gait command or a newer trajectory
+// ends it (progress: aborted, with the reason); at its end the driver holds the last point
+// (kHolding, HoldReason::kTrajectoryDone).
+//
 // Threads: start(), update() and shutdown() run on one thread (the loop). command_gait(),
 // set_base_pose() and call() may be called from any other thread: they hand their data over through
 // mutexes the loop only try_locks (never waits on), so no caller can block the loop; a handover
@@ -51,6 +58,7 @@
 #include "snake_autonomy/core/kinematics.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
 #include "snake_autonomy/core/safety_rules.hpp"
+#include "snake_autonomy/driver/trajectory_source.hpp"
 #include "snake_autonomy/driver/transmission.hpp"
 #include "snake_autonomy/dynamixel/control_table.hpp"
 #include "snake_autonomy/dynamixel/servo_bus.hpp"
@@ -116,6 +124,7 @@ struct DriverSnapshot {
   std::uint32_t consecutive_failed_cycles = 0;
   std::uint64_t commands_applied = 0;
   std::uint64_t poses_refused = 0;
+  driver::TrajectoryProgress trajectory;  // the latest joint trajectory (phase kIdle: none yet)
 };
 
 class DriverController {
@@ -164,6 +173,18 @@ class DriverController {
   std::uint64_t post(DriverRequest request, std::uint8_t servo_id);
   bool take_result(std::uint64_t ticket, RequestResult* out);
 
+  // ---- Joint trajectory execution (driver::TrajectorySource; any thread) ----
+  // Checks the request's static part and hands it over; the loop takes it at its next update().
+  // "" when accepted, else every reason (the robot is untouched). Refused while torque is off or in
+  // a fault. The first segment (present posture -> point 0) is checked when the loop takes it:
+  // fill_snapshot()'s trajectory progress says if it was refused then.
+  std::string command_trajectory(const driver::JointTrajectoryRequest& request);
+  std::uint64_t trajectories_accepted() const noexcept { return trajectories_accepted_.load(); }
+  std::uint64_t trajectories_refused() const noexcept { return trajectories_refused_.load(); }
+  std::string last_trajectory_refusal() const;
+  const driver::TrajectoryProgress& trajectory_progress() const noexcept { return trajectory_.progress(); }  // loop
+  // ---- end of joint trajectory execution ----
+
   DriverState state() const noexcept { return state_.load(std::memory_order_acquire); }
   std::uint64_t commands_accepted() const noexcept { return commands_accepted_.load(); }
   std::uint64_t commands_refused() const noexcept { return commands_refused_.load(); }
@@ -210,6 +231,9 @@ class DriverController {
   bool write_goals() noexcept;
   bool write_torque(bool on) noexcept;
   void run_kinematics() noexcept;
+  void take_trajectory(double t_s) noexcept;  // a pending trajectory becomes the goal source
+  void step_trajectory(double t_s) noexcept;  // its goals; ends it when the state no longer allows it
+  void trajectory_yields_to_gait() noexcept;  // a gait command ends a running trajectory
 
   void enter_fault(const char* reason) noexcept;
   void hold_here() noexcept;  // hold posture = measured positions clamped to the limits
@@ -305,6 +329,13 @@ class DriverController {
   GaitCommandResolver resolver_;
   std::string last_refusal_;
   std::atomic<std::uint64_t> commands_accepted_{0}, commands_refused_{0};
+
+  // Joint trajectory execution: the source owns its mailbox (the loop only try_locks it).
+  driver::TrajectorySource trajectory_;
+  Eigen::VectorXd trajectory_goal_;
+  mutable std::mutex trajectory_refusal_mutex_;
+  std::string last_trajectory_refusal_;
+  std::atomic<std::uint64_t> trajectories_accepted_{0}, trajectories_refused_{0};
 };
 
 }  // namespace snake_autonomy::core

@@ -198,11 +198,11 @@ class BatchRun:
         self.driver = LockStepDriver(self.robot, self.library, self.plant, load_driver_config(spec.driver_config))
         self.feedback = make_feedback(spec.feedback, self.params, self.robot)
         self.scout_executor, scout_planner, self._watching_tail = None, None, False
-        if self.mission.scouts:     # scout stops: the FBSR planner, trajectories on the plant
+        if self.mission.scouts:     # scout stops: the FBSR planner, trajectories through the driver
             from ..missions.scout import fbsr_scout_planner
-            from .scout_executor import PlantTrajectoryExecutor
+            from .scout_executor import DriverTrajectoryExecutor
             scout_planner = fbsr_scout_planner(spec.robot, spec.scout_config, spec.driver_config)
-            self.scout_executor = PlantTrajectoryExecutor(self.plant)
+            self.scout_executor = DriverTrajectoryExecutor(self.driver.controller)
         self.runner = MissionRunner(self.mission, self.defaults["pose_timeout_s"], self.defaults["yaw_filter_window"],
                                     heading_offset_rad=self.heading_offset_rad, scout_planner=scout_planner,
                                     executor=self.scout_executor)
