@@ -20,13 +20,17 @@ Action      mission/run (snake_autonomy/RunMission): goal = a mission (name or f
 Services    mission/load (snake_autonomy/LoadMission), mission/start, mission/abort (std_srvs/Trigger),
             kept beside the action: ~auto_start and `rosservice call` (the one-line stop of any run,
             whoever started it) need no action client.
+Diagnostics /diagnostics (diagnostic_updater): "mission" (state, mission, waypoint, distance, last
+            scout stop; WARN while holding for a stale pose, ERROR when a run aborted) and
+            "tracking_status topic status" (the tracker's rate against ~rate_hz).
 Time        with use_sim_time the node waits for the first /clock before it loads or starts anything.
 Params      ~mission (file or provided name: loaded at start-up), ~auto_start (false), ~tracker_config
             (config/tracker.yaml), ~tracker_overrides (a YAML file whose `tracker:` section is merged
             over tracker_config, e.g. config/sim.yaml for the simulated robot; empty: none),
             ~gaits_config (config/gaits.yaml), ~rate_hz, ~pose_timeout_s, ~yaw_filter_window,
             ~heading_offset_deg (defaults from tracker_config + overrides), ~results_dir, ~record
-            (true), ~world_frame (odom), ~pose_status_name.
+            (true), ~world_frame (odom), ~pose_status_name, ~robot (cobra) and ~scout_config (empty:
+            config/scout.yaml) for the scout stops of a mission.
 """
 import math
 import os
@@ -37,6 +41,7 @@ import time
 from pathlib import Path
 
 import actionlib
+import diagnostic_updater
 import rospy
 import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -150,6 +155,15 @@ class MissionNode:
         self.action = actionlib.SimpleActionServer("mission/run", RunMissionAction, execute_cb=self.execute,
                                                    auto_start=False)
         self.action.start()
+        self.state_text = "idle"
+        self.last_status = None
+        self.updater = diagnostic_updater.Updater()
+        self.updater.setHardwareID("none")
+        self.updater.add("mission", self.diagnose)
+        self._rate = {"min": 0.9 * self.rate_hz, "max": 1.1 * self.rate_hz}   # the task keeps this dict
+        self.status_freq = diagnostic_updater.HeaderlessTopicDiagnostic(
+            "tracking_status", self.updater, diagnostic_updater.FrequencyStatusParam(self._rate, 0.0, 10))
+        rospy.Timer(rospy.Duration(1.0), lambda _e: self.updater.update())
         self.set_state("idle")
 
         mission_param = rospy.get_param("~mission", "")
@@ -186,7 +200,28 @@ class MissionNode:
         return self._scout_parts
 
     def set_state(self, text):
+        self.state_text = text
         self.pub_state.publish(String(data=text))
+
+    def diagnose(self, stat):
+        """The "mission" diagnostics task: what mission/state says, with the tracker's latest status."""
+        text, s = self.state_text, self.last_status
+        level = DiagnosticStatus.OK
+        if text.startswith("aborted"):
+            level = DiagnosticStatus.ERROR
+        elif s is not None and s.get("pose_stale") and text.startswith("running"):
+            level = DiagnosticStatus.WARN
+        stat.summary(level, text if level == DiagnosticStatus.OK or s is None else f"{text}: {s.get('note', '')}")
+        stat.add("mission", self.mission.name if self.mission is not None else "")
+        if s is not None:
+            stat.add("waypoint", f"{s['waypoint_index']}/{s['num_waypoints']}")
+            stat.add("distance_m", f"{s['distance']:.3f}")
+            stat.add("mode", str(s["mode"]))
+            stat.add("gait", str(s["gait"]))
+        log = self.runner.scout_log if self.runner is not None else []
+        if log:
+            stat.add("last_scout", f"waypoint {log[-1].waypoint_index}: {log[-1].outcome}")
+        return stat
 
     def resolved(self, name):
         return rospy.resolve_name(name)
@@ -374,6 +409,8 @@ class MissionNode:
         if not decision.trajectory_active:
             self.pub_cmd.publish(cmd)
         self.pub_status.publish(status)
+        self.status_freq.tick()
+        self.last_status = decision.status
         self.decisions.add(decision.t_s, decision.status)
         if self.action.is_active():
             self.action.publish_feedback(fill_feedback(RunMissionFeedback(), decision.status))
