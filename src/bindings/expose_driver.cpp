@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <optional>
 
 #include "snake_autonomy/core/config_reader.hpp"
 
@@ -86,7 +87,8 @@ void expose_driver(py::module_& m) {
       .def_readwrite("require_pose", &DriverConfig::require_pose)
       .def_readwrite("command_timeout_s", &DriverConfig::command_timeout_s)
       .def_readwrite("pose_workspace_m", &DriverConfig::pose_workspace_m)
-      .def_readwrite("quaternion_norm_tolerance", &DriverConfig::quaternion_norm_tolerance);
+      .def_readwrite("quaternion_norm_tolerance", &DriverConfig::quaternion_norm_tolerance)
+      .def_readwrite("max_trajectory_points", &DriverConfig::max_trajectory_points);
 
   py::class_<DriverController>(
       m, "DriverController",
@@ -133,6 +135,58 @@ void expose_driver(py::module_& m) {
           py::arg("t_s"), py::arg("position"), py::arg("orientation"),
           "base_link pose at t_s (the loop's clock), orientation as (x, y, z, w). False (ignored, counted) when not "
           "finite, outside pose_workspace_m or not a unit quaternion within quaternion_norm_tolerance.")
+      .def(
+          "command_trajectory",
+          [](DriverController& d, const std::vector<std::string>& joint_names, const std::vector<double>& times_s,
+             const Eigen::MatrixXd& positions_rad, const std::optional<Eigen::MatrixXd>& velocities_rad_s,
+             const std::string& id) {
+            if (positions_rad.rows() != static_cast<Eigen::Index>(times_s.size()) ||
+                (velocities_rad_s && (velocities_rad_s->rows() != positions_rad.rows() ||
+                                      velocities_rad_s->cols() != positions_rad.cols())))
+              throw py::value_error("command_trajectory: positions_rad must be (len(times_s), joints) and "
+                                    "velocities_rad_s the same shape");
+            driver::JointTrajectoryRequest r;
+            r.id = id;
+            r.joint_names = joint_names;
+            r.points.resize(times_s.size());
+            for (std::size_t k = 0; k < times_s.size(); ++k) {
+              auto& p = r.points[k];
+              p.time_from_start_s = times_s[k];
+              const auto row = static_cast<Eigen::Index>(k);
+              for (Eigen::Index c = 0; c < positions_rad.cols(); ++c) p.positions_rad.push_back(positions_rad(row, c));
+              if (velocities_rad_s)
+                for (Eigen::Index c = 0; c < velocities_rad_s->cols(); ++c)
+                  p.velocities_rad_s.push_back((*velocities_rad_s)(row, c));
+            }
+            return d.command_trajectory(r);
+          },
+          py::arg("joint_names"), py::arg("times_s"), py::arg("positions_rad"), py::arg("velocities_rad_s") = py::none(),
+          py::arg("id") = "",
+          "A joint trajectory (driver/joint_trajectory): names joint_1 .. joint_N in any order, times_s (P,) "
+          "time_from_start, positions_rad (P, len(joint_names)), velocities_rad_s the same shape or None "
+          "(estimated). Taken at the next update(); '' when accepted, else every reason.")
+      .def_property_readonly(
+          "trajectory_progress",
+          [](const DriverController& d) {
+            const driver::TrajectoryProgress& p = d.trajectory_progress();
+            py::dict out;
+            out["id"] = std::string(p.id.data());
+            out["sequence"] = p.sequence;
+            out["phase"] = std::string(driver::to_string(p.phase));
+            out["abort"] = std::string(driver::to_string(p.abort));
+            out["reason"] = std::string(p.reason.data());
+            out["point_reached"] = p.point_reached;
+            out["num_points"] = p.num_points;
+            out["time_s"] = p.time_s;
+            out["duration_s"] = p.duration_s;
+            return out;
+          },
+          "the latest trajectory (as driver/trajectory_status): id, sequence, phase ('idle', 'running', 'done', "
+          "'aborted'), abort, reason, point_reached, num_points, time_s, duration_s")
+      .def_property_readonly("trajectories_accepted", &DriverController::trajectories_accepted)
+      .def_property_readonly("trajectories_refused", &DriverController::trajectories_refused)
+      .def_property_readonly("last_trajectory_refusal", &DriverController::last_trajectory_refusal,
+                             "why the last refused trajectory was refused")
       .def_property_readonly("state", [](const DriverController& d) { return std::string(to_string(d.state())); },
                              "'stopped', 'holding', 'running' or 'fault'")
       .def_property_readonly("fault_reason", [](const DriverController& d) { return std::string(d.fault_reason()); },

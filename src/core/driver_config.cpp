@@ -55,6 +55,8 @@ std::vector<std::string> DriverConfig::validate() const {
     bad("pose_workspace_m", pose_workspace_m, "is not in (0, 1e6] m");
   if (!(quaternion_norm_tolerance > 0.0) || !(quaternion_norm_tolerance < 0.5))
     bad("quaternion_norm_tolerance", quaternion_norm_tolerance, "is not in (0, 0.5)");
+  if (max_trajectory_points < 1 || max_trajectory_points > 1000000)
+    bad("max_trajectory_points", max_trajectory_points, "is not in 1 .. 1000000");
   return errors;
 }
 
@@ -79,6 +81,7 @@ void for_each_field(DriverConfig& c, Visit&& visit) {
   visit("require_pose", c.require_pose);
   visit("pose_workspace_m", c.pose_workspace_m);
   visit("quaternion_norm_tolerance", c.quaternion_norm_tolerance);
+  visit("max_trajectory_points", c.max_trajectory_points);
 }
 
 }  // namespace

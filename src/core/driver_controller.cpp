@@ -23,6 +23,20 @@ const DriverConfig& checked(const RobotModel& model, const dynamixel::ControlTab
   return config;
 }
 
+// The trajectory source's limits: the joints' (refined to the goal clamp once the servos are known),
+// a tolerance of one servo tick (the clamp is the joint limits rounded inwards to whole ticks: a point
+// on a joint limit is within a tick of it, and the clamp applies), the slew limit, the capacity.
+driver::TrajectoryLimits trajectory_limits(const RobotModel& model, const dynamixel::ControlTable& table,
+                                           const DriverConfig& config) {
+  driver::TrajectoryLimits l;
+  l.lower_rad = Eigen::VectorXd::Map(model.joint_lower_rad.data(), model.num_joints);
+  l.upper_rad = Eigen::VectorXd::Map(model.joint_upper_rad.data(), model.num_joints);
+  l.limit_tolerance_rad = table.unit_scales().rad_per_tick;
+  l.max_velocity_rad_s = config.max_joint_velocity_rad_s;
+  l.max_points = config.max_trajectory_points;
+  return l;
+}
+
 }  // namespace
 
 DriverController::DriverController(const RobotModel& model, const GaitLibrary& gaits,
@@ -34,8 +48,12 @@ DriverController::DriverController(const RobotModel& model, const GaitLibrary& g
       chain_(model_, table_, bus, config_),
       supervisor_(chain_, config_),
       gait_(model_, gaits, config_),
+      trajectory_(model_.num_joints, trajectory_limits(model_, table_, config_)),
+      trajectory_command_(trajectory_),
       kinematics_(model_),
-      kin_state_(model_.num_frames()) {}
+      kin_state_(model_.num_frames()) {
+  trajectory_.set_joint_limits(chain_.lower_rad(), chain_.upper_rad());
+}
 
 void DriverController::start(double t_s) {
   driver::ChainStartReport report = chain_.start();
@@ -45,6 +63,7 @@ void DriverController::start(double t_s) {
     throw ConfigError(what);
   }
   start_notes_ = std::move(report.notes);
+  trajectory_.set_joint_limits(chain_.lower_rad(), chain_.upper_rad());  // with the servos' own limits
   started_ = true;
   t_s_ = t_s;
   gait_.reset_clock(t_s);
@@ -70,6 +89,7 @@ bool DriverController::update(double t_s, double dt_s) noexcept {
       ++commands_applied_;
     }
   }
+  take_trajectory(t_s);
   take_pose(t_s);
 
   const bool read_ok = chain_.read();
@@ -164,6 +184,42 @@ void DriverController::fill_snapshot(DriverSnapshot& out) const noexcept {
   out.consecutive_failed_cycles = supervisor_.consecutive_failed_cycles();
   out.commands_applied = commands_applied_;
   out.poses_refused = poses_refused_.load();
+  out.trajectory = trajectory_.progress();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Joint trajectories
+
+std::string DriverController::command_trajectory(const driver::JointTrajectoryRequest& request) {
+  std::string why = supervisor_.command_refusal();
+  if (!why.empty()) {
+    const std::string more = trajectory_.check(request);
+    if (!more.empty()) why += "\n" + more;
+  } else {
+    why = trajectory_.submit(request);
+  }
+  if (why.empty()) {
+    ++trajectories_accepted_;
+  } else {
+    ++trajectories_refused_;
+    std::lock_guard<std::mutex> lock(trajectory_refusal_mutex_);
+    last_trajectory_refusal_ = why;
+  }
+  return why;
+}
+
+std::string DriverController::last_trajectory_refusal() const {
+  std::lock_guard<std::mutex> lock(trajectory_refusal_mutex_);
+  return last_trajectory_refusal_;
+}
+
+void DriverController::take_trajectory(double t_s) noexcept {
+  const DriverState s = state();
+  const bool allowed = s == DriverState::kHolding || s == DriverState::kRunning;
+  // From the goals commanded now (no step in the command); refused at take: the robot as it was.
+  if (!trajectory_.take(t_s, supervisor_.goal_rad(), allowed) || !trajectory_.running()) return;
+  bool was_active = false;  // a newer trajectory replaces the running one inside the source
+  supervisor_.command(trajectory_command_, t_s, pose_fresh_, &was_active);
 }
 
 }  // namespace snake_autonomy::core

@@ -12,6 +12,7 @@ const char* to_string(HoldReason reason) noexcept {
     case HoldReason::kHoldRequest: return "hold requested";
     case HoldReason::kCommandTimeout: return "no gait command within command_timeout_s: holding until the next";
     case HoldReason::kShutdown: return "driver shut down";
+    case HoldReason::kTrajectoryDone: return "joint trajectory done: its last point held until the next command";
   }
   return "?";
 }

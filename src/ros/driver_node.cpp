@@ -13,6 +13,7 @@
 //    off the loop thread: realtime_tools is not packaged for Debian, and a roscpp publish() from the
 //    loop would put its locks and allocations in the 100 Hz path. Messages are preallocated and
 //    reused; the snapshot is copied into storage of the same size (no allocation either).
+//  - driver/joint_trajectory and driver/trajectory_status: TrajectoryTopics (trajectory_topics.hpp).
 //  - two spinner threads for callbacks and services: they hand data to the controller through its
 //    try-lock mailboxes; a service waits (in its own thread) for the loop to run the request.
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -41,6 +42,7 @@
 #include <thread>
 
 #include "driver_params.hpp"
+#include "trajectory_topics.hpp"
 #include "snake_autonomy/core/driver_controller.hpp"
 #include "snake_autonomy/core/gait_library.hpp"
 #include "snake_autonomy/core/loop_timer.hpp"
@@ -114,6 +116,7 @@ class DriverNode {
     com_pose_pub_ = nh_.advertise<geometry_msgs::PoseStamped>("com_pose", 10);
     bound_state_pub_ = nh_.advertise<snake_autonomy::BoundState>("bound_state", 10);
     setup_diagnostics();
+    trajectory_topics_ = std::make_unique<snake_autonomy::ros_driver::TrajectoryTopics>(nh_, controller_, *updater_);
     pose_sub_ = nh_.subscribe("base_pose", 10, &DriverNode::on_pose, this, ros::TransportHints().tcpNoDelay());
     gait_sub_ = nh_.subscribe("gait_command", 10, &DriverNode::on_gait_command, this);
     enable_srv_ = nh_.advertiseService("driver/enable_torque", &DriverNode::on_enable_torque, this);
@@ -217,6 +220,7 @@ class DriverNode {
     }
     joint_states_pub_.publish(joint_states_);
     joint_states_diag_->tick(stamp);
+    trajectory_topics_->publish(s.trajectory, stamp);
 
     auto set_tf = [&stamp](geometry_msgs::TransformStamped& t, const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
       t.header.stamp = stamp;
@@ -501,6 +505,7 @@ class DriverNode {
   std::unique_ptr<diagnostic_updater::Updater> updater_;
   double rate_min_hz_ = 0.0, rate_max_hz_ = 0.0;  // the topic diagnostics keep pointers to these
   std::unique_ptr<diagnostic_updater::TopicDiagnostic> joint_states_diag_, com_pose_diag_;
+  std::unique_ptr<snake_autonomy::ros_driver::TrajectoryTopics> trajectory_topics_;  // driver/joint_trajectory
   ros::Subscriber pose_sub_, gait_sub_;
   ros::ServiceServer enable_srv_, hold_srv_, reboot_srv_;
 };

@@ -584,6 +584,54 @@ TEST(DriverController, UpdateNeverAllocates) {
   EXPECT_EQ(g_allocations.load(), 0);
 }
 
+TEST(DriverController, UpdateNeverAllocatesWhileATrajectoryRuns) {
+  // Handover (swap of the reserved buffers), the take-time check, interpolation, the end, aborts.
+  Rig rig;
+  rig.start();
+  namespace drv = snake_autonomy::driver;
+  auto request = [](double angle_rad, double t_s) {
+    drv::JointTrajectoryRequest r;
+    r.id = "alloc";
+    for (int j = 0; j < 11; ++j) r.joint_names.push_back("joint_" + std::to_string(j + 1));
+    for (int k = 1; k <= 50; ++k) {
+      drv::JointTrajectoryPoint p;
+      p.time_from_start_s = t_s * k / 50;
+      p.positions_rad.assign(11, angle_rad * k / 50);
+      r.points.push_back(p);
+    }
+    return r;
+  };
+  const auto slow = request(30 * kDeg, 1.0);
+  auto other = request(-10 * kDeg, 2.0);  // from where slow ends: 30 deg down to 20 deg
+  for (auto& p : other.points) p.positions_rad.assign(11, 30 * kDeg + p.positions_rad[0]);
+  auto fast = request(-80 * kDeg, 0.1);  // one point 0.1 s away: too fast from the present posture
+  fast.points.erase(fast.points.begin(), fast.points.end() - 1);
+  ASSERT_EQ(rig.ctl->command_trajectory(slow), "");
+  DriverSnapshot snap = rig.ctl->make_snapshot();
+  g_allocations = 0;
+  g_count_allocations = true;
+  rig.step(150);  // taken, run through, done: holding the last point
+  rig.ctl->fill_snapshot(snap);
+  g_count_allocations = false;
+  EXPECT_EQ(snap.trajectory.phase, snake_autonomy::driver::TrajectoryPhase::kDone);
+  EXPECT_EQ(g_allocations.load(), 0);
+  ASSERT_EQ(rig.ctl->command_trajectory(fast), "");  // refused at take: the reason is formatted
+  g_count_allocations = true;
+  rig.step(2);
+  g_count_allocations = false;
+  EXPECT_EQ(rig.ctl->trajectory_progress().abort, snake_autonomy::driver::TrajectoryAbort::kFirstSegmentTooFast);
+  ASSERT_EQ(rig.ctl->command_trajectory(other), "");
+  g_count_allocations = true;
+  rig.step(20);  // taken, running
+  const auto ticket = rig.ctl->post(DriverRequest::kHold, 0);
+  rig.step(5);   // ended by the hold request
+  g_count_allocations = false;
+  RequestResult result;
+  EXPECT_TRUE(rig.ctl->take_result(ticket, &result));
+  EXPECT_EQ(rig.ctl->trajectory_progress().abort, snake_autonomy::driver::TrajectoryAbort::kHoldRequest);
+  EXPECT_EQ(g_allocations.load(), 0);
+}
+
 TEST(DriverController, OtherThreadsNeverBlockTheLoop) {
   Rig rig;
   rig.start();

@@ -28,6 +28,17 @@ def test_short_plan_keeps_the_zmp_inside_and_raises_the_head(planner, seed):
         assert d > 0
 
 
+def test_last_raise_ends_above_every_earlier_raise(planner):
+    """Seed 3 of the unified snake once ended at 0.100 m with 12 active modules after an earlier
+    raise had the head at 0.348 m: the shifts lower the head and the last raise only had to beat
+    the head after the last shift. Now it must beat the highest raise (re-planned otherwise)."""
+    plan = planner.plan(seed=3)
+    raises = [planner.chain.pose(st.q_end).head[2] for st in plan.stages if st.kind == "raise"]
+    assert plan.active_modules == 12
+    assert plan.final_head_height_m == pytest.approx(raises[-1])
+    assert raises[-1] > max(raises[:-1])
+
+
 def test_plan_checker_catches_a_zmp_outside_and_a_gap(planner):
     doc = plan_io.to_dict(planner.plan(max_active=2, seed=0))
     assert plan_io.problems(doc) == []

@@ -1,6 +1,7 @@
 """The mission action `scout`: the schema (every problem listed) and the sequence in MissionRunner with a
 fake planner and executor: plan off the loop -> raise -> hold -> lower -> resume; a failed plan is
 never sent and the mission resumes."""
+import json
 import math
 import threading
 
@@ -110,6 +111,8 @@ def test_scout_sequence_plans_off_the_loop_then_raises_holds_lowers_and_resumes(
     assert d.status["waypoint_index"] == 1
     rec = r.scout_log[0].as_dict()
     assert rec["outcome"] == "done" and rec["planned_head_height_m"] == 0.3
+    assert rec["measured_head_height_m"] is None                 # not measured on this path: JSON null
+    json.dumps(rec, allow_nan=False)                             # what metrics.json needs
     assert list(rec["phases"]) == ["planning", "raising", "holding", "lowering", "done"]
     r.close()
 

@@ -154,3 +154,17 @@ def test_an_interrupted_run_says_so_live_and_in_its_report(tmp_path, capsys):
     closed.close("aborted: test", plots=False)
     final = json.loads((tmp_path / "closed" / "metrics.json").read_text())
     assert final["outcome"] == "aborted: test" and "note" not in final
+
+
+def test_scout_events_reach_the_metrics_of_the_ros_path(tmp_path):
+    """The mission node logs each finished scout stop as a run event; the results rebuilt from the bag
+    list them under `scouts` (top level, as the batch simulator's metrics do)."""
+    log = RunLog(tmp_path / "run", "scouting", [(1.0, 0.0, 0.0)], t_start_s=0.0, mission_yaml="")
+    log.add_decision(1.0, 0, 0, False, 1.0, 0.1, 0.2, 0.15)
+    log.event({"event": "scout", "waypoint_index": 0, "outcome": "done", "planned_head_height_m": 0.3}, 2.0)
+    log.event({"event": "scout", "waypoint_index": 0, "outcome": "failed: no plan"}, 3.0)
+    log.close("done: every waypoint reached", plots=False)
+    metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert [s["outcome"] for s in metrics["scouts"]] == ["done", "failed: no plan"]
+    assert metrics["scouts"][0]["planned_head_height_m"] == 0.3
+    assert "scouts" not in metrics["meta"]

@@ -10,13 +10,7 @@ from geometry_msgs.msg import PoseStamped
 
 from snake_autonomy.msg import GaitCommand
 
-
-def wait_for(cond, timeout, what):
-    deadline = time.monotonic() + timeout
-    while not cond():
-        if time.monotonic() > deadline or rospy.is_shutdown():
-            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
-        time.sleep(0.01)
+from driver_test_helpers import wait_for  # noqa: F401 (the one helper)
 
 
 class FakeDriver:

@@ -16,6 +16,7 @@ import unittest
 
 import rospy
 import rostest
+from diagnostic_msgs.msg import DiagnosticArray
 from std_srvs.srv import Trigger
 
 from snake_autonomy.msg import TrackingStatus
@@ -30,6 +31,9 @@ class MissionNodeTest(unittest.TestCase):
         rospy.init_node("mission_node_test")
         cls.statuses = []
         rospy.Subscriber("tracking_status", TrackingStatus, cls.statuses.append)
+        cls.diagnostics = {}   # status name -> latest DiagnosticStatus
+        rospy.Subscriber("/diagnostics", DiagnosticArray,
+                         lambda msg: cls.diagnostics.update({st.name: st for st in msg.status}))
         cls.driver = FakeDriver()
         for s in ("mission/load", "mission/start", "mission/abort"):
             rospy.wait_for_service(s, 20)
@@ -76,6 +80,13 @@ class MissionNodeTest(unittest.TestCase):
         self.assertEqual([w["reached"] for w in metrics["waypoints"]], [True, True])
         self.assertLessEqual(metrics["waypoints"][1]["final_distance_m"], 0.35)
         self.assertTrue(os.path.isfile(os.path.join(run_dir, "run.bag")))
+        # diagnostic_updater: the mission's state and the tracker's rate on /diagnostics
+        name = next((n for n in self.diagnostics if n.endswith(": mission")), None)
+        self.assertIsNotNone(name, sorted(self.diagnostics))
+        wait_for(lambda: self.diagnostics[name].message.startswith("done"), 5, "the mission diagnostics to say done")
+        values = {kv.key: kv.value for kv in self.diagnostics[name].values}
+        self.assertEqual(values["mission"], "straight")
+        self.assertTrue(any(n.endswith("tracking_status topic status") for n in self.diagnostics), sorted(self.diagnostics))
 
     def test_3_stale_pose_holds_then_resumes_and_abort_holds(self):
         with self.driver.lock:

@@ -15,17 +15,11 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
 from std_srvs.srv import Trigger
 
+from driver_test_helpers import wait_for
+
 H = 0.1565
 STATUS = "pose_remapper: base pose"
 YAW = math.radians(30)
-
-
-def wait_for(cond, timeout, what):
-    deadline = time.monotonic() + timeout
-    while not cond():
-        if time.monotonic() > deadline or rospy.is_shutdown():
-            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
-        time.sleep(0.01)
 
 
 def odom(x, y, yaw=YAW, cov=0.01, qw=None):

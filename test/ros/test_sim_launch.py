@@ -26,13 +26,7 @@ from std_msgs.msg import String
 from snake_autonomy.msg import TrackingStatus
 from snake_autonomy.sim.batch import BatchRun, RunSpec
 
-
-def wait_for(cond, timeout, what):
-    deadline = time.monotonic() + timeout
-    while not cond():
-        if time.monotonic() > deadline or rospy.is_shutdown():
-            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
-        time.sleep(0.05)
+from driver_test_helpers import wait_for
 
 
 def collapsed_locomotion(gaits):

@@ -51,6 +51,9 @@ struct DriverConfig {
   bool require_pose = true;           // false: gaits run without a base pose (robot on a stand, bench)
   double pose_workspace_m = 1000.0;   // base poses with |x|, |y| or |z| beyond this are refused
   double quaternion_norm_tolerance = 0.01;  // |norm - 1| beyond this is refused; within, normalised
+  // Joint trajectories (driver/joint_trajectory): the most points one may carry; storage for twice
+  // this many points is reserved at construction (2 x points x joints x 16 bytes: 7 MB for COBRA).
+  int max_trajectory_points = 20000;
 
   // Every problem, naming key and value; empty when usable.
   std::vector<std::string> validate() const;

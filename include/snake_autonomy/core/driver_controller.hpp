@@ -5,11 +5,13 @@
 //                      per-servo health, THE goal clamp (joint limits within the servo limits), write
 //   GaitSource         a JointCommandSource: gait commands, CPG, steering law, stale-pose gating,
 //                      command lifetime, CPG-state check
+//   TrajectorySource   joint trajectories (command_trajectory), a JointCommandSource through
+//                      TrajectoryCommand: checks, cubic interpolation from the present goals, progress
 //   DriverSupervisor   Stopped / Holding / Running / Fault, the fault rules, the request mailbox,
 //                      the active source; the one slew limit after whichever source is active
 //   Kinematics         centre of mass, virtual chassis, bounding box, for whoever publishes
 //
-//   update(t_s, dt_s):  requests -> gait command -> base pose -> ServoChain::read (+ the slow status
+//   update(t_s, dt_s):  requests -> gait command -> trajectory -> base pose -> ServoChain::read (+ the slow status
 //                       read) -> hardware errors -> active source -> slew limit -> clamp -> write
 //                       -> fault rule on failed cycles -> forward kinematics
 //
@@ -18,6 +20,12 @@
 // joint's limits nor the servo's own position limits, never moves faster than
 // max_joint_velocity_rad_s, and a non-finite value never becomes a command. Inputs are range-checked
 // before they reach the loop: gait commands by GaitCommandResolver, base poses by check_base_pose.
+//
+// Joint trajectories: taken while Holding or Running, a trajectory becomes the active source (state
+// kRunning; the CPG is not stepped: waves off; no command lifetime and no pose gate: it ends by
+// itself), its goals through the same slew limit and clamp as the gait's. A fault, torque off, a
+// hold request, a gait command or a newer trajectory ends it (progress: aborted, with the reason);
+// at its end the driver holds the last point (kHolding, HoldReason::kTrajectoryDone).
 //
 // Threads: start(), update() and shutdown() run on one thread (the loop). command_gait(),
 // set_base_pose() and call() may be called from any other thread: they hand their data over through
@@ -45,6 +53,8 @@
 #include "snake_autonomy/driver/message.hpp"
 #include "snake_autonomy/driver/servo_chain.hpp"
 #include "snake_autonomy/driver/supervisor.hpp"
+#include "snake_autonomy/driver/trajectory_command.hpp"
+#include "snake_autonomy/driver/trajectory_source.hpp"
 #include "snake_autonomy/driver/transmission.hpp"
 #include "snake_autonomy/dynamixel/control_table.hpp"
 #include "snake_autonomy/dynamixel/servo_bus.hpp"
@@ -86,6 +96,7 @@ struct DriverSnapshot {
   std::uint32_t consecutive_failed_cycles = 0;
   std::uint64_t commands_applied = 0;
   std::uint64_t poses_refused = 0;
+  driver::TrajectoryProgress trajectory;  // the latest joint trajectory (phase kIdle: none yet)
 };
 
 class DriverController {
@@ -133,6 +144,16 @@ class DriverController {
   std::uint64_t post(DriverRequest request, std::uint8_t servo_id) { return supervisor_.post(request, servo_id); }
   bool take_result(std::uint64_t ticket, RequestResult* out) { return supervisor_.take_result(ticket, out); }
 
+  // Joint trajectories (driver::TrajectorySource; any thread). Checks the request's static part and
+  // hands it over; the loop takes it at its next update(). "" when accepted, else every reason (the
+  // robot is untouched). Refused while torque is off or in a fault. The first segment (present
+  // posture -> point 0) is checked when the loop takes it: the progress says if it was refused then.
+  std::string command_trajectory(const driver::JointTrajectoryRequest& request);
+  std::uint64_t trajectories_accepted() const noexcept { return trajectories_accepted_.load(); }
+  std::uint64_t trajectories_refused() const noexcept { return trajectories_refused_.load(); }
+  std::string last_trajectory_refusal() const;
+  const driver::TrajectoryProgress& trajectory_progress() const noexcept { return trajectory_.progress(); }  // loop
+
   DriverState state() const noexcept { return supervisor_.state(); }
   std::uint64_t commands_accepted() const noexcept { return gait_.commands_accepted(); }
   std::uint64_t commands_refused() const noexcept { return gait_.commands_refused(); }
@@ -170,6 +191,7 @@ class DriverController {
   friend struct DriverControllerTestAccess;  // tests only (test/cpp): reaches the gait source's CPG
 
   void take_pose(double t_s) noexcept;
+  void take_trajectory(double t_s) noexcept;  // a pending trajectory becomes the active source
 
   RobotModel model_;
   dynamixel::ControlTable table_;
@@ -177,6 +199,11 @@ class DriverController {
   driver::ServoChain chain_;
   driver::DriverSupervisor supervisor_;
   driver::GaitSource gait_;
+  driver::TrajectorySource trajectory_;
+  driver::TrajectoryCommand trajectory_command_;
+  mutable std::mutex trajectory_refusal_mutex_;
+  std::string last_trajectory_refusal_;
+  std::atomic<std::uint64_t> trajectories_accepted_{0}, trajectories_refused_{0};
   std::vector<std::string> start_notes_;
   std::uint64_t cycle_ = 0, commands_applied_ = 0;
   bool started_ = false;

@@ -27,6 +27,7 @@ enum class HoldReason : std::uint8_t {
   kHoldRequest,     // a hold request
   kCommandTimeout,  // the running gait's last command is older than command_timeout_s
   kShutdown,        // the driver exits (shutdown_action hold)
+  kTrajectoryDone,  // a joint trajectory reached its last point: held there until the next command
 };
 const char* to_string(HoldReason reason) noexcept;
 

@@ -13,7 +13,7 @@ from typing import Any, Dict
 
 import numpy as np
 
-RUN_TOPIC = "/snake_autonomy/run"   # std_msgs/String, JSON events: start (mission, waypoints), end (outcome)
+RUN_TOPIC = "/snake_autonomy/run"   # std_msgs/String, JSON events: start (mission, waypoints), scout, end (outcome)
 INTERRUPTED = "interrupted"          # outcome of a run whose bag has no end event
 
 
@@ -73,6 +73,8 @@ def read_run(path, com_topic: str = "com_pose", status_topic: str = "tracking_st
                 if event.get("event") == "start":
                     meta.update({k: v for k, v in event.items() if k != "event"})
                     waypoints = [tuple(w) for w in event.get("waypoints", [])]
+                elif event.get("event") == "scout":   # a finished scout stop (missions/scout.py)
+                    meta.setdefault("scouts", []).append({k: v for k, v in event.items() if k != "event"})
                 elif event.get("event") == "end":
                     meta["outcome"] = event.get("outcome")
                     meta["t_end"] = event.get("t")

@@ -207,7 +207,11 @@ def write_results(out_dir, waypoints, trajectory: Mapping[str, Any], decisions: 
         t0 = float(meta["t_start"])
     elif starts:
         t0 = float(min(starts))
-    metrics = compute_metrics(waypoints, dec, traj, outcome, t0, extra={"meta": meta or {}})
+    meta = dict(meta or {})
+    extra = {"meta": meta}
+    if "scouts" in meta:   # the scout stops at top level, as the batch simulator writes them
+        extra["scouts"] = meta.pop("scouts")
+    metrics = compute_metrics(waypoints, dec, traj, outcome, t0, extra=extra)
     paths = {"metrics": out / "metrics.json"}
     write_json_atomic(paths["metrics"], metrics)
     paths["decisions_csv"] = out / "decisions.csv"

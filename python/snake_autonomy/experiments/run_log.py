@@ -67,6 +67,10 @@ class RunLog:
             if self._bag is not None:
                 self._bag.write(RUN_TOPIC, self._String(data=json.dumps(event)), _to_time(t_s))
 
+    def event(self, event: Dict[str, Any], t_s: float) -> None:
+        """A run event (JSON on the run topic), e.g. {"event": "scout", ...}: read back by bag_io."""
+        self._event(event, t_s)
+
     def write(self, topic: str, msg, t_s: float) -> None:
         """Records one message (thread-safe; ignored after close)."""
         with self._lock:

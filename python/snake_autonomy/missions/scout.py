@@ -25,7 +25,8 @@ The planner (`ScoutPlanner`, a callable ScoutSpec -> ScoutPlan) does every check
 moves: the FBSR planner's own (ZMP inside U at every sample, joint limits, head above after a
 transfer), the plan.json contract's (plan_io.problems) and the driver's velocity limit on both
 trajectories. The executor (`TrajectoryExecutor`) is the path to the joints: the batch simulator's
-`sim.scout_executor.PlantTrajectoryExecutor`, the ROS side's `nodes.scout_trajectory.TopicTrajectoryExecutor`.
+`sim.scout_executor.DriverTrajectoryExecutor` (the driver's trajectory
+execution in the batch simulator), the ROS side's `nodes.scout_trajectory.TopicTrajectoryExecutor`.
 """
 import math
 import time
@@ -109,10 +110,13 @@ class ScoutRecord:
     phases: Dict[str, float] = field(default_factory=dict)   # phase -> mission time it began
 
     def as_dict(self) -> dict:
+        """JSON-ready: values not known (NaN: no plan, no measurement on this path) become None."""
+        def known(v):
+            return None if isinstance(v, float) and math.isnan(v) else v
         return {"waypoint_index": self.waypoint_index, "height_m": self.spec.height_m, "hold_s": self.spec.hold_s,
-                "outcome": self.outcome, "planned_head_height_m": self.planned_head_height_m,
-                "planning_time_s": self.planning_time_s,
-                "measured_head_height_m": self.measured_head_height_m, "phases": dict(self.phases)}
+                "outcome": self.outcome, "planned_head_height_m": known(self.planned_head_height_m),
+                "planning_time_s": known(self.planning_time_s),
+                "measured_head_height_m": known(self.measured_head_height_m), "phases": dict(self.phases)}
 
 
 class ScoutStop:

@@ -20,13 +20,17 @@ Action      mission/run (snake_autonomy/RunMission): goal = a mission (name or f
 Services    mission/load (snake_autonomy/LoadMission), mission/start, mission/abort (std_srvs/Trigger),
             kept beside the action: ~auto_start and `rosservice call` (the one-line stop of any run,
             whoever started it) need no action client.
+Diagnostics /diagnostics (diagnostic_updater): "mission" (state, mission, waypoint, distance, last
+            scout stop; WARN while holding for a stale pose, ERROR when a run aborted) and
+            "tracking_status topic status" (the tracker's rate against ~rate_hz).
 Time        with use_sim_time the node waits for the first /clock before it loads or starts anything.
 Params      ~mission (file or provided name: loaded at start-up), ~auto_start (false), ~tracker_config
             (config/tracker.yaml), ~tracker_overrides (a YAML file whose `tracker:` section is merged
             over tracker_config, e.g. config/sim.yaml for the simulated robot; empty: none),
             ~gaits_config (config/gaits.yaml), ~rate_hz, ~pose_timeout_s, ~yaw_filter_window,
             ~heading_offset_deg (defaults from tracker_config + overrides), ~results_dir, ~record
-            (true), ~world_frame (odom), ~pose_status_name.
+            (true), ~world_frame (odom), ~pose_status_name, ~robot (cobra) and ~scout_config (empty:
+            config/scout.yaml) for the scout stops of a mission.
 """
 import math
 import os
@@ -37,6 +41,7 @@ import time
 from pathlib import Path
 
 import actionlib
+import diagnostic_updater
 import rospy
 import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -102,6 +107,10 @@ class MissionNode:
         self.results_dir = Path(rospy.get_param("~results_dir", default_results_dir()))
         self.record = bool(rospy.get_param("~record", True))
         self.world_frame = rospy.get_param("~world_frame", "odom")
+        # Scout stops (missions/scout.py): the FBSR planner for this robot, trajectories to the driver.
+        self.robot = rospy.get_param("~robot", "cobra")
+        self.scout_config = rospy.get_param("~scout_config", "") or None
+        self._scout_parts = None
         self.pose_status_name = rospy.get_param("~pose_status_name",
                                                 rospy.resolve_name("pose_remapper")[1:] + ": base pose")
         if not (self.rate_hz > 0 and self.pose_timeout_s > 0 and self.yaw_window > 0):
@@ -146,6 +155,15 @@ class MissionNode:
         self.action = actionlib.SimpleActionServer("mission/run", RunMissionAction, execute_cb=self.execute,
                                                    auto_start=False)
         self.action.start()
+        self.state_text = "idle"
+        self.last_status = None
+        self.updater = diagnostic_updater.Updater()
+        self.updater.setHardwareID("none")
+        self.updater.add("mission", self.diagnose)
+        self._rate = {"min": 0.9 * self.rate_hz, "max": 1.1 * self.rate_hz}   # the task keeps this dict
+        self.status_freq = diagnostic_updater.HeaderlessTopicDiagnostic(
+            "tracking_status", self.updater, diagnostic_updater.FrequencyStatusParam(self._rate, 0.0, 10))
+        rospy.Timer(rospy.Duration(1.0), lambda _e: self.updater.update())
         self.set_state("idle")
 
         mission_param = rospy.get_param("~mission", "")
@@ -166,11 +184,44 @@ class MissionNode:
 
     # -- helpers -----------------------------------------------------------------------------------
     def make_runner(self, mission):
+        planner = executor = None
+        if mission.scouts:
+            planner, executor = self.scout_parts()
         return MissionRunner(mission, self.pose_timeout_s, self.yaw_window,
-                             heading_offset_rad=self.heading_offset_rad)
+                             heading_offset_rad=self.heading_offset_rad, scout_planner=planner, executor=executor)
+
+    def scout_parts(self):
+        """The scout planner (FBSR, ~robot) and the executor that publishes driver/joint_trajectory,
+        made once, when the first mission with a scout stop is loaded."""
+        if self._scout_parts is None:
+            from snake_autonomy.missions.scout import fbsr_scout_planner
+            from snake_autonomy.nodes.scout_trajectory import TopicTrajectoryExecutor
+            self._scout_parts = (fbsr_scout_planner(self.robot, self.scout_config), TopicTrajectoryExecutor())
+        return self._scout_parts
 
     def set_state(self, text):
+        self.state_text = text
         self.pub_state.publish(String(data=text))
+
+    def diagnose(self, stat):
+        """The "mission" diagnostics task: what mission/state says, with the tracker's latest status."""
+        text, s = self.state_text, self.last_status
+        level = DiagnosticStatus.OK
+        if text.startswith("aborted"):
+            level = DiagnosticStatus.ERROR
+        elif s is not None and s.get("pose_stale") and text.startswith("running"):
+            level = DiagnosticStatus.WARN
+        stat.summary(level, text if level == DiagnosticStatus.OK or s is None else f"{text}: {s.get('note', '')}")
+        stat.add("mission", self.mission.name if self.mission is not None else "")
+        if s is not None:
+            stat.add("waypoint", f"{s['waypoint_index']}/{s['num_waypoints']}")
+            stat.add("distance_m", f"{s['distance']:.3f}")
+            stat.add("mode", str(s["mode"]))
+            stat.add("gait", str(s["gait"]))
+        log = self.runner.scout_log if self.runner is not None else []
+        if log:
+            stat.add("last_scout", f"waypoint {log[-1].waypoint_index}: {log[-1].outcome}")
+        return stat
 
     def resolved(self, name):
         return rospy.resolve_name(name)
@@ -338,6 +389,7 @@ class MissionNode:
             decision = self.runner.step(rospy.get_time())
             if decision is None:
                 return
+            self.log_scouts(decision.t_s)
             if decision.status["pose_stale"]:
                 rospy.logwarn_throttle(5.0, f"{self.mission.name}: {decision.status['note']}")
             if decision.finished:
@@ -352,18 +404,33 @@ class MissionNode:
         status = TrackingStatus(**decision.status)
         status.header.stamp = now
         status.header.frame_id = self.world_frame
-        self.pub_cmd.publish(cmd)
+        # While a scout trajectory owns the joints no gait command goes out: one would end it (the
+        # driver holds the trajectory's last point afterwards, the hold of a finished mission included).
+        if not decision.trajectory_active:
+            self.pub_cmd.publish(cmd)
         self.pub_status.publish(status)
+        self.status_freq.tick()
+        self.last_status = decision.status
         self.decisions.add(decision.t_s, decision.status)
         if self.action.is_active():
             self.action.publish_feedback(fill_feedback(RunMissionFeedback(), decision.status))
         if self.log is not None:
-            self.log.write(self.resolved("gait_command"), cmd, decision.t_s)
+            if not decision.trajectory_active:
+                self.log.write(self.resolved("gait_command"), cmd, decision.t_s)
             self.log.write(self.resolved("tracking_status"), status, decision.t_s)
             s = decision.status
             self.log.add_decision(decision.t_s, s["waypoint_index"], s["waypoint_index"] - int(s["waypoint_reached"]),
                                   s["waypoint_reached"], s["distance"], s["yaw_error_abs"], s["yaw_error_rel"],
                                   s["yaw_error"], s["pose_stale"])
+
+    def log_scouts(self, t_s):
+        """Each finished scout stop as a run event (metrics.json `scouts`, as in the batch simulator)."""
+        records = self.runner.scout_log
+        if self.log is not None:
+            for record in records[getattr(self.runner, "_scouts_logged", 0):]:
+                self.log.event({"event": "scout", **record.as_dict()}, t_s)
+                rospy.loginfo(f"scout at waypoint {record.waypoint_index}: {record.outcome}")
+        self.runner._scouts_logged = len(records)
 
     def send_hold(self, why):
         hold = self.runner.hold_gait if self.runner is not None else self.defaults["gaits"]["stop"]
@@ -379,6 +446,7 @@ class MissionNode:
         except rospy.ROSException as exc:   # shutting down: topics already closed
             rospy.logerr(f"could not send the final hold: {exc}")
         outcome = self.runner.outcome or decision.outcome
+        self.log_scouts(decision.t_s)
         self.set_state(f"{self.runner.state}: {self.mission.name}: {outcome}")
         rospy.loginfo(f"mission {self.mission.name!r} ended: {outcome}")
         self.last_result = self.result_of_run(outcome)
@@ -391,6 +459,7 @@ class MissionNode:
             else:
                 rospy.loginfo(f"results in {self.run_dir}")
         m = self.runner
+        m.close()
         reached = m.tracker.waypoint_index
         rospy.loginfo(f"{reached}/{len(self.mission.waypoints)} waypoint(s) reached")
         self.run_ended.set()

@@ -3,15 +3,21 @@
 `to_msg` turns planning/fbsr/trajectory.py's points into a trajectory_msgs/JointTrajectory (joint_1 ..
 joint_N, radians, time_from_start; header.stamp zero: start on receipt). `TopicTrajectoryExecutor`
 is missions/scout.py's TrajectoryExecutor for the mission node: it publishes on
-`driver/joint_trajectory` (the driver's TrajectorySource, issue 11) and counts a trajectory finished
-once its duration (plus a settle margin) has passed. Pure wiring: no node, no master needed to build
-a message.
+`driver/joint_trajectory` (the driver's TrajectorySource, issue 11) with a header.frame_id of its own
+(the driver's id for it) and counts it finished when `driver/trajectory_status` says so for that id:
+done (the last point held), aborted or refused (`aborted` keeps why). Pure wiring: no node, no master
+needed to build a message.
 """
+import threading
+
 import rospy
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from snake_autonomy.msg import TrajectoryStatus
+
 TOPIC = "driver/joint_trajectory"
-SETTLE_MARGIN_S = 0.5
+STATUS_TOPIC = "driver/trajectory_status"
+ENDED = ("done", "aborted", "refused")
 
 
 def to_msg(trajectory, frame_id: str = "") -> JointTrajectory:
@@ -28,22 +34,40 @@ def to_msg(trajectory, frame_id: str = "") -> JointTrajectory:
 
 
 class TopicTrajectoryExecutor:
-    """Publishes scout trajectories to the driver. The driver refuses a bad trajectory whole and
-    says why on its own diagnostics; the planner's checks (missions/scout.py) make that the
-    exception, so this executor accepts once published and times the motion."""
+    """Publishes scout trajectories to the driver and follows them on driver/trajectory_status. The
+    driver refuses a bad trajectory whole (every reason on the status and its diagnostics); the
+    planner's checks (missions/scout.py) make that the exception, so `execute` accepts once published
+    and a refusal shows as finished with `aborted` set."""
 
-    def __init__(self, publisher=None, settle_margin_s: float = SETTLE_MARGIN_S):
+    def __init__(self, publisher=None, subscribe: bool = True):
         self.pub = publisher if publisher is not None else rospy.Publisher(
             TOPIC, JointTrajectory, queue_size=1, latch=False)
-        self.settle_margin_s = float(settle_margin_s)
-        self._end_s = float("-inf")
+        self._lock = threading.Lock()
+        self._ended = {}                    # trajectory id -> its final TrajectoryStatus
+        self._id, self._count = None, 0
+        self.aborted = ""
+        if subscribe:
+            self.sub = rospy.Subscriber(STATUS_TOPIC, TrajectoryStatus, self.on_status)
+
+    def on_status(self, msg) -> None:
+        if msg.phase in ENDED:
+            with self._lock:
+                self._ended[msg.id] = msg
 
     def execute(self, trajectory, t_s: float) -> str:
         if self.pub.get_num_connections() == 0:
             return f"nobody subscribes to {self.pub.resolved_name} (is the driver running?)"
-        self.pub.publish(to_msg(trajectory))
-        self._end_s = t_s + trajectory.duration_s + self.settle_margin_s
+        self._count += 1
+        self._id = f"scout {self._count} {t_s:.2f}"
+        self.aborted = ""
+        self.pub.publish(to_msg(trajectory, frame_id=self._id))
         return ""
 
     def finished(self, t_s: float) -> bool:
-        return t_s >= self._end_s
+        with self._lock:
+            end = self._ended.get(self._id)
+        if end is None:
+            return self._id is None
+        if end.phase != "done":
+            self.aborted = f"{end.phase} {end.abort}: {end.reason}".strip()
+        return True

@@ -36,7 +36,7 @@ from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, WrenchStam
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 
-from snake_autonomy.msg import TrackingStatus
+from snake_autonomy.msg import GaitCommand, TrackingStatus, TrajectoryStatus
 from snake_autonomy.paths import config_path
 from snake_autonomy.sim.realtime import RealTimeSim, SimSetup
 
@@ -96,6 +96,11 @@ class SimNode:
             diagnostic_updater.FrequencyStatusParam(self._source_rate, 0.0, 10))
         rospy.Subscriber("sim/disturbance", WrenchStamped, self.on_disturbance, queue_size=10)
         rospy.Subscriber("tracking_status", TrackingStatus, self.on_status, queue_size=10)
+        # A scout trajectory raises the head on purpose: from the driver taking one until the next gait
+        # command (the head is down again), the roll-over check watches the tail.
+        self._watching_tail = False
+        rospy.Subscriber("driver/trajectory_status", TrajectoryStatus, self.on_trajectory_status, queue_size=10)
+        rospy.Subscriber("gait_command", GaitCommand, self.on_gait_command, queue_size=10)
         self.sim.start()
         rospy.loginfo(f"simulated {self.sim.robot.name}: seed {setup.seed}, {self.feedback} feedback, servo bus on "
                       f"{setup.port}, start {start_t}; {self.sim.params.summary()['floor_friction']:.3f} floor friction")
@@ -117,6 +122,16 @@ class SimNode:
 
     def on_status(self, msg):
         self.sim.set_target(msg.waypoint_index)
+
+    def on_trajectory_status(self, msg):
+        if msg.phase == "running" and not self._watching_tail:
+            self._watching_tail = True
+            self.sim.watch_tail(True)
+
+    def on_gait_command(self, _msg):
+        if self._watching_tail:
+            self._watching_tail = False
+            self.sim.watch_tail(False)
 
     # -- the loop ------------------------------------------------------------------------------------
     def loop(self):

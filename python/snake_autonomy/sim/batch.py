@@ -40,6 +40,7 @@ from ..missions.runner import MissionRunner
 from .feedback import make_feedback
 from .mujoco_servo_backend import MujocoServoBackend
 from .plant import Plant
+from .servo_backend import ShaftUnits
 from .world import CONFIG, SimWorld, WorldSpec
 
 DRIVER_RATE_HZ = 100.0
@@ -137,6 +138,7 @@ class LockStepDriver:
         self.ids = [int(i) for i in robot.servo_ids]
         self.backend = MujocoServoBackend(plant, table=self.table)
         self.bus = dx.FakeServoBus(self.table, self.ids)
+        self.units = ShaftUnits(self.table)   # shaft state <-> raw values, by this servo model's table
         self.bus.set_follow_goal(False)
         self.controller = _core.DriverController(robot, library, self.table, self.bus, config)
         self.lower_rad = np.asarray(robot.joint_lower_rad, float)
@@ -162,9 +164,9 @@ class LockStepDriver:
         if c.state == "running":
             raw = c.cpg.unclamped_output
             self.cpg_clamped += int(np.count_nonzero((raw < self.lower_rad) | (raw > self.upper_rad)))
-        get, set_goal, ticks_to_rad = self.bus.servos.get, self.backend.set_goal, _core.dynamixel.ticks_to_rad
+        get, set_goal, goal_rad = self.bus.servos.get, self.backend.set_goal, self.units.goal_rad
         for sid in self.ids:
-            set_goal(sid, ticks_to_rad(get(sid, "goal_position")))
+            set_goal(sid, goal_rad(get(sid, "goal_position")))
 
     def com_pose(self) -> Optional[Tuple[float, float, float]]:
         """(x, y, yaw) of the centre of mass and virtual chassis, as com_pose carries it; None while
@@ -176,14 +178,9 @@ class LockStepDriver:
         return float(com[0]), float(com[1]), c.com_yaw
 
     def _write_states(self) -> None:
-        dx = _core.dynamixel
-        bus_set, state = self.bus.servos.set, self.backend.state
-        rad_to_ticks, velocity, current = dx.rad_to_ticks, dx.rad_s_to_velocity, dx.amps_to_current
+        put, state, present = self.bus.servos.set_present, self.backend.state, self.units.present
         for sid in self.ids:
-            s = state(sid)
-            bus_set(sid, "present_position", rad_to_ticks(s.position_rad))
-            bus_set(sid, "present_velocity", velocity(s.velocity_rad_s))
-            bus_set(sid, "present_current", current(s.current_a))
+            put(sid, *present(state(sid)))
 
 
 class BatchRun:
@@ -198,11 +195,11 @@ class BatchRun:
         self.driver = LockStepDriver(self.robot, self.library, self.plant, load_driver_config(spec.driver_config))
         self.feedback = make_feedback(spec.feedback, self.params, self.robot)
         self.scout_executor, scout_planner, self._watching_tail = None, None, False
-        if self.mission.scouts:     # scout stops: the FBSR planner, trajectories on the plant
+        if self.mission.scouts:     # scout stops: the FBSR planner, trajectories through the driver
             from ..missions.scout import fbsr_scout_planner
-            from .scout_executor import PlantTrajectoryExecutor
+            from .scout_executor import DriverTrajectoryExecutor
             scout_planner = fbsr_scout_planner(spec.robot, spec.scout_config, spec.driver_config)
-            self.scout_executor = PlantTrajectoryExecutor(self.plant)
+            self.scout_executor = DriverTrajectoryExecutor(self.driver.controller)
         self.runner = MissionRunner(self.mission, self.defaults["pose_timeout_s"], self.defaults["yaw_filter_window"],
                                     heading_offset_rad=self.heading_offset_rad, scout_planner=scout_planner,
                                     executor=self.scout_executor)

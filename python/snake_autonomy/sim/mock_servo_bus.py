@@ -24,14 +24,13 @@ servo's error status); an exception in the backend costs that one call, counted 
 stats()["dropped"] and logged (a last resort: the fuzz tests require 0).
 """
 import logging
-import math
 import threading
 import time
 
 from snake_autonomy._core import dynamixel as dx
 from snake_autonomy.paths import config_path
 from snake_autonomy.sim.pty_serving import CONTROL_COMMANDS, MockBusClient, PtyServing  # noqa: F401 (API)
-from snake_autonomy.sim.servo_backend import ServoBackend
+from snake_autonomy.sim.servo_backend import ServoBackend, ShaftUnits
 
 DEFAULT_TABLE = config_path("dynamixel", "xh540_w270.yaml")
 LOG = logging.getLogger(__name__)
@@ -68,32 +67,25 @@ def parse_ids(text: str) -> list:
 
 
 class _BackendHooks:
-    """The servos' ShaftHooks: the ServoBackend moves the shafts; ticks <-> radians by the table.
-    (TODO when the driver's Transmission lands: convert with it instead of the scales below.)"""
+    """The servos' ShaftHooks: the ServoBackend moves the shafts; raw values <-> shaft units by the
+    control table (ShaftUnits, shared with the batch simulator's bus)."""
 
     def __init__(self, servos, backend: ServoBackend, table, clock):
         self._servos, self._backend, self._clock = servos, backend, clock
-        self._rad_per_tick = table.at("present_position").scale * math.pi / 180.0
-        self._rad_s_per_unit = table.at("present_velocity").scale * 2.0 * math.pi / 60.0
-        self._amps_per_unit = table.at("present_current").scale * 1e-3
-        self._volts_per_unit = table.at("present_input_voltage").scale
-        self._centre = table.position_centre_ticks
+        self._units = ShaftUnits(table)
 
     def before_write(self):
         self._backend.advance(self._clock())
 
     def before_read(self):
         """Present position, velocity, current, voltage, temperature from the backend."""
-        backend, put = self._backend, self._servos.set_present
+        backend, put, present = self._backend, self._servos.set_present, self._units.present
         backend.advance(self._clock())
         for i in self._servos.ids:
-            st = backend.state(i)
-            put(i, round(st.position_rad / self._rad_per_tick) + self._centre,
-                round(st.velocity_rad_s / self._rad_s_per_unit), round(st.current_a / self._amps_per_unit),
-                round(st.voltage_v / self._volts_per_unit), round(st.temperature_c))
+            put(i, *present(backend.state(i)))
 
     def on_goal(self, servo_id, ticks):
-        self._backend.set_goal(servo_id, (ticks - self._centre) * self._rad_per_tick)
+        self._backend.set_goal(servo_id, self._units.goal_rad(ticks))
 
     def on_torque(self, servo_id, enabled):
         self._backend.set_torque(servo_id, enabled)

@@ -67,6 +67,12 @@ class RealTimeSim:
         self.world.disturb(link, force_n, torque_nm, duration_s)
 
     # ---- the step --------------------------------------------------------------------------------
+    def watch_tail(self, on: bool) -> None:
+        """While a scout trajectory raises the head on purpose (the driver's trajectory status says so),
+        the roll-over check watches the tail's tilt instead of base_link's (as the batch path does)."""
+        with self.world.lock:
+            self.world.watch_tilt_of(self.robot.frame_names[-1] if on else None)
+
     def step(self, now_s: float) -> WorldStep:
         with self.world.lock:
             self.backend.advance_locked(now_s)

@@ -6,17 +6,18 @@ a first-order servo model for driver tests (KinematicServoBackend, in mock_servo
 the MuJoCo plant (snake_autonomy.sim.plant) for the simulated robot.
 
 Units are those of the servo shaft, not of the robot's joints: radians from the servo's centre
-(tick 2048), positive in the servo's own direction. The mapping between joint angles and shaft
+(the control table's position_centre_ticks, 2048 on the XH540), positive in the servo's own direction. The mapping between joint angles and shaft
 angles (servo direction and zero offset from the robot YAML) belongs to whoever knows the robot:
 the driver on one side, the plant's adapter on the other.
 """
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 
 @dataclass
 class ShaftState:
-    position_rad: float   # from the servo centre (tick 2048)
+    position_rad: float   # from the servo centre (the table's position_centre_ticks)
     velocity_rad_s: float
     current_a: float      # signed, as Present Current reports it
     temperature_c: float = 35.0
@@ -45,3 +46,27 @@ class ServoBackend(ABC):
     @abstractmethod
     def advance(self, now_s: float) -> None:
         """Bring the physics up to time now_s (monotonic seconds); called before reads and writes."""
+
+
+class ShaftUnits:
+    """A backend's shaft state <-> a servo's raw control-table values, by the control table's scales
+    (position resolution and centre, velocity, current and voltage units): what both simulated buses
+    (the pty mock's ShaftHooks and the batch simulator's in-process bus) write as Present values and
+    read as goals. A servo model with another resolution converts through its own YAML."""
+
+    def __init__(self, table):
+        self.rad_per_tick = table.at("present_position").scale * math.pi / 180.0
+        self.rad_s_per_unit = table.at("present_velocity").scale * 2.0 * math.pi / 60.0
+        self.amps_per_unit = table.at("present_current").scale * 1e-3
+        self.volts_per_unit = table.at("present_input_voltage").scale
+        self.centre = table.position_centre_ticks
+
+    def present(self, st: ShaftState):
+        """(position ticks, velocity units, current units, voltage units, temperature C) of `st`."""
+        return (round(st.position_rad / self.rad_per_tick) + self.centre, round(st.velocity_rad_s / self.rad_s_per_unit),
+                round(st.current_a / self.amps_per_unit), round(st.voltage_v / self.volts_per_unit),
+                round(st.temperature_c))
+
+    def goal_rad(self, ticks: int) -> float:
+        """A Goal Position (ticks) as a shaft angle from the centre."""
+        return (ticks - self.centre) * self.rad_per_tick

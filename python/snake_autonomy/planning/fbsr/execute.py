@@ -5,10 +5,12 @@
 
 - The start: the plant's robot lying in the plan's first posture (q0_rad, its head placed where
   the planner's world puts it), left to settle with the servos holding it.
-- Execution: `send_goals` writes the planned positions as servo goals at 100 Hz, cubic-interpolated
-  between the plan's samples: exactly what the driver would write. It stands in for the driver's
-  trajectory execution (the TrajectorySource of issue 11) until that exists; replace this one
-  function by the driver path then.
+- Execution: through the driver, as on the robot: the plan as a joint trajectory
+  (trajectory.plan_points) handed to the batch simulator's DriverController (sim/batch.py
+  LockStepDriver: the C++ loop driver_node runs, over an in-process servo bus on this plant) by
+  `command_trajectory`; the driver's TrajectorySource interpolates it at 100 Hz, slew-limits and
+  clamps the goals, and holds the last point. A trajectory the driver refuses ends the run with
+  its reasons.
 - Every 10 ms step: the centre of pressure from the floor contacts' normal forces, inside the
   (closed) support polygon of the actual contacts, which must span an area; the lift of the base's frames
   above the floor; the servos' torques against their limit. The actual contacts are MuJoCo's floor
@@ -25,7 +27,6 @@ from typing import Callable, Optional
 
 import mujoco
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from ...sim.config import SimConfig
 from ...sim.plant import Plant
@@ -43,17 +44,36 @@ MIN_NORMAL_FORCE_N = 0.05
 CONTACT_GAP_M = 0.001
 
 
-def send_goals(plant: Plant, times_s, q_rad, on_step: Callable[[float], None],
-               period_s: float = DRIVER_PERIOD_S) -> None:
-    """The driver's part: the plan's positions as servo goals every period_s (cubic interpolation
-    between samples), the plant stepped in between; on_step(t) after each step. To be replaced by
-    the driver's TrajectorySource (issue 11) once it exists."""
-    spline = CubicSpline(times_s, q_rad, axis=0, bc_type="clamped")
+def send_through_driver(plant: Plant, plan: Plan, sample_period_s: float,
+                        on_step: Callable[[float], None], period_s: float = DRIVER_PERIOD_S) -> None:
+    """The plan executed by the driver's trajectory execution on `plant`; on_step(t) after each
+    10 ms step until the driver reports the trajectory done. ValueError with the driver's reasons
+    when it refuses or aborts the trajectory."""
+    from snake_autonomy import _core
+    from snake_autonomy.paths import config_path
+
+    from ...sim.batch import LockStepDriver, load_driver_config
+    from ...sim.scout_executor import DriverTrajectoryExecutor
+    from .trajectory import plan_points
+
+    robot = plant.robot
+    driver = LockStepDriver(robot, _core.GaitLibrary.from_yaml(str(config_path("gaits.yaml"))), plant,
+                            load_driver_config(config_path("driver.yaml")))
+    executor = DriverTrajectoryExecutor(driver.controller)
     t0 = plant.time_s
-    for t in np.arange(0.0, times_s[-1] + 1e-9, period_s):
-        plant.set_joint_targets(spline(t))
+    why = executor.execute(plan_points(plan, sample_period_s), t0)
+    if why:
+        raise ValueError(f"the driver refused the plan's trajectory: {why}")
+    t = 0.0
+    while True:
+        driver.update(t0 + t, period_s)
         plant.step_to(t0 + t + period_s)
         on_step(t)
+        t += period_s
+        if executor.finished(t0 + t):
+            break
+    if executor.aborted:
+        raise ValueError(f"the driver aborted the plan's trajectory: {executor.aborted}")
 
 
 def centre_of_pressure(model, data, floor_geom: int):
@@ -114,7 +134,6 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
     robot = chain.robot
     params = SimConfig.from_yaml(sim_yaml).draw(seed, num_joints=robot.num_joints)
     samples = stage_samples(plan, sample_period_s)
-    times = np.array([t for _, t, _ in samples])
     q = np.array([qq for _, _, qq in samples])
     start_pose = chain.pose(q[0])
     heading = float(np.arctan2(start_pose.rotations[0][1, 0], start_pose.rotations[0][0, 0]))
@@ -127,7 +146,7 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
     monitor.base_from = plan.active_modules
     step = (lambda t: (monitor(), record.append((t, plant.frame_positions())))) \
         if record is not None else monitor
-    send_goals(plant, times, q, step)
+    send_through_driver(plant, plan, sample_period_s, step)
     for _ in range(int(round(HOLD_S / DRIVER_PERIOD_S))):
         plant.step(DRIVER_PERIOD_S)
         monitor()

@@ -56,11 +56,7 @@ def write_figures(plan: Plan, out_dir, period_s: float = 0.05, pipe=None) -> lis
     for k in range(n, rows * cols):
         axes[k // cols][k % cols].axis("off")
     fig.suptitle(f"{plan.robot_name}: ZMP in the support polygons per stage (x, y in m)")
-    fig.tight_layout()
-    path = f"{out_dir}/zmp_stages.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    paths.append(path)
+    paths.append(_save(fig, f"{out_dir}/zmp_stages.png"))
 
     fig, ax = plt.subplots(figsize=(7, 3.5))
     ax.plot(times, head, color="C0")
@@ -72,9 +68,13 @@ def write_figures(plan: Plan, out_dir, period_s: float = 0.05, pipe=None) -> lis
     ax.set_xlabel("t (s)")
     ax.set_ylabel("head height (m)")
     ax.set_title(f"{plan.robot_name}: head height (stage boundaries, active modules)")
-    fig.tight_layout()
-    path = f"{out_dir}/head_height.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    paths.append(path)
+    paths.append(_save(fig, f"{out_dir}/head_height.png"))
     return paths
+
+
+def _save(fig, path: str) -> str:
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    import matplotlib.pyplot as plt
+    plt.close(fig)
+    return path

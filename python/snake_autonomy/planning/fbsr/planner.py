@@ -109,19 +109,25 @@ class FbsrPlanner:
         backtracks = 0
         extra_cycles = 0
         reseed = False
-        previous = None          # where the last raise started: (stages, q, m, head, transferred)
+        previous = None          # where the last raise started: (stages, q, m, head, transferred, raised)
+        raised = -np.inf         # the highest head at the end of a raise so far
         while True:
             u = self.support(m)
             first = len(plan.stages)
-            here = (first, q, m, head_before, transferred)
+            here = (first, q, m, head_before, transferred, raised)
             if into_pipe:
                 head_now = self.chain.pose(q).head
                 under = np.hypot(*(head_now[:2] - below[:2])) < pipe.radius_m - self.chain.radius_m
                 directive = Directive(target_m=target_m if under else below)
             q_before = q
             try:
+                # The global check after a transfer (paper III.E): the head ends higher than
+                # before it. The last raise (every module active) must also end above the highest
+                # raise so far: the shifts lower the head, and a last raise that recovers only part
+                # of that is a local optimum (re-planned from a random start).
+                floor = max(head_before, raised) if m >= max_active else head_before
                 stage = self._stage("raise", m, q, u, Checks(
-                    u, head_above_m=head_before if transferred else None,
+                    u, head_above_m=floor if transferred else None,
                     period_s=cfg.sample_period_s), directive, pipe, rng, cfg.k1, restarts,
                     random_first=reseed)
             except PlanningError:
@@ -130,7 +136,7 @@ class FbsrPlanner:
                 if not restarts or previous is None or backtracks >= cfg.max_backtracks:
                     raise
                 backtracks += 1
-                first, q, m, head_before, transferred = previous
+                first, q, m, head_before, transferred, raised = previous
                 del plan.stages[first:]
                 previous, reseed = None, True
                 continue
@@ -140,6 +146,7 @@ class FbsrPlanner:
             q = stage.q_end
             head_xyz = self.chain.pose(q).head
             head = head_xyz[2]
+            raised = max(raised, head)
             if height_m is not None and head >= height_m - cfg.head_height_tol_m:
                 break
             if target_m is not None and np.linalg.norm(head_xyz - np.asarray(target_m)) < cfg.target_tol_m:
