@@ -258,8 +258,10 @@ class DriverNode {
     const core::DriverSnapshot& s = published_.driver;
     if (s.state != logged_state_ || std::strcmp(s.fault_reason.data(), logged_fault_.c_str()) != 0) {
       if (s.state == core::DriverState::kFault) {
-        ROS_ERROR("driver: locomotion stopped (%s): %s", core::to_string(config_.controller.fault_action),
-                  s.fault_reason.data());
+        // The core's reasons name no ROS interface: the recovery services are named here.
+        ROS_ERROR("driver: locomotion stopped (%s): %s [recover: driver/reboot_servo for a hardware error, then "
+                  "driver/enable_torque]",
+                  core::to_string(config_.controller.fault_action), s.fault_reason.data());
       } else if (s.hold_reason == core::HoldReason::kCommandTimeout) {
         ROS_WARN("driver: %s", command_timeout_text().c_str());
       } else {
@@ -440,7 +442,10 @@ class DriverNode {
     if (why.empty()) {
       ROS_DEBUG("gait command accepted: %s", controller_.commanded_gait().c_str());
     } else {
-      ROS_WARN("gait command refused, the running gait is unchanged:\n%s", why.c_str());
+      const core::DriverState state = controller_.state();
+      const bool blocked = state == core::DriverState::kStopped || state == core::DriverState::kFault;
+      ROS_WARN("gait command refused, the running gait is unchanged:\n%s%s", why.c_str(),
+               blocked ? " (driver/enable_torque; see /diagnostics)" : "");
     }
   }
 

@@ -8,14 +8,12 @@
 
 #include "driver_rig.hpp"
 #include "snake_autonomy/core/safety_rules.hpp"
+#include "test_access.hpp"
 
 namespace snake_autonomy::core {
-// Test hooks (friends of Cpg and DriverController): the only way to reach a state no input can make.
-struct CpgTestAccess {
-  static void corrupt_phase(Cpg& cpg, int joint) { cpg.theta_(joint) = std::nan(""); }
-};
+// Test hook (friend of DriverController): reaches the gait source's CPG (test_access.hpp).
 struct DriverControllerTestAccess {
-  static Cpg& cpg(DriverController& d) { return d.cpg_; }
+  static Cpg& cpg(DriverController& d) { return driver::GaitSourceTestAccess::cpg(d.gait_); }
 };
 }  // namespace snake_autonomy::core
 
