@@ -85,3 +85,13 @@ def test_image_messages_round_trip():
     assert mm == pytest.approx(depth, abs=1e-3)
     k = CameraIntrinsics(640, 480, 615.0, 610.0, 320.0, 240.0)
     assert from_camera_info(to_camera_info(k, None, "cam")) == k
+
+
+def test_a_replan_uses_the_pose_at_the_frames_stamp():
+    loop, _ = _loop(True, goal_xy=(2.0, 0.0))
+    for k in range(11):
+        loop.on_pose(0.1 * k, _pose(0.01 * k, 0.0, 0.0))
+    loop.on_frame(0.42, None)
+    out = loop.tick(1.0)
+    assert out.replan.pose[0] == pytest.approx(0.04)       # the pose of t 0.4, not the latest (0.10)
+    assert loop.pose[0] == pytest.approx(0.10)

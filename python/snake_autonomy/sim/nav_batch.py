@@ -20,7 +20,9 @@ Joint targets (NavRunSpec.gait_source): "driver" (default) commands config/gaits
 gait with curve + kappa through the C++ driver on the plant (sim/gait_driver.py: LockStepDriver, the
 DriverController driver_node runs; its CPG ramps the wave in from the hold posture); "reference"
 writes the Python reference's gait.joint_angles(t, kappa) (config/nav.yaml gait:) straight to the
-plant every control period, ramped in over ramp_s.
+plant every control period, ramped in over ramp_s. gaits.yaml's `rectilinear` is derived for
+COBRA's joint spacing (its comment): another robot (the 12-link chang_rectilinear, L 0.07 m) gets a
+different wave through the driver until it has its own entry (gait_name); use the reference there.
 """
 import dataclasses
 import json

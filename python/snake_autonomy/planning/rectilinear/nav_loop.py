@@ -7,8 +7,8 @@ what to show out. planner_node (nodes/planner_node.py) only converts messages an
     loop.on_frame(t, depth_m)                 # the latest camera frame (depth in m, or colour for mono)
     out = loop.tick(t)                        # at the follower's rate: NavTick
 
-Every replan_period_s (config/nav.yaml follower.replan_period_s) the latest frame with the latest
-pose becomes a replan (perception -> perception-space arcs -> the follower); between replans the
+Every replan_period_s (config/nav.yaml follower.replan_period_s) the latest frame with the pose
+nearest its stamp (of the last POSE_HISTORY poses) becomes a replan (perception -> perception-space arcs -> the follower); between replans the
 follower turns the pose into kappa. The camera's pose in the replan's ground frame is base_link's
 pose (the one the driver uses, base_pose) times the mount of config/nav.yaml camera: (the head
 bobs with the gait: the mount is the camera's mean pose, the error the batch path does not have).
@@ -17,7 +17,9 @@ No free arc: `on_no_free_arc` "hold" (default) stops (gait hold) until a replan 
 "turn" turns in place with the follower's kappa_turn_per_m (what the batch run does).
 Goal reached (base_link within the goal radius): hold for good.
 """
+import bisect
 import math
+from collections import deque
 from dataclasses import dataclass
 from typing import Callable, Optional, Tuple
 
@@ -28,6 +30,7 @@ from .planner import NavPlanner, Replan, T_world_ground, ground_frame
 
 FOLLOWING, WAITING, NO_FREE_ARC, GOAL_REACHED = "following", "waiting", "no_free_arc", "goal_reached"
 NO_FREE_ARC_ACTIONS = ("hold", "turn")
+POSE_HISTORY = 500                 # base poses kept to match a frame's stamp (5 s of 100 Hz)
 
 
 @dataclass
@@ -61,6 +64,7 @@ class NavLoop:
         self.replan_period_s = float(cfg.replan_period_s)
         self._T_wb = None
         self._pose_t = None
+        self._history = deque(maxlen=POSE_HISTORY)     # (t_s, T_world_base), in arrival order
         self._frame = None
         self._next_replan = None
         self.state = WAITING
@@ -71,6 +75,16 @@ class NavLoop:
     def on_pose(self, t_s: float, T_world_base: np.ndarray) -> None:
         self._T_wb = np.asarray(T_world_base, float)
         self._pose_t = float(t_s)
+        self._history.append((self._pose_t, self._T_wb))
+
+    def pose_at(self, t_s: float) -> np.ndarray:
+        """base_link's pose nearest t_s among the recent ones (the latest when the history is empty)."""
+        if not self._history:
+            return self._T_wb
+        times = [h[0] for h in self._history]
+        i = bisect.bisect_left(times, t_s)
+        near = [j for j in (i - 1, i) if 0 <= j < len(times)]
+        return self._history[min(near, key=lambda j: abs(times[j] - t_s))][1]
 
     def on_frame(self, t_s: float, image: np.ndarray) -> None:
         """The latest camera frame (what the perception reads: depth in m or colour)."""
@@ -114,9 +128,11 @@ class NavLoop:
         return out
 
     def _replan(self, t_s: float, pose) -> NavTick:
-        _, image = self._frame
+        t_frame, image = self._frame
         ground = np.asarray(self.perception(image), bool)
-        T_gc = np.linalg.inv(T_world_ground(pose)) @ self._T_wb @ self.T_base_optical
+        T_wb = self.pose_at(t_frame)           # where the camera was when it took the frame
+        pose = ground_frame(T_wb)
+        T_gc = np.linalg.inv(T_world_ground(pose)) @ T_wb @ self.T_base_optical
         r = self.planner.replan(t_s, ground, T_gc, pose, self.goal_xy)
         self.replans += 1
         if r.path_world is None:
