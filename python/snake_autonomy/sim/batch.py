@@ -149,8 +149,10 @@ class LockStepDriver:
         if self.controller.state != "holding":
             raise RuntimeError(f"the driver did not start: {self.controller.state} {self.controller.fault_reason}")
 
-    def command_gait(self, gait: str, steer: bool = False, delta_rad: float = 0.0) -> str:
-        return self.controller.command_gait(gait=gait, steer=steer, delta_rad=delta_rad)
+    def command_gait(self, gait: str, steer: bool = False, delta_rad: float = 0.0, curve: bool = False,
+                     kappa_per_m: float = 0.0) -> str:
+        return self.controller.command_gait(gait=gait, steer=steer, delta_rad=delta_rad, curve=curve,
+                                            kappa_per_m=kappa_per_m)
 
     def set_base_pose(self, t_s: float, position, quat_xyzw) -> bool:
         return self.controller.set_base_pose(t_s, position, quat_xyzw)

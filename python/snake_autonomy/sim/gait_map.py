@@ -96,18 +96,28 @@ def simulate_point(point: GaitPoint) -> Dict:
             plant.step_to(t)
             max_tilt = max(max_tilt, plant.base_tilt_deg())
         if cycle >= point.settle_cycles:
-            T = plant.frame_transform("base_link")
-            samples.append((plant.frame_positions().mean(axis=0)[:2], math.atan2(T[1, 0], T[0, 0])))
-    yaws = np.unwrap([s[1] for s in samples])
-    c0, c1 = samples[0][0], samples[-1][0]
-    dur = point.measure_cycles * period
-    th = yaws[0]
-    d = c1 - c0
-    xi_x = (math.cos(th) * d[0] + math.sin(th) * d[1]) / dur
-    xi_y = (-math.sin(th) * d[0] + math.cos(th) * d[1]) / dur
-    xi_w = (yaws[-1] - yaws[0]) / dur
+            samples.append(stroboscopic_sample(plant))
+    xi_x, xi_y, xi_w = body_velocity(samples, point.measure_cycles * period)
     return {**asdict(point), "xi_x_m_s": float(xi_x), "xi_y_m_s": float(xi_y), "xi_w_rad_s": float(xi_w),
             "max_tilt_deg": float(max_tilt), "rolled_over": bool(max_tilt > 60.0)}
+
+
+def stroboscopic_sample(plant):
+    """(centroid of the kinematic frames' xy, base_link's yaw): one sample of body_velocity."""
+    T = plant.frame_transform("base_link")
+    return plant.frame_positions().mean(axis=0)[:2], math.atan2(T[1, 0], T[0, 0])
+
+
+def body_velocity(samples, duration_s: float):
+    """xi = (xi_x, xi_y, xi_w) from stroboscopic samples (one per gait cycle, same phase) spanning
+    duration_s: the centroid's displacement in the body frame of the first sample (x: base_link's
+    heading, y: left) per second, and base_link's unwrapped yaw change per second."""
+    yaws = np.unwrap([s[1] for s in samples])
+    th = yaws[0]
+    d = np.asarray(samples[-1][0]) - np.asarray(samples[0][0])
+    return ((math.cos(th) * d[0] + math.sin(th) * d[1]) / duration_s,
+            (-math.sin(th) * d[0] + math.cos(th) * d[1]) / duration_s,
+            (yaws[-1] - yaws[0]) / duration_s)
 
 
 def fit_gait_map(rows: List[Dict], nominal_amplitude: Optional[float] = None) -> Dict:

@@ -16,8 +16,13 @@ at kappa 1/m it points up to 43 deg away from the camera's 27.5 deg half field o
 The camera's pose in the planning frame is the true one at the frame (the head bobs with the gait).
 kappa is updated every command_period_s and slewed at kappa_slew_per_m_s (the body reshapes over a
 gait cycle; an instant 0.5 rad jump of every lateral joint whips the body).
-Joint targets: gait.joint_angles(t, kappa) every control period (100 Hz) straight to the plant: the
-driver's path (C++ gait library, `curvature` steering law, issue 11) replaces this when it lands.
+Joint targets (NavRunSpec.gait_source): "driver" (default) commands config/gaits.yaml's rectilinear
+gait with curve + kappa through the C++ driver on the plant (sim/gait_driver.py: LockStepDriver, the
+DriverController driver_node runs; its CPG ramps the wave in from the hold posture); "reference"
+writes the Python reference's gait.joint_angles(t, kappa) (config/nav.yaml gait:) straight to the
+plant every control period, ramped in over ramp_s. gaits.yaml's `rectilinear` is derived for
+COBRA's joint spacing (its comment): another robot (the 12-link chang_rectilinear, L 0.07 m) gets a
+different wave through the driver until it has its own entry (gait_name); use the reference there.
 """
 import dataclasses
 import json
@@ -54,6 +59,8 @@ class NavRunSpec:
     kappa_slew_per_m_s: float = 1.0
     keep_frames: bool = True
     flat_belly_fraction: Optional[float] = None   # None: nav.yaml plant.flat_belly_fraction
+    gait_source: str = "driver"           # driver (C++ gait, config/gaits.yaml) | reference (gait.py)
+    gait_name: str = "rectilinear"        # the driver's gait (steering: curvature)
 
 
 @dataclass
@@ -160,6 +167,12 @@ class NavRun:
         self.planner = NavPlanner(self.cfg.intrinsics, head_width_m(ry), self.cfg.sampler,
                                   RecedingHorizonFollower(self.cfg.follower))
         self.rollover_deg = sim_cfg.monitor.rollover_tilt_deg
+        if spec.gait_source not in ("driver", "reference"):
+            raise ValueError(f"gait_source: expected driver or reference, got {spec.gait_source!r}")
+        self.drive = None
+        if spec.gait_source == "driver":
+            from .gait_driver import PlantGaitDriver
+            self.drive = PlantGaitDriver(self.robot, self.plant)
         self.flat_belly_fraction = belly
         if spec.perception == "depth":
             from ..perception.depth_traversability import DepthTraversability
@@ -224,10 +237,14 @@ class NavRun:
                     kappa_goal = self.planner.command(t, pose).kappa_per_m
                 step = spec.kappa_slew_per_m_s * dt
                 kappa += max(-step, min(step, kappa_goal - kappa))
-                q = gait.joint_angles(self.robot, t - spec.ramp_s, kappa)
+            if self.drive is not None:
+                if self.drive.kappa_per_m != kappa:
+                    self.drive.command(spec.gait_name, kappa_per_m=kappa)
+                self.drive.step(t, dt)
+            elif t >= spec.ramp_s:
+                plant.set_joint_targets(gait.joint_angles(self.robot, t - spec.ramp_s, kappa))
             else:
-                q = gait.joint_angles(self.robot, 0.0, 0.0) * (t / spec.ramp_s)
-            plant.set_joint_targets(q)
+                plant.set_joint_targets(gait.joint_angles(self.robot, 0.0, 0.0) * (t / spec.ramp_s))
             t += dt
             plant.step_to(t)
         self.camera.close()
@@ -239,5 +256,5 @@ class NavRun:
                    "stops_no_free_arc": sum(1 for r in replans if r.path_world is None),
                    "rolled_over": rolled, "robot": self.robot.name, "perception": spec.perception,
                    "seed": spec.seed, "world": world.source or world.name,
-                   "flat_belly_fraction": self.flat_belly_fraction}
+                   "flat_belly_fraction": self.flat_belly_fraction, "gait_source": spec.gait_source}
         return NavResult(metrics, np.array(traj), replans, frames, world)

@@ -111,3 +111,11 @@ def build_scene(world: World, appearance: Optional[Appearance] = None,
                          f'size="{_v((sx / 2, sy / 2, sz / 2))}" '
                          f'quat="{_v((math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)))}"/>')
     return Scene("\n".join(scene) + "\n", "\n".join(assets) + "\n")
+
+
+def world_plant_fields(world: World, flat_belly_fraction: Optional[float]) -> dict:
+    """sim.world.WorldSpec fields that put a nav world in the plant: its obstacles and floor, base_link
+    at the world's start, the nav runs' plant option (config/nav.yaml plant:)."""
+    scene = build_scene(world)
+    return {"scene_xml": scene.scene_xml, "assets_xml": scene.assets_xml, "start_base": world.start_rad,
+            "flat_belly_fraction": flat_belly_fraction}

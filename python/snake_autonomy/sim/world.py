@@ -14,6 +14,7 @@ CoM pose then and 2 s later. The monitor: roll-over (monitor.rollover_tilt_deg),
 joint goals beyond the limits. The start pose and true heading use the tracker's heading offset
 (config/sim.yaml `tracker:` over config/tracker.yaml); scene_xml adds MJCF obstacles (Plant).
 """
+import dataclasses
 import math
 import threading
 from dataclasses import dataclass, field
@@ -54,6 +55,10 @@ class WorldSpec:
     tracker_config: str = str(CONFIG / "tracker.yaml")
     randomize: bool = True                     # per-seed physics (False: the ranges' midpoints)
     scene_xml: str = ""                        # MJCF elements added to the world (Plant, build_mjcf)
+    assets_xml: str = ""                       # the textures and materials scene_xml uses
+    start_base: Optional[Tuple[float, float, float]] = None   # base_link x_m, y_m, heading_rad on the
+                                               # floor (a nav world file's start); None: from start
+    flat_belly_fraction: Optional[float] = None   # plant option over sim_config's (nav runs: nav.yaml)
     sensors: Optional[Sequence[str]] = None    # sampled sensors; None: motion capture and the feedback's
 
 
@@ -101,6 +106,9 @@ class SimWorld:
             raise ValueError(f"sensors: unknown {unknown}; known: {', '.join(FEEDBACKS)}")
         self.spec = spec
         self.config = SimConfig.from_yaml(spec.sim_config)
+        if spec.flat_belly_fraction is not None:
+            self.config = dataclasses.replace(self.config, physics=dataclasses.replace(
+                self.config.physics, flat_belly_fraction=float(spec.flat_belly_fraction)))
         self.defaults = load_defaults(spec.tracker_config, self.config.tracker,
                                       overrides_source=f"{spec.sim_config} (tracker:)")
         self.heading_offset_rad = math.radians(self.defaults["heading_offset_deg"])
@@ -111,8 +119,10 @@ class SimWorld:
                         if spec.mission else None)
         self.triggers = (parse_triggers(self.mission.raw.get("disturbances"), len(self.mission.waypoints))
                          if self.mission else [])         # all of the mission's (fired or not)
-        start = start_base_pose(self.robot, self.kinematics, spec.start, self.heading_offset_rad)
-        self.plant = Plant(self.robot, self.params, start=start, scene_xml=spec.scene_xml)
+        start = (tuple(spec.start_base) if spec.start_base is not None else
+                 start_base_pose(self.robot, self.kinematics, spec.start, self.heading_offset_rad))
+        self.plant = Plant(self.robot, self.params, start=start, scene_xml=spec.scene_xml,
+                           assets_xml=spec.assets_xml)
         self.backend = MujocoServoBackend(self.plant)
         self.mocap = MocapSensor(self.params) if "mocap" in sensors else None
         self.vio = (SimulatedVio(self.params, load_camera_calibration(self.config.calibration_path()).camera_in_head)

@@ -48,6 +48,9 @@ def add_arguments(parser):
     run.add_argument("--out", required=True, metavar="DIR")
     run.add_argument("--flat-belly", type=float, default=None, metavar="F",
                      help="plant option: flat belly F x the link diameter wide (default nav.yaml plant:)")
+    run.add_argument("--gait-source", choices=("driver", "reference"), default="driver",
+                     help="driver: config/gaits.yaml's rectilinear through the C++ driver (default); "
+                          "reference: the Python reference planning/rectilinear/gait.py")
     ex = sub.add_parser("experiment", help="random solvable corridors x seeds: success rate, collisions, time")
     ex.add_argument("--worlds", type=int, default=20, help="random corridors 0..N-1 (sim/nav_experiment.py)")
     ex.add_argument("--first-world", type=int, default=0)
@@ -171,7 +174,8 @@ def main(args) -> int:
             return 1
         result = NavRun(NavRunSpec(world, robot=args.robot, perception=args.perception, seed=args.seed,
                                    time_limit_s=args.time_limit, classifier=args.classifier,
-                                   nav_config=args.config, flat_belly_fraction=args.flat_belly)).run()
+                                   nav_config=args.config, flat_belly_fraction=args.flat_belly,
+                                   gait_source=args.gait_source)).run()
         result.write(args.out)
         print(json.dumps(result.metrics))
         return 0

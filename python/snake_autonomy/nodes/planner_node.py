@@ -1,0 +1,233 @@
+"""planner_node: navigation among obstacles with the rectilinear gait (issue 13, Chang et al.).
+Wiring only: the logic is planning.rectilinear.nav_loop.NavLoop (perception -> perception-space
+arcs -> receding-horizon follower), the same classes the batch run (sim/nav_batch.py) uses.
+
+Subscribes  base_pose (geometry_msgs/PoseWithCovarianceStamped): base_link's pose, what the driver
+            steers with (motion capture, or pose_remap_node's from the VIO). Not com_pose: the arcs
+            start at base_link (the head, where the camera is) and the camera's pose is base_link's
+            times the mount; com_pose is the body's centre of mass and virtual-chassis heading.
+            camera/color/image_raw + camera/color/camera_info (sensor_msgs; the intrinsics come from
+            the first camera_info), camera/depth/image_rect_raw (32FC1 m or 16UC1 mm; ~perception depth).
+Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with curve=true and kappa;
+            hold while waiting for a pose and a frame, with no free arc and once the goal is reached),
+            nav/path (nav_msgs/Path: the chosen arc's free prefix, latched), nav/arcs
+            (visualization_msgs/MarkerArray: every candidate, chosen green, free parts yellow,
+            blocked red), nav/traversability (sensor_msgs/Image rgb8: the frame with non-ground tinted
+            red and the arcs drawn), /diagnostics ("planner: navigation": WARN with no free arc,
+            OK otherwise; replans, stops, distance to the goal).
+Params      ~world (a world file: goal and goal radius) or ~goal ("x,y") + ~goal_radius_m; ~nav_config
+            (config/nav.yaml), ~robot_config (config/robots/cobra.yaml: head width, link radius),
+            ~perception (depth|mono), ~classifier (model file, mono), ~rate_hz (2: the follower's
+            command rate), ~gait (rectilinear), ~on_no_free_arc (hold|turn), ~world_frame (frame of
+            the path and markers; default base_pose's frame_id), ~pose_timeout_s (1.0).
+"""
+import math
+
+import diagnostic_updater
+import numpy as np
+import rospy
+from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import Point, PoseStamped, PoseWithCovarianceStamped
+from nav_msgs.msg import Path
+from sensor_msgs.msg import CameraInfo, Image
+from std_msgs.msg import ColorRGBA
+from visualization_msgs.msg import Marker, MarkerArray
+
+from snake_autonomy.msg import GaitCommand
+from snake_autonomy.nodes.image_msgs import from_camera_info, from_image, to_image
+from snake_autonomy.paths import config_path
+from snake_autonomy.transforms import pose_to_matrix
+
+GREEN, YELLOW, RED = ColorRGBA(0.1, 0.9, 0.1, 1.0), ColorRGBA(0.95, 0.85, 0.1, 1.0), ColorRGBA(0.9, 0.1, 0.1, 1.0)
+
+
+class PlannerNode:
+    def __init__(self):
+        import dataclasses
+
+        from snake_autonomy.planning.rectilinear.config import NavConfig, head_width_m
+        self.cfg = NavConfig.from_yaml(rospy.get_param("~nav_config", str(config_path("nav.yaml"))))
+        self.robot_yaml = rospy.get_param("~robot_config", str(config_path("robots", "cobra.yaml")))
+        self.head_width_m = head_width_m(self.robot_yaml)
+        self.perception = rospy.get_param("~perception", "depth")
+        if self.perception not in ("depth", "mono"):
+            raise ValueError(f"~perception: expected depth or mono, got {self.perception!r}")
+        self.classifier = rospy.get_param("~classifier", "")
+        if self.perception == "mono" and not self.classifier:
+            raise ValueError("~classifier: perception mono needs a model file (snake_autonomy nav train-classifier)")
+        self.goal, self.goal_radius_m = self._goal()
+        self.gait = rospy.get_param("~gait", "rectilinear")
+        self.on_no_free_arc = rospy.get_param("~on_no_free_arc", "hold")
+        self.rate_hz = float(rospy.get_param("~rate_hz", 2.0))
+        self.pose_timeout_s = float(rospy.get_param("~pose_timeout_s", 1.0))
+        self.world_frame = rospy.get_param("~world_frame", "")
+        self._replace = dataclasses.replace
+        self.loop = None
+        self.rgb = None
+        self.last_tick = None
+        self.pub_cmd = rospy.Publisher("gait_command", GaitCommand, queue_size=10)
+        self.pub_path = rospy.Publisher("nav/path", Path, queue_size=1, latch=True)
+        self.pub_arcs = rospy.Publisher("nav/arcs", MarkerArray, queue_size=1, latch=True)
+        self.pub_trav = rospy.Publisher("nav/traversability", Image, queue_size=1, latch=True)
+        self.updater = diagnostic_updater.Updater()
+        self.updater.setHardwareID("rectilinear_planner")
+        self.updater.add("navigation", self.diagnose)
+        rospy.Subscriber("camera/color/camera_info", CameraInfo, self.on_info, queue_size=1)
+        rospy.Subscriber("base_pose", PoseWithCovarianceStamped, self.on_pose, queue_size=5)
+        rospy.Subscriber("camera/color/image_raw", Image, self.on_colour, queue_size=1, buff_size=2 ** 24)
+        if self.perception == "depth":
+            rospy.Subscriber("camera/depth/image_rect_raw", Image, self.on_depth, queue_size=1, buff_size=2 ** 24)
+        self.timer = rospy.Timer(rospy.Duration(1.0 / self.rate_hz), self.on_timer)
+        rospy.loginfo(f"planner: {self.perception} perception, goal {self.goal} (radius {self.goal_radius_m} m), "
+                      f"gait {self.gait}, replan every {self.cfg.replan_period_s:g} s, commands at {self.rate_hz:g} Hz")
+
+    def _goal(self):
+        world = rospy.get_param("~world", "")
+        if world:
+            from snake_autonomy.sim.world_file import load_world
+            w = load_world(world)
+            return tuple(w.goal), float(w.goal_radius_m)
+        goal = str(rospy.get_param("~goal", ""))
+        if not goal:
+            raise ValueError("~world or ~goal: the planner needs a goal (a world file or \"x,y\")")
+        try:
+            x, y = (float(v) for v in goal.split(","))
+        except ValueError:
+            raise ValueError(f"~goal: expected x,y, got {goal!r}") from None
+        return (x, y), float(rospy.get_param("~goal_radius_m", 0.1))
+
+    # -- inputs --------------------------------------------------------------------------------------
+    def on_info(self, msg):
+        if self.loop is not None:
+            return
+        from snake_autonomy.planning.rectilinear.nav_loop import NavLoop
+        intr = from_camera_info(msg)
+        cfg = self._replace(self.cfg, intrinsics=intr)
+        if self.perception == "depth":
+            from snake_autonomy import _core
+            from snake_autonomy.perception.depth_traversability import DepthTraversability
+            from snake_autonomy.planning.rectilinear.config import T_ground_camera
+            radius = _core.RobotModel.from_yaml(self.robot_yaml).link_radius_m
+            perceive = DepthTraversability(intr, T_ground_camera(cfg.mount, radius), cfg.depth)
+        else:
+            from snake_autonomy.perception.block_classifier import BlockClassifier
+            perceive = BlockClassifier.load(self.classifier).traversable
+        self.loop = NavLoop(cfg, self.head_width_m, perceive, self.goal, self.goal_radius_m,
+                            self.on_no_free_arc, self.pose_timeout_s)
+        rospy.loginfo(f"planner: camera {intr.width}x{intr.height}, fx {intr.fx:g} (camera_info)")
+
+    def on_pose(self, msg):
+        if not self.world_frame:
+            self.world_frame = msg.header.frame_id
+        if self.loop is not None:
+            p, q = msg.pose.pose.position, msg.pose.pose.orientation
+            self.loop.on_pose(msg.header.stamp.to_sec(), pose_to_matrix((p.x, p.y, p.z), (q.x, q.y, q.z, q.w)))
+
+    def on_colour(self, msg):
+        self.rgb = from_image(msg)
+        if self.loop is not None and self.perception == "mono":
+            self.loop.on_frame(msg.header.stamp.to_sec(), self.rgb)
+
+    def on_depth(self, msg):
+        if self.loop is not None:
+            self.loop.on_frame(msg.header.stamp.to_sec(), from_image(msg))
+
+    # -- the tick ------------------------------------------------------------------------------------
+    def on_timer(self, _event):
+        if self.loop is None:
+            self.publish_command(True, 0.0)
+            return
+        now = rospy.Time.now()
+        tick = self.loop.tick(now.to_sec())
+        previous, self.last_tick = self.last_tick, tick
+        if tick.replan is not None:
+            self.publish_replan(now, tick)
+            if tick.replan.path_world is None:
+                rospy.logwarn(f"planner: {tick.message}")
+            else:
+                d = self.loop.distance_to_goal_m()
+                rospy.loginfo(f"planner: replan {self.loop.replans}: {tick.message}; goal {d:.2f} m away")
+        if tick.state == "goal_reached" and (previous is None or previous.state != "goal_reached"):
+            rospy.loginfo(f"planner: {tick.message}")
+        self.publish_command(tick.hold, tick.kappa_per_m)
+        self.updater.update()
+
+    def publish_command(self, hold: bool, kappa_per_m: float):
+        c = GaitCommand()
+        c.header.stamp = rospy.Time.now()
+        if hold:
+            c.gait = "hold"
+        else:
+            c.gait, c.curve, c.kappa = self.gait, True, float(kappa_per_m)
+        self.pub_cmd.publish(c)
+
+    def publish_replan(self, stamp, tick):
+        from snake_autonomy.planning.rectilinear.planner import to_world
+        r = tick.replan
+        path = Path()
+        path.header.stamp, path.header.frame_id = stamp, self.world_frame
+        for x, y, th in (r.path_world if r.path_world is not None else []):
+            ps = PoseStamped()
+            ps.header = path.header
+            ps.pose.position.x, ps.pose.position.y = float(x), float(y)
+            ps.pose.orientation.z, ps.pose.orientation.w = math.sin(th / 2), math.cos(th / 2)
+            path.poses.append(ps)
+        self.pub_path.publish(path)
+        arcs = MarkerArray()
+        clear = Marker()
+        clear.action = Marker.DELETEALL
+        arcs.markers.append(clear)
+        for i, a in enumerate(r.selection.arcs):
+            world = to_world(a.poses, r.pose)
+            m = Marker()
+            m.header.stamp, m.header.frame_id = stamp, self.world_frame
+            m.ns, m.id, m.type, m.action = "nav_arcs", i, Marker.LINE_STRIP, Marker.ADD
+            m.pose.orientation.w = 1.0
+            m.scale.x = 0.01
+            for s, (x, y, _) in zip(a.s_m, world):
+                m.points.append(Point(float(x), float(y), 0.01))
+                free = s <= a.free_m + 1e-9
+                m.colors.append(GREEN if (i == r.selection.chosen and free and r.path_world is not None)
+                                else YELLOW if free else RED)
+            arcs.markers.append(m)
+        self.pub_arcs.publish(arcs)
+        self.pub_trav.publish(to_image(self.overlay(tick), "rgb8", stamp, "camera_color_optical_frame"))
+
+    def overlay(self, tick) -> np.ndarray:
+        from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
+        from snake_autonomy.sim.nav_batch import overlay
+        ground = tick.ground
+        rgb = self.rgb
+        if rgb is None or rgb.shape[:2] != ground.shape:
+            depth = np.asarray(tick.frame, float) if tick.frame is not None and tick.frame.ndim == 2 else None
+            grey = np.full(ground.shape, 128, np.uint8) if depth is None else \
+                (255 * (1.0 - np.clip(depth / 4.0, 0.0, 1.0))).astype(np.uint8)
+            rgb = np.dstack([grey] * 3)
+        checker = PerceptionCollisionChecker(self.loop.cfg.intrinsics, tick.T_ground_camera, self.head_width_m)
+        return overlay(rgb, ground, tick.replan.selection, checker)
+
+    def diagnose(self, stat):
+        t, loop = self.last_tick, self.loop
+        if t is None or loop is None:
+            stat.summary(DiagnosticStatus.WARN, "waiting for camera_info" if loop is None else "starting")
+            return stat
+        level = DiagnosticStatus.WARN if t.state in ("no_free_arc", "waiting") else DiagnosticStatus.OK
+        stat.summary(level, f"{t.state}: {t.message}")
+        d = loop.distance_to_goal_m()
+        stat.add("state", t.state)
+        stat.add("replans", str(loop.replans))
+        stat.add("stops_no_free_arc", str(loop.stops_no_free_arc))
+        stat.add("kappa_per_m", f"{t.kappa_per_m:.3f}")
+        stat.add("distance_to_goal_m", "unknown" if d is None else f"{d:.3f}")
+        return stat
+
+
+def main():
+    rospy.init_node("planner")
+    try:
+        PlannerNode()
+    except (ValueError, OSError, RuntimeError) as exc:
+        rospy.logfatal(str(exc))
+        return 1
+    rospy.spin()
+    return 0

@@ -1,0 +1,146 @@
+"""The planner node's logic, ROS-free (issue 13): camera frames and base poses in, gait commands and
+what to show out. planner_node (nodes/planner_node.py) only converts messages and calls this.
+
+    loop = NavLoop(NavConfig.from_yaml(), head_width_m=0.09, perception=DepthTraversability(...),
+                   goal_xy=(1.4, 0.0), goal_radius_m=0.15)
+    loop.on_pose(t, T_world_base)             # base_pose (4x4 of base_link in the world)
+    loop.on_frame(t, depth_m)                 # the latest camera frame (depth in m, or colour for mono)
+    out = loop.tick(t)                        # at the follower's rate: NavTick
+
+Every replan_period_s (config/nav.yaml follower.replan_period_s) the latest frame with the pose
+nearest its stamp (of the last POSE_HISTORY poses) becomes a replan (perception -> perception-space arcs -> the follower); between replans the
+follower turns the pose into kappa. The camera's pose in the replan's ground frame is base_link's
+pose (the one the driver uses, base_pose) times the mount of config/nav.yaml camera: (the head
+bobs with the gait: the mount is the camera's mean pose, the error the batch path does not have).
+
+No free arc: `on_no_free_arc` "hold" (default) stops (gait hold) until a replan finds a free arc;
+"turn" turns in place with the follower's kappa_turn_per_m (what the batch run does).
+Goal reached (base_link within the goal radius): hold for good.
+"""
+import bisect
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Callable, Optional, Tuple
+
+import numpy as np
+
+from .follower import RecedingHorizonFollower
+from .planner import NavPlanner, Replan, T_world_ground, ground_frame
+
+FOLLOWING, WAITING, NO_FREE_ARC, GOAL_REACHED = "following", "waiting", "no_free_arc", "goal_reached"
+NO_FREE_ARC_ACTIONS = ("hold", "turn")
+POSE_HISTORY = 500                 # base poses kept to match a frame's stamp (5 s of 100 Hz)
+
+
+@dataclass
+class NavTick:
+    state: str                         # FOLLOWING | WAITING (no frame or pose yet) | NO_FREE_ARC | GOAL_REACHED
+    hold: bool                         # command the hold gait (else rectilinear with kappa_per_m)
+    kappa_per_m: float = 0.0
+    replan: Optional[Replan] = None    # a replan happened in this tick
+    ground: Optional[np.ndarray] = None   # its traversability image
+    frame: Optional[np.ndarray] = None    # the frame it used
+    T_ground_camera: Optional[np.ndarray] = None
+    message: str = ""
+
+
+class NavLoop:
+    def __init__(self, cfg, head_width_m: float, perception: Callable[[np.ndarray], np.ndarray],
+                 goal_xy: Optional[Tuple[float, float]] = None, goal_radius_m: float = 0.1,
+                 on_no_free_arc: str = "hold", pose_timeout_s: float = 1.0):
+        if on_no_free_arc not in NO_FREE_ARC_ACTIONS:
+            raise ValueError(f"on_no_free_arc: expected hold or turn, got {on_no_free_arc!r}")
+        if not goal_radius_m > 0:
+            raise ValueError(f"goal_radius_m: must be > 0, got {goal_radius_m}")
+        self.cfg = cfg
+        self.perception = perception
+        self.goal_xy = None if goal_xy is None else (float(goal_xy[0]), float(goal_xy[1]))
+        self.goal_radius_m = float(goal_radius_m)
+        self.on_no_free_arc = on_no_free_arc
+        self.pose_timeout_s = float(pose_timeout_s)
+        self.T_base_optical = cfg.mount.T_base_optical()
+        self.planner = NavPlanner(cfg.intrinsics, head_width_m, cfg.sampler, RecedingHorizonFollower(cfg.follower))
+        self.replan_period_s = float(cfg.replan_period_s)
+        self._T_wb = None
+        self._pose_t = None
+        self._history = deque(maxlen=POSE_HISTORY)     # (t_s, T_world_base), in arrival order
+        self._frame = None
+        self._next_replan = None
+        self.state = WAITING
+        self.replans = 0
+        self.stops_no_free_arc = 0
+
+    # ---- inputs ------------------------------------------------------------------------------------
+    def on_pose(self, t_s: float, T_world_base: np.ndarray) -> None:
+        self._T_wb = np.asarray(T_world_base, float)
+        self._pose_t = float(t_s)
+        self._history.append((self._pose_t, self._T_wb))
+
+    def pose_at(self, t_s: float) -> np.ndarray:
+        """base_link's pose nearest t_s among the recent ones (the latest when the history is empty)."""
+        if not self._history:
+            return self._T_wb
+        times = [h[0] for h in self._history]
+        i = bisect.bisect_left(times, t_s)
+        near = [j for j in (i - 1, i) if 0 <= j < len(times)]
+        return self._history[min(near, key=lambda j: abs(times[j] - t_s))][1]
+
+    def on_frame(self, t_s: float, image: np.ndarray) -> None:
+        """The latest camera frame (what the perception reads: depth in m or colour)."""
+        self._frame = (float(t_s), image)
+
+    @property
+    def pose(self):
+        return None if self._T_wb is None else ground_frame(self._T_wb)
+
+    def distance_to_goal_m(self) -> Optional[float]:
+        p = self.pose
+        if p is None or self.goal_xy is None:
+            return None
+        return math.hypot(self.goal_xy[0] - p[0], self.goal_xy[1] - p[1])
+
+    # ---- the tick ----------------------------------------------------------------------------------
+    def tick(self, t_s: float) -> NavTick:
+        if self.state == GOAL_REACHED:
+            return NavTick(GOAL_REACHED, True, message="goal reached: holding")
+        d = self.distance_to_goal_m()
+        if d is not None and d <= self.goal_radius_m:
+            self.state = GOAL_REACHED
+            return NavTick(GOAL_REACHED, True, message=f"goal reached: base_link {d:.3f} m from the goal, holding")
+        if self._T_wb is None or self._frame is None:
+            return NavTick(WAITING, True, message="waiting for " + ("a base pose" if self._T_wb is None else
+                                                                      "a camera frame"))
+        fresh = t_s - self._pose_t <= self.pose_timeout_s
+        pose = self.pose
+        out = NavTick(self.state, False)
+        if self._next_replan is None or t_s >= self._next_replan:
+            self._next_replan = t_s + self.replan_period_s
+            out = self._replan(t_s, pose)
+        cmd = self.planner.command(t_s, pose if fresh else None)
+        if self.state == NO_FREE_ARC and self.on_no_free_arc == "hold":
+            out.hold, out.kappa_per_m = True, 0.0
+        else:
+            out.hold, out.kappa_per_m = False, float(cmd.kappa_per_m)
+        out.state = self.state
+        if not out.message:
+            out.message = cmd.reason or f"{cmd.mode}: kappa {cmd.kappa_per_m:+.2f} /m"
+        return out
+
+    def _replan(self, t_s: float, pose) -> NavTick:
+        t_frame, image = self._frame
+        ground = np.asarray(self.perception(image), bool)
+        T_wb = self.pose_at(t_frame)           # where the camera was when it took the frame
+        pose = ground_frame(T_wb)
+        T_gc = np.linalg.inv(T_world_ground(pose)) @ T_wb @ self.T_base_optical
+        r = self.planner.replan(t_s, ground, T_gc, pose, self.goal_xy)
+        self.replans += 1
+        if r.path_world is None:
+            self.stops_no_free_arc += 1
+            self.state = NO_FREE_ARC
+            action = "holding" if self.on_no_free_arc == "hold" else "turning in place"
+            msg = f"no collision-free arc ({len(r.selection.arcs)} candidates): {action} until a replan finds one"
+        else:
+            self.state = FOLLOWING
+            msg = r.reason
+        return NavTick(self.state, False, replan=r, ground=ground, frame=image, T_ground_camera=T_gc, message=msg)

@@ -1,0 +1,98 @@
+#!/usr/bin/env python3
+"""rostest: navigation through ROS (issue 13). sim.launch world:=test/ros/worlds/sim_nav.yaml.
+
+Checks: the head camera's frames arrive (colour, depth, camera_info); planner_node publishes a
+non-empty nav/path, candidate arcs (nav/arcs) and the traversability overlay, and gait commands
+rectilinear with curve=true; the robot's base_link (ground truth) gets PROGRESS_M closer to the
+goal than at the first gait command (or reaches it) within the time limit.
+"""
+import math
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Path
+from sensor_msgs.msg import CameraInfo, Image
+from snake_autonomy.msg import GaitCommand
+from visualization_msgs.msg import MarkerArray
+
+from mission_test_helpers import wait_for
+
+PROGRESS_M = 0.3        # ~45 s of the gait's 7 mm/s (measured: 0.14 m in the first 21 s); ~200 s allowed
+TIMEOUT_S = 200.0
+
+
+class SimNavTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("sim_nav_test")
+        from snake_autonomy.sim.world_file import load_world
+        cls.world = load_world(rospy.get_param("~world"))
+        cls.lock = threading.Lock()
+        cls.seen = {}
+        cls.paths, cls.commands, cls.distances = [], [], []
+        cls.first_curve_distance = None
+        for topic, kind in (("camera/color/image_raw", Image), ("camera/depth/image_rect_raw", Image),
+                            ("camera/color/camera_info", CameraInfo), ("nav/arcs", MarkerArray),
+                            ("nav/traversability", Image)):
+            rospy.Subscriber(topic, kind, cls.on_topic, callback_args=topic, queue_size=1, buff_size=2 ** 24)
+        rospy.Subscriber("nav/path", Path, cls.on_path, queue_size=5)
+        rospy.Subscriber("gait_command", GaitCommand, cls.on_cmd, queue_size=20)
+        rospy.Subscriber("ground_truth/base_pose", PoseStamped, cls.on_truth, queue_size=5)
+
+    @classmethod
+    def on_topic(cls, msg, topic):
+        with cls.lock:
+            cls.seen[topic] = msg
+
+    @classmethod
+    def on_path(cls, msg):
+        with cls.lock:
+            cls.paths.append(msg)
+
+    @classmethod
+    def on_cmd(cls, msg):
+        with cls.lock:
+            cls.commands.append(msg)
+
+    @classmethod
+    def on_truth(cls, msg):
+        p = msg.pose.position
+        d = math.hypot(cls.world.goal[0] - p.x, cls.world.goal[1] - p.y)
+        with cls.lock:
+            cls.distances.append(d)
+            if cls.first_curve_distance is None and any(c.curve for c in cls.commands):
+                cls.first_curve_distance = d
+
+    def test_planner_drives_the_rectilinear_gait_towards_the_goal(self):
+        wait_for(lambda: all(t in self.seen for t in ("camera/color/image_raw", "camera/depth/image_rect_raw",
+                                                      "camera/color/camera_info")), 120, "the head camera")
+        with self.lock:
+            depth, info = self.seen["camera/depth/image_rect_raw"], self.seen["camera/color/camera_info"]
+        self.assertEqual((depth.encoding, depth.width, depth.height), ("32FC1", info.width, info.height))
+        wait_for(lambda: any(p.poses for p in self.paths), 60, "a non-empty nav/path")
+        wait_for(lambda: any(c.curve and c.gait == "rectilinear" for c in self.commands), 30,
+                 "a rectilinear gait command with curve=true")
+        wait_for(lambda: "nav/arcs" in self.seen and "nav/traversability" in self.seen, 30, "arcs and overlay")
+        with self.lock:
+            arcs = self.seen["nav/arcs"]
+        self.assertGreaterEqual(len([m for m in arcs.markers if m.points]), 5)
+        wait_for(lambda: self.first_curve_distance is not None, 10, "the ground truth")
+        start = self.first_curve_distance
+        deadline = time.monotonic() + TIMEOUT_S
+        while time.monotonic() < deadline and not rospy.is_shutdown():
+            with self.lock:
+                d = self.distances[-1]
+            if start - d >= PROGRESS_M or d <= self.world.goal_radius_m:
+                break
+            time.sleep(0.5)
+        rospy.loginfo(f"sim_nav: distance to the goal {start:.3f} -> {d:.3f} m")
+        self.assertTrue(start - d >= PROGRESS_M or d <= self.world.goal_radius_m,
+                        f"distance to the goal {start:.3f} -> {d:.3f} m (wanted {PROGRESS_M} m less)")
+
+
+if __name__ == "__main__":
+    rostest.rosrun("snake_autonomy", "sim_nav", SimNavTest)
