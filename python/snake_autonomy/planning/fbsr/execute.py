@@ -11,7 +11,8 @@
   `command_trajectory`; the driver's TrajectorySource interpolates it at 100 Hz, slew-limits and
   clamps the goals, and holds the last point. A trajectory the driver refuses ends the run with
   its reasons.
-- Every 10 ms step: the centre of pressure from the floor contacts' normal forces, inside the
+- Every 10 ms step: the centre of pressure from the floor contacts' normal forces (a step with no
+  normal force at all has none: counted as no_pressure_steps, not in the fraction), inside the
   (closed) support polygon of the actual contacts, which must span an area; the lift of the base's frames
   above the floor; the servos' torques against their limit. The actual contacts are MuJoCo's floor
   contacts plus the frames whose capsule is within CONTACT_GAP_M of the floor: a body lying flat is
@@ -21,7 +22,8 @@
   Tipping about an edge lifts the frames beyond it by more than CONTACT_GAP_M within a degree,
   leaving a polygon of no area: counted outside.
 - tipped: a frame of the planned base rose more than LIFT_TIPPED_M off the floor (a base module
-  lifting off unplanned), or the CoP left the contacts' polygon for more than 0.1 s in a row.
+  lifting off unplanned), or the CoP left the contacts' polygon (or the floor carried nothing) for
+  more than 0.1 s in a row.
 """
 from typing import Callable, Optional
 
@@ -104,6 +106,8 @@ class Monitor:
         self.torque_limit_nm = torque_limit_nm
         self.radius_m = float(plant.robot.link_radius_m)
         self.inside, self.max_torque_ratio, self.max_lift_m = [], 0.0, 0.0
+        self.no_pressure_steps = 0    # steps with no floor contact pushing up: no CoP to check
+        self.longest_no_pressure, self._no_pressure_run = 0, 0
         self.base_from = plant.robot.num_frames   # frames >= this index are the planned base
 
     def __call__(self, _t=None) -> None:
@@ -111,8 +115,16 @@ class Monitor:
         frames = self.plant.frame_positions()
         touching = frames[frames[:, 2] - self.radius_m < CONTACT_GAP_M, :2]
         contacts = np.vstack([contacts, touching])
-        ok = cop is not None and Support.of(contacts).signed_distance([cop])[0] >= -COP_TOLERANCE_M
-        self.inside.append(bool(ok))
+        if cop is None:
+            # MuJoCo's soft contacts can carry no normal force for one 10 ms step while the body
+            # lies within a millimetre of the floor (a micro-bounce as tick-quantised goals step):
+            # no pressure, no centre of pressure; counted apart, tipping shows as lift instead.
+            self.no_pressure_steps += 1
+            self._no_pressure_run += 1
+            self.longest_no_pressure = max(self.longest_no_pressure, self._no_pressure_run)
+        else:
+            self._no_pressure_run = 0
+            self.inside.append(bool(Support.of(contacts).signed_distance([cop])[0] >= -COP_TOLERANCE_M))
         ratio = np.abs(self.plant.actuator_torques_nm()).max() / self.torque_limit_nm
         self.max_torque_ratio = max(self.max_torque_ratio, float(ratio))
         z = frames[self.base_from:, 2]
@@ -151,7 +163,8 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
         plant.step(DRIVER_PERIOD_S)
         monitor()
     head = plant.frame_positions()[0]
-    tipped = monitor.max_lift_m > LIFT_TIPPED_M or monitor.longest_outside_s() > 0.1
+    tipped = (monitor.max_lift_m > LIFT_TIPPED_M or monitor.longest_outside_s() > 0.1
+              or monitor.longest_no_pressure * DRIVER_PERIOD_S > 0.1)
     metrics = {
         "tipped": bool(tipped),
         "cop_inside_fraction": float(np.mean(monitor.inside)),
@@ -161,6 +174,7 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
         "active_modules": int(plan.active_modules),
     }
     extra = {"head_xy_m": head[:2].tolist(), "max_base_lift_m": monitor.max_lift_m,
+             "no_pressure_steps": monitor.no_pressure_steps,
              "limit_violations": int(plant.limit_violations)}
     if pipe is not None:
         extra["head_to_pipe_axis_m"] = float(np.hypot(head[0] - pipe.x_m, head[1] - pipe.y_m))
