@@ -1,5 +1,5 @@
 """The rectilinear gait of Chang et al. (eq. 2) on a chain of alternating pitch and yaw joints: a
-Python reference, driving the plant's joint targets directly.
+Python reference that drives the plant's joint targets directly.
 
     z(s, t) = A sin(2 pi (f t + direction * s / lambda))     vertical travelling wave
     the average body in the ground plane: an arc of constant curvature kappa
@@ -13,9 +13,9 @@ at s_i = H + (i - 1) L. Discretised on the joint spacing:
 pitch_sign and yaw_sign map these angles to the joints' q (the thesis's eq. 3.4 axes): yaw_sign is
 chosen so that kappa > 0 bends the body to the left (CCW path), measured on the plant.
 
-When issue 11's C++ gait library has the rectilinear gait and its `curvature` steering law, the
-driver's path replaces this module for driving (this stays as the reference the gait map and tests
-check against).
+Driving goes through the driver now (config/gaits.yaml `rectilinear`, derived from this
+discretisation, with the C++ `curvature` steering law; sim/gait_driver.py): this module stays the
+reference the gait map, the tests and `nav run --gait-source reference` check against.
 """
 import math
 from dataclasses import dataclass
