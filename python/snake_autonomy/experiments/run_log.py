@@ -12,14 +12,13 @@ process. Crash safety:
   results folder from the closed bag: the same code path as ``snake_autonomy report BAG``.
 """
 import json
-import math
 import threading
 import time
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence
 
 from .bag_io import RUN_TOPIC
-from .results import compute_metrics, write_json_atomic
+from .results import PathLength, compute_metrics, write_json_atomic
 
 BAG_NAME = "run.bag"
 LIVE_NOTE = ("written while the run was live; if the process died this is where it stopped: "
@@ -50,8 +49,7 @@ class RunLog:
         self._decisions: Dict[str, List[Any]] = {k: [] for k in (
             "t", "waypoint_index", "target_index", "reached", "distance", "yaw_error_abs", "yaw_error_rel",
             "yaw_error", "pose_stale")}
-        self._path_m = 0.0
-        self._last_xy = None
+        self._path = PathLength()
         self._last_t = self.t_start_s
         self.closed = False
         self.meta = {"mission": mission_name, "t_start": self.t_start_s, "waypoints": self.waypoints,
@@ -80,12 +78,12 @@ class RunLog:
             self._last_t = max(self._last_t, t_s)
 
     def add_pose(self, t_s: float, x: float, y: float) -> None:
-        """The centre of mass, for the running path length of the metrics."""
-        if not (math.isfinite(x) and math.isfinite(y)):
-            return
-        if self._last_xy is not None:
-            self._path_m += math.hypot(x - self._last_xy[0], y - self._last_xy[1])
-        self._last_xy = (x, y)
+        """The centre of mass, for the running path length of the metrics (results.PathLength)."""
+        self._path.add(x, y)
+
+    @property
+    def path_length_m(self) -> float:
+        return self._path.length_m
 
     def add_decision(self, t_s: float, waypoint_index: int, target_index: int, reached: bool, distance: float,
                      yaw_error_abs: float, yaw_error_rel: float, yaw_error: float, pose_stale: bool = False):
@@ -109,7 +107,7 @@ class RunLog:
 
     def metrics(self, outcome: str) -> Dict[str, Any]:
         return compute_metrics(self.waypoints, self._decisions, None, outcome, self.t_start_s,
-                               extra={"path_length_m": self._path_m, "duration_s": self._last_t - self.t_start_s,
+                               extra={"path_length_m": self._path.length_m, "duration_s": self._last_t - self.t_start_s,
                                       "meta": {k: v for k, v in self.meta.items() if k != "mission_yaml"}})
 
     def _write_metrics(self, outcome: str) -> None:

@@ -370,7 +370,7 @@ class MissionNode:
 
     def result_of_run(self, outcome):
         m = self.runner
-        path_m = self.log._path_m if self.log is not None else float("nan")
+        path_m = self.log.path_length_m if self.log is not None else float("nan")
         metrics = self.decisions.metrics(self.mission.waypoints, outcome, m.t_start if m.t_start is not None else 0.0)
         return fill_result(RunMissionResult(), WaypointResult, self.mission.name, m.state, outcome, metrics,
                            path_length_m=path_m, run_dir=str(self.run_dir) if self.log is not None else "")
