@@ -183,3 +183,24 @@ def test_path_length_counts_progress_not_the_sway_of_a_100_hz_stream(tmp_path):
         log.add_pose(float(ti), float(xi), float(yi))
     assert log.path_length_m == pytest.approx(path_length({"x": x, "y": y}))
     log.close("done", plots=False)
+
+
+def test_the_simulators_ground_truth_com_is_not_read_as_the_estimate(tmp_path):
+    """/ground_truth/com_pose shares the last name of /com_pose; interleaved, the trajectory zig-zagged
+    between the two (the demo's star measured 260 m)."""
+    from geometry_msgs.msg import PoseStamped
+    log = RunLog(tmp_path / "run", "truth", [(1.0, 0.0, 0.0)], t_start_s=0.0, mission_yaml="")
+    for k in range(20):
+        for topic, y in (("/com_pose", 0.0), ("/ground_truth/com_pose", 0.3)):
+            msg = PoseStamped()
+            msg.header.stamp = rospy_time(0.1 * k + (0.05 if y else 0.0))
+            msg.pose.position.x, msg.pose.position.y, msg.pose.orientation.w = 0.05 * k, y, 1.0
+            log.write(topic, msg, 0.1 * k)
+    log.close("done", plots=False)
+    run = read_run(tmp_path / "run" / "run.bag")
+    assert len(run["trajectory"]["y"]) == 20 and not np.any(run["trajectory"]["y"])
+
+
+def rospy_time(t_s):
+    import genpy
+    return genpy.Time.from_sec(t_s)

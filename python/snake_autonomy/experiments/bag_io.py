@@ -21,6 +21,11 @@ def _basename(topic: str) -> str:
     return topic.rstrip("/").rsplit("/", 1)[-1]
 
 
+def _is_ground_truth(topic: str) -> bool:
+    """The simulator's ground_truth/* topics share the estimates' last names (com_pose, base_pose)."""
+    return "ground_truth" in topic.strip("/").split("/")
+
+
 @contextmanager
 def open_bag(path):
     """Yields (rosbag.Bag opened for reading, reindexed: bool)."""
@@ -58,7 +63,8 @@ def _yaw(q) -> float:
 
 def read_run(path, com_topic: str = "com_pose", status_topic: str = "tracking_status") -> Dict[str, Any]:
     """{waypoints, trajectory, decisions, meta, reindexed} of a run bag. Topics are matched by their
-    last name component, so a namespaced run (/cobra/com_pose) reads the same."""
+    last name component, so a namespaced run (/cobra/com_pose) reads the same; the simulator's
+    ground_truth/com_pose is not the robot's estimate and is left out (it was interleaved once)."""
     traj = {"t": [], "x": [], "y": [], "yaw": []}
     keys = ("t", "waypoint_index", "target_index", "reached", "distance", "yaw_error_abs", "yaw_error_rel",
             "yaw_error", "w", "mode", "delta", "gait", "pose_stale", "done")
@@ -78,7 +84,7 @@ def read_run(path, com_topic: str = "com_pose", status_topic: str = "tracking_st
                 elif event.get("event") == "end":
                     meta["outcome"] = event.get("outcome")
                     meta["t_end"] = event.get("t")
-            elif name == com_topic:
+            elif name == com_topic and not _is_ground_truth(topic):
                 stamp = msg.header.stamp.to_sec() or t.to_sec()
                 traj["t"].append(stamp)
                 traj["x"].append(msg.pose.position.x)
