@@ -91,3 +91,17 @@ def test_the_planner_keeps_its_earlier_views():
     assert planner(earlier_views=0).sampler_params.earlier_views == 0
     assert SamplerParams(earlier_views=-1).validate() == ["earlier_views: must be an integer >= 0, got -1"]
     assert SamplerParams(body_clearance_m=-0.1).validate() == ["body_clearance_m: must be >= 0, got -0.1"]
+
+
+def test_floor_far_behind_an_obstacle_in_an_earlier_view_is_hidden_not_blocked():
+    # 1 m back, the camera saw a thin wall across the view 0.4 m ahead: the floor behind it is not
+    # ground in that image; both points are behind the camera now (hidden)
+    wall = drawn_mask(boxes=[(0.4, 0.45, -2.0, 2.0)])
+    now = drawn_mask()
+    shadow = np.array([[-0.2, 0.1, 0.0]])       # 0.8 m ahead of the earlier camera: behind the wall
+    on_wall = np.array([[-0.58, 0.1, 0.0]])     # 0.42 m ahead of it: the wall itself
+    for depth, shadow_free in ((np.inf, False), (0.25, True)):
+        c = PerceptionCollisionChecker(K, T_GC, 0.5)
+        c.add_view(wall, shifted(-1.0), obstacle_depth_m=depth)
+        assert bool(c.point_free(shadow, now)[0]) == shadow_free
+        assert not c.point_free(on_wall, now)[0]

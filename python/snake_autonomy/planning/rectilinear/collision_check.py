@@ -25,11 +25,25 @@ import numpy as np
 class _View:
     """One traversability image and the projection of ground points into it."""
 
-    def __init__(self, K, ground: np.ndarray, T_ground_camera: np.ndarray, max_depth_m: float = math.inf):
+    def __init__(self, K, ground: np.ndarray, T_ground_camera: np.ndarray, max_depth_m: float = math.inf,
+                 obstacle_depth_m: float = math.inf):
         self.max_depth_m = max_depth_m
         T_cam_ground = np.linalg.inv(np.asarray(T_ground_camera, float))
         self.R, self.t = T_cam_ground[:3, :3], T_cam_ground[:3, 3]
         self.K, self.ground = K, ground
+        self.edge_depth = None
+        if math.isfinite(obstacle_depth_m):
+            # per column, the depth of the floor at the ground region's top edge (the region is
+            # grown from the bottom): non-ground further than obstacle_depth_m beyond it is hidden
+            # behind the obstacle there, not known to be one
+            h, w = ground.shape
+            top = np.where(ground.any(axis=0), np.argmax(ground, axis=0), h) - 0.5
+            T = np.asarray(T_ground_camera, float)
+            rays = np.column_stack([(np.arange(w) - K[0, 2]) / K[0, 0], (top - K[1, 2]) / K[1, 1],
+                                    np.ones(w)]) @ T[:3, :3].T
+            down = rays[:, 2] < -1e-9
+            depth = np.where(down, -T[2, 3] / np.where(down, rays[:, 2], -1.0), np.inf)
+            self.edge_depth = depth + obstacle_depth_m
 
     def look(self, pts: np.ndarray):
         """(M, 3) ground points -> (shown (M,) bool, ground (M,) bool where shown)."""
@@ -42,6 +56,9 @@ class _View:
         shown = (z > 1e-9) & (z < self.max_depth_m) & (u >= 0) & (u < w) & (v >= 0) & (v < h)
         free = np.zeros(len(pts), bool)
         free[shown] = self.ground[v[shown], u[shown]]
+        if self.edge_depth is not None:
+            idx = np.flatnonzero(shown & ~free)
+            shown[idx[z[idx] > self.edge_depth[u[idx]]]] = False
         return shown, free
 
 
@@ -68,11 +85,14 @@ class PerceptionCollisionChecker:
         n = max(footprint_points, int(math.ceil(head_width_m / point_spacing_m - 1e-9)) + 1)
         self.offsets = np.linspace(-0.5 * head_width_m, 0.5 * head_width_m, n)
 
-    def add_view(self, ground: np.ndarray, T_ground_camera: np.ndarray, max_depth_m: float = math.inf) -> None:
+    def add_view(self, ground: np.ndarray, T_ground_camera: np.ndarray, max_depth_m: float = math.inf,
+                 obstacle_depth_m: float = math.inf) -> None:
         """An earlier traversability image, its camera in the current ground frame; add the newest
         first (a hidden point takes the value of the first view that shows it nearer than
-        max_depth_m along its optical axis: the far floor is often marked unsure)."""
-        self._earlier.append(_View(self.K, ground, T_ground_camera, max_depth_m))
+        max_depth_m along its optical axis: the far floor is often marked unsure). Non-ground further
+        than obstacle_depth_m beyond the ground region's edge in its column is not shown there
+        (hidden behind the obstacle at the edge, not known to be one)."""
+        self._earlier.append(_View(self.K, ground, T_ground_camera, max_depth_m, obstacle_depth_m))
 
     def footprint_points(self, poses: np.ndarray) -> np.ndarray:
         """(N, 3) poses -> (N, P, 3) ground points of the footprint at each."""

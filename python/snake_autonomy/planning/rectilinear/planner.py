@@ -71,7 +71,8 @@ class NavPlanner:
         T_world_g = T_world_ground(pose)
         T_g_world = np.linalg.inv(T_world_g)
         for ground_k, T_world_camera_k in self._views:
-            checker.add_view(ground_k, T_g_world @ T_world_camera_k, self.sampler_params.horizon_m)
+            checker.add_view(ground_k, T_g_world @ T_world_camera_k, self.sampler_params.horizon_m,
+                             self.sampler_params.obstacle_depth_m)
         if self.sampler_params.earlier_views:
             self._views.appendleft((ground_image, T_world_g @ np.asarray(T_ground_camera, float)))
         sampler = TrajectorySampler(checker, self.sampler_params)

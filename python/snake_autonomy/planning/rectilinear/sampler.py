@@ -39,6 +39,8 @@ class SamplerParams:
     body_clearance_m: float = 0.0         # > 0: the footprint's half-width is at least this (the
                                           # body's reach beyond the head's path, planner.py)
     earlier_views: int = 0                # views of earlier replans kept for hidden points
+    obstacle_depth_m: float = math.inf    # in those: non-ground this far beyond the ground's edge
+                                          # counts as blocked, further is hidden behind it
 
     def validate(self) -> List[str]:
         p = []
@@ -47,7 +49,7 @@ class SamplerParams:
         for key in ("max_curvature_per_m", "horizon_m", "spacing_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
-        for key in ("lateral_margin_m", "body_clearance_m"):
+        for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
         if not isinstance(self.earlier_views, int) or self.earlier_views < 0:
