@@ -230,7 +230,7 @@ class NavRun:
                 if spec.keep_frames:
                     frames.append(overlay(frame.rgb, ground, r.selection,
                                           PerceptionCollisionChecker(self.cfg.intrinsics, T_gc,
-                                                                     self.planner.head_width_m)))
+                                                                     self.planner.footprint_width_m)))
             if t >= spec.ramp_s:
                 if t >= next_command:
                     next_command += spec.command_period_s

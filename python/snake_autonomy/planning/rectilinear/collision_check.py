@@ -1,27 +1,72 @@
-"""Perception-space collision checks (Chang et al. III): a path's poses, the head's footprint at
-each projected into the current traversability image; free while every projected pixel is ground.
+"""Perception-space collision checks (Chang et al. III): a path's poses, a footprint at each
+projected into the current traversability image; free while every projected pixel is ground.
 
 The ground frame: the robot's current pose on the floor (x forward, y left, z up, origin under
 base_link). T_ground_camera: the camera's optical frame in it (OpenCV: x right, y down, z forward).
-The footprint at a pose is the segment across the head, width head_width_m (51 mm on Chang's robot),
-sampled at `footprint_points` points (a line, as in the paper: the image is a homography of the
-floor, so only the footprint on the floor is hallucinated).
+The footprint at a pose is the segment across the path, width footprint width (the head's 51 mm on
+Chang's robot; the planner passes the body's swept width, planner.py), sampled at points no further
+apart than point_spacing_m and at least `footprint_points` (a line, as in the paper: the image is a
+homography of the floor, so only the footprint on the floor is hallucinated).
 
-Points nearer (ahead of the camera, along its heading on the floor) than near_field_m are hidden
-from the view and count as free: the robot is there or saw that floor on its way. near_field_m is
-the larger of where the image's bottom row meets the floor and where the view becomes as wide as
-the head (a head wider than the view at its own front: COBRA's 90 mm at 5 cm up). Points anywhere
-else outside the image (beside or beyond the field of view) are not known to be free.
+A point the current image shows is judged by it, however near. A point the image does not show
+(below the bottom row, beside or beyond the field of view) is looked up in the earlier views given
+with add_view (the newest that shows it: the last few replans' images, each with its camera pose
+in the current ground frame; images, not a map: nothing is fused). Seen in none, it counts as free
+when nearer (ahead of the camera, along its heading on the floor) than near_field_m, the distance
+at which the view becomes as wide as the footprint (or the bottom row's, if further): the robot is
+there or came from there; anywhere else it is not known to be free. Without the earlier views a
+passed obstacle beside the body is free (round 3: the head slid along the cylinder it had passed).
 """
 import math
 
-import cv2
 import numpy as np
+
+
+class _View:
+    """One traversability image and the projection of ground points into it."""
+
+    def __init__(self, K, ground: np.ndarray, T_ground_camera: np.ndarray, max_depth_m: float = math.inf,
+                 obstacle_depth_m: float = math.inf):
+        self.max_depth_m = max_depth_m
+        T_cam_ground = np.linalg.inv(np.asarray(T_ground_camera, float))
+        self.R, self.t = T_cam_ground[:3, :3], T_cam_ground[:3, 3]
+        self.K, self.ground = K, ground
+        self.edge_depth = None
+        if math.isfinite(obstacle_depth_m):
+            # per column, the depth of the floor at the ground region's top edge (the region is
+            # grown from the bottom): non-ground further than obstacle_depth_m beyond it is hidden
+            # behind the obstacle there, not known to be one
+            h, w = ground.shape
+            top = np.where(ground.any(axis=0), np.argmax(ground, axis=0), h) - 0.5
+            T = np.asarray(T_ground_camera, float)
+            rays = np.column_stack([(np.arange(w) - K[0, 2]) / K[0, 0], (top - K[1, 2]) / K[1, 1],
+                                    np.ones(w)]) @ T[:3, :3].T
+            down = rays[:, 2] < -1e-9
+            depth = np.where(down, -T[2, 3] / np.where(down, rays[:, 2], -1.0), np.inf)
+            self.edge_depth = depth + obstacle_depth_m
+
+    def look(self, pts: np.ndarray):
+        """(M, 3) ground points -> (shown (M,) bool, ground (M,) bool where shown)."""
+        c = pts @ self.R.T + self.t
+        z = c[:, 2]
+        zs = np.where(z > 1e-9, z, 1.0)
+        u = np.round(self.K[0, 0] * c[:, 0] / zs + self.K[0, 2]).astype(np.int64)
+        v = np.round(self.K[1, 1] * c[:, 1] / zs + self.K[1, 2]).astype(np.int64)
+        h, w = self.ground.shape
+        shown = (z > 1e-9) & (z < self.max_depth_m) & (u >= 0) & (u < w) & (v >= 0) & (v < h)
+        free = np.zeros(len(pts), bool)
+        free[shown] = self.ground[v[shown], u[shown]]
+        if self.edge_depth is not None:
+            idx = np.flatnonzero(shown & ~free)
+            shown[idx[z[idx] > self.edge_depth[u[idx]]]] = False
+        return shown, free
 
 
 class PerceptionCollisionChecker:
     def __init__(self, intrinsics, T_ground_camera: np.ndarray, head_width_m: float,
-                 footprint_points: int = 5):
+                 footprint_points: int = 5, point_spacing_m: float = 0.04):
+        """head_width_m: the checked footprint's width (the head's, or the body's swept width)."""
+        import cv2
         self.k = intrinsics
         self.K = intrinsics.K()
         self.dist = np.zeros(5)
@@ -29,46 +74,82 @@ class PerceptionCollisionChecker:
         self.rvec, _ = cv2.Rodrigues(T_cam_ground[:3, :3])
         self.tvec = T_cam_ground[:3, 3].copy()
         self._R, self._t = T_cam_ground[:3, :3], T_cam_ground[:3, 3]
+        self._T_gc = np.asarray(T_ground_camera, float)
+        self._earlier = []                                            # newest first
         # the camera's position and heading on the floor; the near field hidden under the view
-        T = np.asarray(T_ground_camera, float)
+        T = self._T_gc
         self._cam_xy = T[:2, 3]
         fwd = T[:2, 2] / max(1e-9, np.linalg.norm(T[:2, 2]))
         self._cam_fwd = fwd
-        ray = T[:3, :3] @ np.array([0.0, (intrinsics.height - 1 - intrinsics.cy) / intrinsics.fy, 1.0])
-        bottom = float(-T[2, 3] / ray[2] * (ray[:2] @ fwd)) if ray[2] < 0 else 0.0
-        half_fov = math.atan2(min(intrinsics.cx, intrinsics.width - intrinsics.cx), intrinsics.fx)
-        self.near_field_m = max(bottom, 0.5 * head_width_m / math.tan(half_fov))
-        self.offsets = np.linspace(-0.5 * head_width_m, 0.5 * head_width_m, footprint_points)
+        self.near_field_m = near_field(intrinsics, T, fwd, 0.5 * head_width_m)
+        n = max(footprint_points, int(math.ceil(head_width_m / point_spacing_m - 1e-9)) + 1)
+        self.offsets = np.linspace(-0.5 * head_width_m, 0.5 * head_width_m, n)
+
+    def add_view(self, ground: np.ndarray, T_ground_camera: np.ndarray, max_depth_m: float = math.inf,
+                 obstacle_depth_m: float = math.inf) -> None:
+        """An earlier traversability image, its camera in the current ground frame; add the newest
+        first (a hidden point takes the value of the first view that shows it nearer than
+        max_depth_m along its optical axis: the far floor is often marked unsure). Non-ground further
+        than obstacle_depth_m beyond the ground region's edge in its column is not shown there
+        (hidden behind the obstacle at the edge, not known to be one)."""
+        self._earlier.append(_View(self.K, ground, T_ground_camera, max_depth_m, obstacle_depth_m))
 
     def footprint_points(self, poses: np.ndarray) -> np.ndarray:
-        """(N, 3) poses -> (N, P, 3) ground points of the head's footprint at each."""
+        """(N, 3) poses -> (N, P, 3) ground points of the footprint at each."""
         poses = np.asarray(poses, float)
         nx, ny = -np.sin(poses[:, 2]), np.cos(poses[:, 2])           # left normal
         x = poses[:, 0:1] + nx[:, None] * self.offsets[None, :]
         y = poses[:, 1:2] + ny[:, None] * self.offsets[None, :]
         return np.dstack([x, y, np.zeros_like(x)])
 
+    def point_free(self, flat: np.ndarray, ground: np.ndarray) -> np.ndarray:
+        """(M, 3) ground points -> (M,) bool: ground in the current image where it shows them; else
+        ground in any earlier view (not ground in one of them: behind an obstacle, or the obstacle);
+        shown in none: free only within the near field."""
+        shown, free = _View(self.K, ground, self._T_gc).look(flat)
+        hidden = np.flatnonzero(~shown)
+        seen = np.zeros(len(hidden), bool)
+        for view in self._earlier:
+            if not len(hidden):
+                break
+            s, f = view.look(flat[hidden])
+            free[hidden] |= s & f
+            seen |= s
+        unseen = hidden[~seen]
+        free[unseen] = (flat[unseen, :2] - self._cam_xy) @ self._cam_fwd < self.near_field_m
+        return free
+
     def pose_free(self, poses: np.ndarray, ground: np.ndarray) -> np.ndarray:
-        """(N,) bool: every footprint point of the pose is ground (or hidden below the image)."""
+        """(N,) bool: every footprint point of the pose is free (point_free)."""
         pts = self.footprint_points(poses)
         n, p = pts.shape[:2]
-        flat = pts.reshape(-1, 3)
-        z = flat @ self._R[2] + self._t[2]                            # depth in the camera
-        uv, _ = cv2.projectPoints(flat, self.rvec, self.tvec, self.K, self.dist)
-        uv = uv.reshape(-1, 2)
-        u = np.round(uv[:, 0]).astype(np.int64)
-        v = np.round(uv[:, 1]).astype(np.int64)
-        h, w = ground.shape
-        inside = (z > 0) & (u >= 0) & (u < w) & (v >= 0) & (v < h)
-        ok = (flat[:, :2] - self._cam_xy) @ self._cam_fwd < self.near_field_m
-        inside &= ~ok
-        ok[inside] = ground[v[inside], u[inside]]
-        return ok.reshape(n, p).all(axis=1)
+        return self.point_free(pts.reshape(-1, 3), ground).reshape(n, p).all(axis=1)
 
     def free_length(self, poses: np.ndarray, ground: np.ndarray, s_m: np.ndarray) -> float:
         """Arc length s_m of the last pose of the path's collision-free prefix (0 if pose 0 is not
         free)."""
         return prefix_length(self.pose_free(poses, ground), s_m)
+
+
+def near_field(intrinsics, T_ground_camera: np.ndarray, fwd: np.ndarray, half_width_m: float) -> float:
+    """Forward distance from the camera (along fwd on the floor) at which the image shows the floor
+    at least half_width_m to both sides of the camera's heading, and below which it shows none:
+    where the image's side columns (or its bottom row) meet the floor, row by row from the bottom."""
+    T = np.asarray(T_ground_camera, float)
+    k = intrinsics
+    v = np.arange(k.height - 1, -1, -1, dtype=float)
+    best = None
+    for u in (0.0, k.width - 1.0):
+        rays = np.column_stack([np.full_like(v, (u - k.cx) / k.fx), (v - k.cy) / k.fy, np.ones_like(v)]) @ T[:3, :3].T
+        down = rays[:, 2] < -1e-9
+        s = np.where(down, -T[2, 3] / np.where(down, rays[:, 2], -1.0), 0.0)
+        pts = T[:2, 3] + s[:, None] * rays[:, :2]
+        d = (pts - T[:2, 3]) @ fwd
+        lateral = np.abs((pts - T[:2, 3]) @ np.array([-fwd[1], fwd[0]]))
+        ok = down & (lateral >= half_width_m)
+        reach = float(d[np.argmax(ok)]) if ok.any() else math.inf
+        best = reach if best is None else max(best, reach)
+    return max(best, float(d[0]) if down[0] else 0.0)
 
 
 def prefix_length(free: np.ndarray, s_m: np.ndarray) -> float:

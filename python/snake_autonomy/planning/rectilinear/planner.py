@@ -6,6 +6,7 @@ The ground frame of a replan: the robot's pose on the floor (base_link projected
 base_link's x axis). Both the simulator's batch loop and a planner node call `replan` and then
 `follower.update` at the control rate.
 """
+import collections
 import math
 from dataclasses import dataclass
 from typing import Optional, Tuple
@@ -55,11 +56,25 @@ class NavPlanner:
         self.sampler_params = sampler_params
         self.follower = follower
         self._turning = None
+        self._views = collections.deque(maxlen=max(1, sampler_params.earlier_views))
+
+    @property
+    def footprint_width_m(self) -> float:
+        """The checked footprint: the head's width plus lateral_margin_m a side, at least
+        2 body_clearance_m (the body's swept width around the head's path)."""
+        p = self.sampler_params
+        return max(self.head_width_m + 2.0 * p.lateral_margin_m, 2.0 * p.body_clearance_m)
 
     def replan(self, t_s: float, ground_image: np.ndarray, T_ground_camera: np.ndarray, pose,
                goal_xy=None) -> Replan:
-        checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera,
-                                             self.head_width_m + 2.0 * self.sampler_params.lateral_margin_m)
+        checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera, self.footprint_width_m)
+        T_world_g = T_world_ground(pose)
+        T_g_world = np.linalg.inv(T_world_g)
+        for ground_k, T_world_camera_k in self._views:
+            checker.add_view(ground_k, T_g_world @ T_world_camera_k, self.sampler_params.horizon_m,
+                             self.sampler_params.obstacle_depth_m)
+        if self.sampler_params.earlier_views:
+            self._views.appendleft((ground_image, T_world_g @ np.asarray(T_ground_camera, float)))
         sampler = TrajectorySampler(checker, self.sampler_params)
         goal_g = None
         if goal_xy is not None:

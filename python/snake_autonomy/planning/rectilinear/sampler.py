@@ -9,7 +9,8 @@ says so (no_free_arc) and the caller stops and turns in place.
 
 Optional goal bias (not in the paper, off by default): arcs whose free length is within
 goal_tie_m of the longest count as equally long, and among them the one whose free prefix passes
-closest to the goal (to 1 cm) is taken before curvature decides; an arc free beyond the goal's
+closest to the goal (to 1 cm) is taken, then the one whose prefix ends closest to it (a goal
+behind the robot: every prefix passes closest at its start), before curvature decides; an arc free beyond the goal's
 distance counts as long enough (the far floor is often marked unsure at the horizon) (round 1 compared the heading at
 the prefix's end: with the goal nearer than the horizon every prefix ends past it and COBRA drove
 by the goal at 0.28 m). lateral_margin_m widens the checked footprint on each side (the body
@@ -35,6 +36,11 @@ class SamplerParams:
     margin_m: float = 0.0                 # taken off every free prefix
     goal_tie_m: float = 0.0               # > 0: the goal bias above
     lateral_margin_m: float = 0.0         # added to each side of the head footprint (planner.py)
+    body_clearance_m: float = 0.0         # > 0: the footprint's half-width is at least this (the
+                                          # body's reach beyond the head's path, planner.py)
+    earlier_views: int = 0                # views of earlier replans kept for hidden points
+    obstacle_depth_m: float = math.inf    # in those: non-ground this far beyond the ground's edge
+                                          # counts as blocked, further is hidden behind it
 
     def validate(self) -> List[str]:
         p = []
@@ -43,8 +49,11 @@ class SamplerParams:
         for key in ("max_curvature_per_m", "horizon_m", "spacing_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
-        if self.lateral_margin_m < 0:
-            p.append(f"lateral_margin_m: must be >= 0, got {self.lateral_margin_m}")
+        for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m"):
+            if getattr(self, key) < 0:
+                p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
+        if not isinstance(self.earlier_views, int) or self.earlier_views < 0:
+            p.append(f"earlier_views: must be an integer >= 0, got {self.earlier_views!r}")
         if self.min_free_m < 0 or self.goal_tie_m < 0 or self.margin_m < 0:
             p.append(f"min_free_m, goal_tie_m, margin_m: must be >= 0, got {self.min_free_m}, "
                      f"{self.goal_tie_m}, {self.margin_m}")
@@ -111,11 +120,11 @@ class TrajectorySampler:
 
         def key(i):
             a = arcs[i]
-            goal_err = 0.0
+            goal_err = end_err = 0.0
             if goal_in_ground is not None and p.goal_tie_m > 0:
                 n = np.searchsorted(a.s_m, a.free_m, side="right")
                 prefix = a.poses[:max(1, n), :2]
-                goal_err = float(np.min(np.hypot(prefix[:, 0] - goal_in_ground[0],
-                                                 prefix[:, 1] - goal_in_ground[1])))
-            return (round(goal_err, 2), abs(a.curvature_per_m))
+                d = np.hypot(prefix[:, 0] - goal_in_ground[0], prefix[:, 1] - goal_in_ground[1])
+                goal_err, end_err = float(np.min(d)), float(d[-1])
+            return (round(goal_err, 2), round(end_err, 2), abs(a.curvature_per_m))
         return Selection(arcs, min(best, key=key))
