@@ -184,6 +184,7 @@ class MissionNode:
 
     # -- helpers -----------------------------------------------------------------------------------
     def make_runner(self, mission):
+        self.scouts_logged = 0   # the new runner's scout_log starts empty
         planner = executor = None
         if mission.scouts:
             planner, executor = self.scout_parts()
@@ -427,10 +428,10 @@ class MissionNode:
         """Each finished scout stop as a run event (metrics.json `scouts`, as in the batch simulator)."""
         records = self.runner.scout_log
         if self.log is not None:
-            for record in records[getattr(self.runner, "_scouts_logged", 0):]:
+            for record in records[self.scouts_logged:]:
                 self.log.event({"event": "scout", **record.as_dict()}, t_s)
                 rospy.loginfo(f"scout at waypoint {record.waypoint_index}: {record.outcome}")
-        self.runner._scouts_logged = len(records)
+        self.scouts_logged = len(records)
 
     def send_hold(self, why):
         hold = self.runner.hold_gait if self.runner is not None else self.defaults["gaits"]["stop"]

@@ -115,7 +115,6 @@ class SimNode:
         rospy.Subscriber("tracking_status", TrackingStatus, self.on_status, queue_size=10)
         # A scout trajectory raises the head on purpose: from the driver taking one until the next gait
         # command (the head is down again), the roll-over check watches the tail.
-        self._watching_tail = False
         rospy.Subscriber("driver/trajectory_status", TrajectoryStatus, self.on_trajectory_status, queue_size=10)
         rospy.Subscriber("gait_command", GaitCommand, self.on_gait_command, queue_size=10)
         self.sim.start()
@@ -197,14 +196,11 @@ class SimNode:
         self.sim.set_target(msg.waypoint_index)
 
     def on_trajectory_status(self, msg):
-        if msg.phase == "running" and not self._watching_tail:
-            self._watching_tail = True
+        if msg.phase == "running":
             self.sim.watch_tail(True)
 
     def on_gait_command(self, _msg):
-        if self._watching_tail:
-            self._watching_tail = False
-            self.sim.watch_tail(False)
+        self.sim.watch_tail(False)
 
     # -- the loop ------------------------------------------------------------------------------------
     def loop(self):

@@ -196,7 +196,7 @@ class BatchRun:
         self.heading_offset_rad, self.plant = w.heading_offset_rad, w.plant
         self.driver = LockStepDriver(self.robot, self.library, self.plant, load_driver_config(spec.driver_config))
         self.feedback = make_feedback(spec.feedback, self.params, self.robot)
-        self.scout_executor, scout_planner, self._watching_tail = None, None, False
+        self.scout_executor, scout_planner = None, None
         if self.mission.scouts:     # scout stops: the FBSR planner, trajectories through the driver
             from ..missions.scout import fbsr_scout_planner
             from .scout_executor import DriverTrajectoryExecutor
@@ -297,12 +297,9 @@ class BatchRun:
         return self._result(traj, dec, outcome or runner.outcome, t_start, wall)
 
     def _scout_step(self, t: float) -> None:
-        """The scout trajectory's goals over the driver's; the head's height while held raised."""
-        ex = self.scout_executor
-        ex.apply(t)
-        if ex.active != self._watching_tail:      # the head is raised on purpose: watch the tail
-            self._watching_tail = ex.active
-            self.world.watch_tilt_of(self.robot.frame_names[-1] if ex.active else None)
+        """While a scout trajectory is out, the roll-over check watches the tail; the head's height
+        while held raised."""
+        self.world.watch_tail(self.scout_executor.active)
         stop = self.runner.scout
         if stop is not None and stop.phase == "holding":
             head_z = float(self.plant.frame_positions()[0, 2])

@@ -33,6 +33,7 @@ from typing import List, Optional
 
 import numpy as np
 
+from ..experiments.results import PathLength
 from ..paths import config_path
 from .camera import HeadCamera
 from .collisions import CollisionMonitor
@@ -199,7 +200,7 @@ class NavRun:
         t, kappa = 0.0, 0.0
         traj, replans, frames = [], [], []
         next_replan, next_sample = spec.ramp_s, 0.0
-        path_len, last_xy, reached, rolled = 0.0, None, False, False
+        path, reached, rolled = PathLength(min_step_m=0.0), False, False   # ground truth at 10 Hz: every step
         kappa_goal, next_command = 0.0, spec.ramp_s
         while t < spec.time_limit_s:
             T_wb = plant.frame_transform("base_link")
@@ -207,9 +208,7 @@ class NavRun:
             if t >= next_sample:
                 next_sample += 0.1
                 traj.append((t, pose[0], pose[1]))
-                if last_xy is not None:
-                    path_len += math.hypot(pose[0] - last_xy[0], pose[1] - last_xy[1])
-                last_xy = pose[:2]
+                path.add(pose[0], pose[1])
                 self.collisions.update(plant.data, clearance=True)
                 if world.goal_reached(pose[0], pose[1]):
                     reached = True
@@ -252,7 +251,7 @@ class NavRun:
         metrics = {"goal_reached": bool(reached), "time_s": round(float(t), 3),
                    "collisions": int(self.collisions.collisions),
                    "min_clearance_m": float(clearance) if math.isfinite(clearance) else None,
-                   "path_length_m": round(path_len, 4), "replans": len(replans),
+                   "path_length_m": round(path.length_m, 4), "replans": len(replans),
                    "stops_no_free_arc": sum(1 for r in replans if r.path_world is None),
                    "rolled_over": rolled, "robot": self.robot.name, "perception": spec.perception,
                    "seed": spec.seed, "world": world.source or world.name,

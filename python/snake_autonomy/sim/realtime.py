@@ -71,7 +71,7 @@ class RealTimeSim:
         """While a scout trajectory raises the head on purpose (the driver's trajectory status says so),
         the roll-over check watches the tail's tilt instead of base_link's (as the batch path does)."""
         with self.world.lock:
-            self.world.watch_tilt_of(self.robot.frame_names[-1] if on else None)
+            self.world.watch_tail(on)
 
     def step(self, now_s: float) -> WorldStep:
         with self.world.lock:

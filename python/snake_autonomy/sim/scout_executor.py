@@ -60,8 +60,5 @@ class DriverTrajectoryExecutor:
     def active(self) -> bool:
         return self._sequence is not None
 
-    def apply(self, t_s: float) -> None:
-        """Nothing to do: the driver's loop interpolates (kept for the batch loop's interface)."""
-
     def release(self) -> None:
         self._sequence = None

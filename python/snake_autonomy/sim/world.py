@@ -213,6 +213,13 @@ class SimWorld:
         instead of base_link's tilt from the vertical; None goes back to base_link."""
         self._tilt_ref = None if frame is None else (frame, self.plant.frame_transform(frame)[:3, :3].copy())
 
+    def watch_tail(self, on: bool) -> None:
+        """While a scout trajectory raises the head on purpose (both run paths say when), the roll-over
+        check watches the tail's tilt from where it lay (watch_tilt_of); idempotent: the reference is
+        taken once, when watching starts."""
+        if bool(on) != (self._tilt_ref is not None):
+            self.watch_tilt_of(self.robot.frame_names[-1] if on else None)
+
     def _reference_tilt_deg(self) -> float:
         frame, rot0 = self._tilt_ref
         up = self.plant.frame_transform(frame)[:3, :3] @ rot0.T[:, 2]
