@@ -47,8 +47,7 @@ class Launch:
         self.tmp_path = tmp_path
         port = _free_port()
         env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_HOME=str(tmp_path),
-                   ROS_LOG_DIR=str(tmp_path / "log"), PYTHONUNBUFFERED="1",
-                   ROSCONSOLE_STDOUT_LINE_BUFFERED="1")  # roscpp INFO lines (stdout) as they come
+                   ROS_LOG_DIR=str(tmp_path / "log"), PYTHONUNBUFFERED="1")
         cmd = ["roslaunch", "-p", str(port), "snake_autonomy", "sim.launch", f"port:={tmp_path}/bus",
                f"results_dir:={tmp_path}/results", *args]
         self.proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
