@@ -100,11 +100,12 @@ class PlannerNode:
     def on_info(self, msg):
         if self.loop is not None:
             return
+        from snake_autonomy import _core
+        from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
         from snake_autonomy.planning.rectilinear.nav_loop import NavLoop
         intr = from_camera_info(msg)
         cfg = self._replace(self.cfg, intrinsics=intr)
         if self.perception == "depth":
-            from snake_autonomy import _core
             from snake_autonomy.perception.depth_traversability import DepthTraversability
             from snake_autonomy.planning.rectilinear.config import T_ground_camera
             radius = _core.RobotModel.from_yaml(self.robot_yaml).link_radius_m
@@ -113,7 +114,8 @@ class PlannerNode:
             from snake_autonomy.perception.block_classifier import BlockClassifier
             perceive = BlockClassifier.load(self.classifier).traversable
         self.loop = NavLoop(cfg, self.head_width_m, perceive, self.goal, self.goal_radius_m,
-                            self.on_no_free_arc, self.pose_timeout_s)
+                            self.on_no_free_arc, self.pose_timeout_s,
+                            BodyGeometry.of_robot(_core.RobotModel.from_yaml(self.robot_yaml)))
         rospy.loginfo(f"planner: camera {intr.width}x{intr.height}, fx {intr.fx:g} (camera_info)")
 
     def on_pose(self, msg):

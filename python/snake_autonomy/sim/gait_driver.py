@@ -36,6 +36,11 @@ class PlantGaitDriver:
         self._sent_t = None
 
     @property
+    def gait(self) -> Optional[str]:
+        """The commanded gait (None before a command)."""
+        return None if self._command is None else self._command[0]
+
+    @property
     def kappa_per_m(self) -> Optional[float]:
         """The commanded curvature (None before a command or without curvature steering)."""
         return None if self._command is None else self._command[1]

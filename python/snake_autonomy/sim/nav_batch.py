@@ -62,6 +62,7 @@ class NavRunSpec:
     flat_belly_fraction: Optional[float] = None   # None: nav.yaml plant.flat_belly_fraction
     gait_source: str = "driver"           # driver (C++ gait, config/gaits.yaml) | reference (gait.py)
     gait_name: str = "rectilinear"        # the driver's gait (steering: curvature)
+    reverse_gait_name: str = "rectilinear_reverse"   # backing off (follower back_off)
 
 
 @dataclass
@@ -146,6 +147,7 @@ def overlay(rgb: np.ndarray, ground: np.ndarray, selection, checker) -> np.ndarr
 class NavRun:
     def __init__(self, spec: NavRunSpec):
         from .. import _core
+        from ..planning.rectilinear.body_model import BodyGeometry
         from ..planning.rectilinear.cli import robot_yaml
         from ..planning.rectilinear.config import NavConfig, head_width_m
         from ..planning.rectilinear.follower import RecedingHorizonFollower
@@ -166,7 +168,7 @@ class NavRun:
         self.camera = HeadCamera(self.plant.model, self.cfg.intrinsics, self.cfg.mount)
         self.collisions = CollisionMonitor(self.plant.model)
         self.planner = NavPlanner(self.cfg.intrinsics, head_width_m(ry), self.cfg.sampler,
-                                  RecedingHorizonFollower(self.cfg.follower))
+                                  RecedingHorizonFollower(self.cfg.follower), BodyGeometry.of_robot(self.robot))
         self.rollover_deg = sim_cfg.monitor.rollover_tilt_deg
         if spec.gait_source not in ("driver", "reference"):
             raise ValueError(f"gait_source: expected driver or reference, got {spec.gait_source!r}")
@@ -194,6 +196,7 @@ class NavRun:
 
     def run(self) -> NavResult:
         from ..planning.rectilinear.collision_check import PerceptionCollisionChecker
+        from ..planning.rectilinear.follower import BACK_OFF
         from ..planning.rectilinear.planner import T_world_ground, ground_frame
         spec, plant, gait, world = self.spec, self.plant, self.cfg.gait, self.spec.world
         dt = spec.control_period_s
@@ -201,7 +204,7 @@ class NavRun:
         traj, replans, frames = [], [], []
         next_replan, next_sample = spec.ramp_s, 0.0
         path, reached, rolled = PathLength(min_step_m=0.0), False, False   # ground truth at 10 Hz: every step
-        kappa_goal, next_command = 0.0, spec.ramp_s
+        kappa_goal, next_command, backwards = 0.0, spec.ramp_s, False
         while t < spec.time_limit_s:
             T_wb = plant.frame_transform("base_link")
             pose = ground_frame(T_wb)
@@ -233,12 +236,14 @@ class NavRun:
             if t >= spec.ramp_s:
                 if t >= next_command:
                     next_command += spec.command_period_s
-                    kappa_goal = self.planner.command(t, pose).kappa_per_m
+                    cmd = self.planner.command(t, pose)
+                    kappa_goal, backwards = cmd.kappa_per_m, cmd.mode == BACK_OFF
                 step = spec.kappa_slew_per_m_s * dt
                 kappa += max(-step, min(step, kappa_goal - kappa))
             if self.drive is not None:
-                if self.drive.kappa_per_m != kappa:
-                    self.drive.command(spec.gait_name, kappa_per_m=kappa)
+                name = spec.reverse_gait_name if backwards else spec.gait_name
+                if self.drive.kappa_per_m != kappa or self.drive.gait != name:
+                    self.drive.command(name, kappa_per_m=kappa)
                 self.drive.step(t, dt)
             elif t >= spec.ramp_s:
                 plant.set_joint_targets(gait.joint_angles(self.robot, t - spec.ramp_s, kappa))

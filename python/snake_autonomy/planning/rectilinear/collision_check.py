@@ -106,7 +106,16 @@ class PerceptionCollisionChecker:
         """(M, 3) ground points -> (M,) bool: ground in the current image where it shows them; else
         ground in any earlier view (not ground in one of them: behind an obstacle, or the obstacle);
         shown in none: free only within the near field."""
+        free, known = self.point_state(flat, ground)
+        unseen = np.flatnonzero(~known)
+        free[unseen] = (flat[unseen, :2] - self._cam_xy) @ self._cam_fwd < self.near_field_m
+        return free
+
+    def point_state(self, flat: np.ndarray, ground: np.ndarray):
+        """(M, 3) ground points -> (free (M,), known (M,)): known where the current image or an
+        earlier view shows the point; free where known and ground (as point_free judges it)."""
         shown, free = _View(self.K, ground, self._T_gc).look(flat)
+        known = shown.copy()
         hidden = np.flatnonzero(~shown)
         seen = np.zeros(len(hidden), bool)
         for view in self._earlier:
@@ -115,9 +124,20 @@ class PerceptionCollisionChecker:
             s, f = view.look(flat[hidden])
             free[hidden] |= s & f
             seen |= s
-        unseen = hidden[~seen]
-        free[unseen] = (flat[unseen, :2] - self._cam_xy) @ self._cam_fwd < self.near_field_m
-        return free
+        known[hidden] = seen
+        return free, known
+
+    def pose_state(self, poses: np.ndarray, ground: np.ndarray):
+        """(N,) bool pairs (blocked, unknown): some footprint point of the pose is known and not
+        ground; none is, but some is not known and beyond the near field."""
+        pts = self.footprint_points(poses)
+        n, p = pts.shape[:2]
+        flat = pts.reshape(-1, 3)
+        free, known = self.point_state(flat, ground)
+        near = (flat[:, :2] - self._cam_xy) @ self._cam_fwd < self.near_field_m
+        blocked = (known & ~free).reshape(n, p).any(axis=1)
+        unknown = (~known & ~near).reshape(n, p).any(axis=1) & ~blocked
+        return blocked, unknown
 
     def pose_free(self, poses: np.ndarray, ground: np.ndarray) -> np.ndarray:
         """(N,) bool: every footprint point of the pose is free (point_free)."""

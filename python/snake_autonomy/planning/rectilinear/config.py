@@ -139,6 +139,11 @@ def _section(cls, d, name: str, problems: List[str]):
     for key, value in d.items():
         if key not in types:
             problems.append(f"{name}.{key}: unknown key (value {value!r}); known: {', '.join(types)}")
+        elif isinstance(getattr(cls(), key), bool):
+            if isinstance(value, bool):
+                kwargs[key] = value
+            else:
+                problems.append(f"{name}.{key}: must be true or false, got {value!r}")
         elif not isinstance(value, (int, float)) or isinstance(value, bool):
             problems.append(f"{name}.{key}: must be a number, got {value!r}")
         else:

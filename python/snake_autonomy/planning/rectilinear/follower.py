@@ -13,7 +13,11 @@ robot changes its curvature slowly; a kappa that jumps whips the body and rolls 
 simulated COBRA onto its side (bench/nav_roll). The unicycle prediction uses the limited kappa.
 
 No free arc: the follower stops forward motion and turns in place (mode TURN_IN_PLACE, towards
-`turn_direction`), and says so in the command's reason.
+`turn_direction`), or with `back_off` it backs off tail first (mode BACK_OFF: the caller runs the
+gait backwards) with the body's curvature held, so the body retraces its own track, which it has
+just crawled over (issue 13 round 5: turning with kappa_turn_per_m crawls on forward at 5 mm/s on
+a tight curve and swings the head (L^2/8) kappa = 0.42 m into what stopped it). Either way the
+command's reason says so.
 """
 import math
 from dataclasses import dataclass
@@ -23,7 +27,7 @@ import numpy as np
 
 from .unicycle import predict, wrap
 
-FOLLOW, TURN_IN_PLACE, IDLE = "follow", "turn_in_place", "idle"
+FOLLOW, TURN_IN_PLACE, BACK_OFF, IDLE = "follow", "turn_in_place", "back_off", "idle"
 
 
 @dataclass
@@ -40,6 +44,7 @@ class FollowerParams:
     kappa_rate_per_m_s: float = 0.0       # > 0: the commanded kappa changes at most this fast
                                           # (1/m per s; slow body reshaping keeps the robot upright:
                                           # bench/nav_roll); 0: no limit
+    back_off: bool = False                # no free arc: back off along the track (else turn in place)
 
     def validate(self) -> List[str]:
         p = []
@@ -90,6 +95,11 @@ class RecedingHorizonFollower:
         self._v = 0.0
         self._kappa = 0.0
 
+    @property
+    def kappa_per_m(self) -> float:
+        """The last commanded (rate-limited) body curvature."""
+        return self._kappa
+
     def set_path(self, path_world: np.ndarray, curvature_per_m: float) -> None:
         self.path = np.asarray(path_world, float)
         self.path_curvature = float(curvature_per_m)
@@ -100,6 +110,11 @@ class RecedingHorizonFollower:
         self.path = None
         self.mode = TURN_IN_PLACE
         self.turn_direction = 1.0 if direction >= 0 else -1.0
+
+    def back_off_now(self) -> None:
+        """No free arc: back off tail first, the body's curvature held (its own track)."""
+        self.path = None
+        self.mode = BACK_OFF
 
     def update(self, t_s: float, pose=None) -> Command:
         """pose: a fresh (x, y, theta) estimate, or None to predict from the last command."""
@@ -115,6 +130,10 @@ class RecedingHorizonFollower:
             side = "left" if self.turn_direction > 0 else "right"
             return Command(TURN_IN_PLACE, self._limit(self.turn_direction * p.kappa_turn_per_m, elapsed),
                            reason=f"no collision-free arc: stopped, turning in place {side}")
+        if self.mode == BACK_OFF:
+            self._v, self._omega = -p.speed_m_s, -p.omega(self._kappa)
+            return Command(BACK_OFF, self._limit(self._kappa, elapsed),
+                           reason="no collision-free arc: backing off along the track")
         if self.mode != FOLLOW or self.path is None or self.pose is None:
             self._v, self._omega = 0.0, 0.0
             return Command(IDLE, self._limit(0.0, elapsed), reason="no path")

@@ -48,7 +48,8 @@ class NavTick:
 class NavLoop:
     def __init__(self, cfg, head_width_m: float, perception: Callable[[np.ndarray], np.ndarray],
                  goal_xy: Optional[Tuple[float, float]] = None, goal_radius_m: float = 0.1,
-                 on_no_free_arc: str = "hold", pose_timeout_s: float = 1.0):
+                 on_no_free_arc: str = "hold", pose_timeout_s: float = 1.0, body=None):
+        """body: the robot's BodyGeometry (body_model.py), needed when cfg.sampler.body_model."""
         if on_no_free_arc not in NO_FREE_ARC_ACTIONS:
             raise ValueError(f"on_no_free_arc: expected hold or turn, got {on_no_free_arc!r}")
         if not goal_radius_m > 0:
@@ -60,7 +61,8 @@ class NavLoop:
         self.on_no_free_arc = on_no_free_arc
         self.pose_timeout_s = float(pose_timeout_s)
         self.T_base_optical = cfg.mount.T_base_optical()
-        self.planner = NavPlanner(cfg.intrinsics, head_width_m, cfg.sampler, RecedingHorizonFollower(cfg.follower))
+        self.planner = NavPlanner(cfg.intrinsics, head_width_m, cfg.sampler, RecedingHorizonFollower(cfg.follower),
+                                  body)
         self.replan_period_s = float(cfg.replan_period_s)
         self._T_wb = None
         self._pose_t = None

@@ -13,6 +13,7 @@ from typing import Optional, Tuple
 
 import numpy as np
 
+from .body_model import BodyGeometry, middle_path, middle_pose
 from .collision_check import PerceptionCollisionChecker
 from .follower import Command, RecedingHorizonFollower
 from .sampler import Selection, TrajectorySampler
@@ -50,20 +51,35 @@ class Replan:
 
 
 class NavPlanner:
-    def __init__(self, intrinsics, head_width_m: float, sampler_params, follower: RecedingHorizonFollower):
+    def __init__(self, intrinsics, head_width_m: float, sampler_params, follower: RecedingHorizonFollower,
+                 body: Optional[BodyGeometry] = None):
+        """body: the robot's body (BodyGeometry.of_robot), needed by sampler_params.body_model:
+        arcs of the body's middle, the whole body checked, the follower tracking the middle."""
+        if sampler_params.body_model and body is None:
+            raise ValueError("sampler.body_model: true needs the robot's body geometry (BodyGeometry.of_robot)")
         self.intrinsics = intrinsics
         self.head_width_m = head_width_m
         self.sampler_params = sampler_params
         self.follower = follower
+        self.body = body if sampler_params.body_model else None
         self._turning = None
         self._views = collections.deque(maxlen=max(1, sampler_params.earlier_views))
 
     @property
     def footprint_width_m(self) -> float:
-        """The checked footprint: the head's width plus lateral_margin_m a side, at least
-        2 body_clearance_m (the body's swept width around the head's path)."""
+        """The checked footprint: the head's width (body model: the wider of head and body) plus
+        lateral_margin_m a side, at least 2 body_clearance_m (the body's swept width around the
+        head's path: for the head-only model)."""
         p = self.sampler_params
-        return max(self.head_width_m + 2.0 * p.lateral_margin_m, 2.0 * p.body_clearance_m)
+        width = self.head_width_m if self.body is None else max(self.head_width_m, self.body.width_m)
+        return max(width + 2.0 * p.lateral_margin_m, 2.0 * p.body_clearance_m)
+
+    def middle(self, pose):
+        """The pose the follower tracks: the body's middle (body model, from base_link's pose and
+        the commanded kappa), else base_link's."""
+        if self.body is None or pose is None:
+            return pose
+        return middle_pose(pose, self.follower.kappa_per_m, self.body.half_length_m)
 
     def replan(self, t_s: float, ground_image: np.ndarray, T_ground_camera: np.ndarray, pose,
                goal_xy=None) -> Replan:
@@ -80,7 +96,11 @@ class NavPlanner:
         if goal_xy is not None:
             g = np.linalg.inv(T_world_ground(pose)) @ np.array([goal_xy[0], goal_xy[1], 0.0, 1.0])
             goal_g = (float(g[0]), float(g[1]))
-        sel = sampler.select(ground_image, goal_g)
+        body = None
+        if self.body is not None:
+            kappa = self.follower.kappa_per_m
+            body = (self.body, middle_pose((0.0, 0.0, 0.0), kappa, self.body.half_length_m), kappa)
+        sel = sampler.select(ground_image, goal_g, body)
         if sel.no_free_arc:
             # keep turning the same way as at the previous replan (no dithering); else towards the
             # side whose arcs see more free floor, ties towards the goal
@@ -89,14 +109,22 @@ class NavPlanner:
                 right = sum(a.free_m for a in sel.arcs if a.curvature_per_m < 0)
                 goal_left = goal_g is None or goal_g[1] >= 0
                 self._turning = 1.0 if left > right or (left == right and goal_left) else -1.0
+            if self.follower.params.back_off:
+                self.follower.back_off_now()
+                return Replan(t_s, tuple(pose), sel, None, "no collision-free arc: back off along the track")
             self.follower.stop_and_turn(self._turning)
             return Replan(t_s, tuple(pose), sel, None, "no collision-free arc: stop and turn in place")
         self._turning = None
         arc = sel.arc
         keep = arc.s_m <= arc.free_m + 1e-9
         path = to_world(arc.poses[keep], pose)
-        self.follower.set_path(path, arc.curvature_per_m)
+        if self.body is None:
+            self.follower.set_path(path, arc.curvature_per_m)
+        else:
+            mid = middle_path(arc.middle, arc.curvature_per_m, arc.free_m, self.sampler_params.spacing_m)
+            self.follower.set_path(to_world(mid, pose), arc.curvature_per_m)
         return Replan(t_s, tuple(pose), sel, path, f"arc c {arc.curvature_per_m:+.2f}/m, free {arc.free_m:.2f} m")
 
     def command(self, t_s: float, pose=None) -> Command:
-        return self.follower.update(t_s, pose)
+        """pose: base_link's (x, y, theta) on the floor, or None to predict."""
+        return self.follower.update(t_s, self.middle(pose))

@@ -22,6 +22,7 @@ from typing import List, Optional, Tuple
 
 import numpy as np
 
+from .body_model import body_poses, head_path
 from .collision_check import PerceptionCollisionChecker, prefix_length
 from .unicycle import arc_poses
 
@@ -41,6 +42,17 @@ class SamplerParams:
     earlier_views: int = 0                # views of earlier replans kept for hidden points
     obstacle_depth_m: float = math.inf    # in those: non-ground this far beyond the ground's edge
                                           # counts as blocked, further is hidden behind it
+    body_model: bool = False              # arcs of the body's middle, the whole body checked
+                                          # (body_model.py); False: arcs of base_link (the paper)
+    curvature_step_per_m: float = 0.0     # > 0: candidates within +- this of the current curvature
+                                          # (clipped to +- max_curvature_per_m); 0: a fixed set
+    known_free_m: float = math.inf        # an arc's first known_free_m of travel must be seen free;
+                                          # beyond, only a point seen blocked ends its free prefix (a
+                                          # point no view shows yet is seen before the robot gets
+                                          # there); inf: every point must be seen free (the paper)
+    switch_cost_m: float = 0.0            # goal bias: metres of closest approach a change of 1/m of
+                                          # curvature from the current one costs (keeps the side
+                                          # round an obstacle from one replan to the next)
 
     def validate(self) -> List[str]:
         p = []
@@ -49,9 +61,12 @@ class SamplerParams:
         for key in ("max_curvature_per_m", "horizon_m", "spacing_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
-        for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m"):
+        for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "curvature_step_per_m", "known_free_m",
+                    "switch_cost_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
+        if not isinstance(self.body_model, bool):
+            p.append(f"body_model: must be true or false, got {self.body_model!r}")
         if not isinstance(self.earlier_views, int) or self.earlier_views < 0:
             p.append(f"earlier_views: must be an integer >= 0, got {self.earlier_views!r}")
         if self.min_free_m < 0 or self.goal_tie_m < 0 or self.margin_m < 0:
@@ -63,9 +78,11 @@ class SamplerParams:
 @dataclass
 class Arc:
     curvature_per_m: float
-    poses: np.ndarray          # (N, 3) in the ground frame of the planning pose
+    poses: np.ndarray          # (N, 3) the head's path in the ground frame of the planning pose
     s_m: np.ndarray            # (N,) arc length of each pose
     free_m: float = 0.0        # collision-free prefix
+    middle: Optional[tuple] = None   # body model: the middle's pose the arc starts from
+    body_free: bool = True     # body model: the body on the arc and while reshaping to it is free
 
 
 @dataclass
@@ -97,16 +114,29 @@ class TrajectorySampler:
         for c in self.curvatures:
             poses = arc_poses(float(c), p.horizon_m, p.spacing_m)
             self._arcs.append((float(c), poses, np.linspace(0.0, p.horizon_m, len(poses))))
-        self._all = np.vstack([a[1] for a in self._arcs])
-        self._splits = np.cumsum([len(a[1]) for a in self._arcs])[:-1]
 
-    def select(self, ground: np.ndarray, goal_in_ground: Optional[Tuple[float, float]] = None) -> Selection:
-        """Check every arc against the traversability image `ground` (True = ground) and choose."""
+    def curvatures_around(self, kappa_now: float) -> np.ndarray:
+        """The candidates' curvatures: the fixed set, or (curvature_step_per_m > 0) the current
+        curvature +- the step, clipped to the range (duplicates at the range's ends dropped)."""
         p = self.params
-        free_all = self.checker.pose_free(self._all, ground)
-        arcs = []
-        for (c, poses, s), free in zip(self._arcs, np.split(free_all, self._splits)):
-            arcs.append(Arc(c, poses, s, max(0.0, prefix_length(free, s) - p.margin_m)))
+        if p.curvature_step_per_m <= 0:
+            return self.curvatures
+        c = np.clip(kappa_now + np.linspace(-p.curvature_step_per_m, p.curvature_step_per_m, p.num_arcs),
+                    -p.max_curvature_per_m, p.max_curvature_per_m)
+        return np.array(sorted(set(np.round(c, 9))))
+
+    def select(self, ground: np.ndarray, goal_in_ground: Optional[Tuple[float, float]] = None,
+               body: Optional[Tuple] = None) -> Selection:
+        """Check every arc against the traversability image `ground` (True = ground) and choose.
+        body: (BodyGeometry, the middle's pose in the ground frame, the current kappa) for the
+        body model (arcs of the middle, the body checked); None: arcs of base_link."""
+        p = self.params
+        kappa_now = 0.0
+        if body is None:
+            arcs = self._head_arcs(ground)
+        else:
+            kappa_now = float(body[2])
+            arcs = self._body_arcs(ground, *body)
         cands = [i for i, a in enumerate(arcs) if a.free_m >= p.min_free_m and a.free_m > 0]
         if not cands:
             return Selection(arcs, None)
@@ -126,5 +156,41 @@ class TrajectorySampler:
                 prefix = a.poses[:max(1, n), :2]
                 d = np.hypot(prefix[:, 0] - goal_in_ground[0], prefix[:, 1] - goal_in_ground[1])
                 goal_err, end_err = float(np.min(d)), float(d[-1])
-            return (round(goal_err, 2), round(end_err, 2), abs(a.curvature_per_m))
+            switch = p.switch_cost_m * abs(a.curvature_per_m - kappa_now)
+            return (round(goal_err + switch, 2), round(end_err, 2), abs(a.curvature_per_m))
         return Selection(arcs, min(best, key=key))
+
+    def _head_arcs(self, ground) -> List[Arc]:
+        p = self.params
+        free_all = self._free(np.vstack([a[1] for a in self._arcs]), np.concatenate([a[2] for a in self._arcs]),
+                              ground)
+        splits = np.cumsum([len(a[1]) for a in self._arcs])[:-1]
+        return [Arc(c, poses, s, max(0.0, prefix_length(free, s) - p.margin_m))
+                for (c, poses, s), free in zip(self._arcs, np.split(free_all, splits))]
+
+    def _free(self, poses: np.ndarray, s_m: np.ndarray, ground) -> np.ndarray:
+        """(N,) bool per pose: not blocked, and known (or near field) where s_m < known_free_m."""
+        blocked, unknown = self.checker.pose_state(poses, ground)
+        return ~blocked & ~(unknown & (s_m < self.params.known_free_m))
+
+    def _body_arcs(self, ground, geometry, middle, kappa_now: float) -> List[Arc]:
+        """body_model.py: per curvature the head's path from the middle (free prefix) and the body
+        in the shapes from the current kappa to it (all free, else the arc is not a candidate)."""
+        p = self.params
+        groups, along, meta = [], [], []
+        for c in self.curvatures_around(kappa_now):
+            poses, s = head_path(middle, float(c), geometry.half_length_m, p.horizon_m, p.spacing_m)
+            shapes = body_poses(middle, kappa_now, float(c), geometry.half_length_m, 2.0 * p.spacing_m)
+            groups += [poses] + shapes
+            along += [s] + [np.zeros(len(b)) for b in shapes]     # the body: known free everywhere
+            meta.append((float(c), poses, s, len(shapes)))
+        free_all = np.split(self._free(np.vstack(groups), np.concatenate(along), ground),
+                            np.cumsum([len(g) for g in groups])[:-1])
+        arcs, k = [], 0
+        for c, poses, s, n_shapes in meta:
+            head_free, shapes_free = free_all[k], free_all[k + 1:k + 1 + n_shapes]
+            k += 1 + n_shapes
+            body_free = all(f.all() for f in shapes_free)
+            free = max(0.0, prefix_length(head_free, s) - p.margin_m) if body_free else 0.0
+            arcs.append(Arc(c, poses, s, free, tuple(middle), body_free))
+        return arcs

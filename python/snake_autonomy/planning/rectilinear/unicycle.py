@@ -8,8 +8,8 @@ import numpy as np
 def arc_poses(curvature_per_m: float, length_m: float, spacing_m: float,
               start=(0.0, 0.0, 0.0)) -> np.ndarray:
     """(N, 3) poses every spacing_m along an arc of constant curvature from `start` (included),
-    the last one at length_m."""
-    n = max(1, int(math.ceil(length_m / spacing_m)))
+    the last one at length_m (negative: backwards along the arc)."""
+    n = max(1, int(math.ceil(abs(length_m) / spacing_m)))
     s = np.linspace(0.0, length_m, n + 1)
     c = curvature_per_m
     if abs(c) < 1e-9:

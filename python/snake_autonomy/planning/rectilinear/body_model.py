@@ -1,0 +1,79 @@
+"""Where the whole body goes on an arc (issue 13 round 5): the rectilinear body as a curve.
+
+The rectilinear gait bends the body to one curvature kappa (the lateral joints' bias, the
+`curvature` steering law) and moves it along its own tangent: at a constant kappa every point of
+the body follows the same circle, the tail in the head's track. When kappa changes the body
+reshapes about its middle (measured in round 4, bench/nav_body_sweep: the head swings
+(L^2 / 8) dkappa = 0.28 m per 1/m to the inside on COBRA, L 1.51 m, and its heading turns by
+(L / 2) dkappa = 0.75 rad per 1/m at once; that swing is what drove COBRA's head and tail into
+obstacles beside a head-only arc). So the unicycle of Chang et al. is the body's MIDDLE here:
+
+- the middle's pose is base_link's pose carried back half the body along the current curvature;
+- an arc of curvature c is an arc of the middle; after reshaping the body lies on it, the head
+  half a body length ahead of the middle, the tail half a body length behind;
+- its collision check covers the head's path (the part the camera sees, free prefix = how far the
+  robot may go), and the whole body on the new arc and on two intermediate shapes (the sweep of
+  the reshaping), which must all be free;
+- the follower tracks the middle's path: its heading answers kappa only through the turn rate
+  (omega = omega_per_kappa kappa), not through the instant swing of the head.
+
+The paper's robot (12 links, 51 mm head) is short enough for the head-only model; the model here
+reduces to it for a body of length 0 (half_length_m 0).
+Poses are (x_m, y_m, theta_rad) on the floor; arc lengths s in metres along the arc.
+"""
+from dataclasses import dataclass
+from typing import List, Tuple
+
+import numpy as np
+
+from .unicycle import arc_poses
+
+RESHAPE_FRACTIONS = (1.0 / 3.0, 2.0 / 3.0, 1.0)     # the body's shapes checked from the current kappa to the new
+
+
+@dataclass(frozen=True)
+class BodyGeometry:
+    half_length_m: float      # base_link (the head's front) to the middle of the body, along it
+    width_m: float            # the body's width (the links' diameter)
+
+    @classmethod
+    def of_robot(cls, robot) -> "BodyGeometry":
+        """From a RobotModel: head + links, the body's middle at half their length."""
+        length = float(robot.head_length_m) + robot.num_joints * float(robot.link_length_m)
+        return cls(0.5 * length, 2.0 * float(robot.link_radius_m))
+
+
+def middle_pose(head_pose, kappa_per_m: float, half_length_m: float) -> Tuple[float, float, float]:
+    """The middle's pose from base_link's: back along the body's current curvature."""
+    if half_length_m <= 0:
+        return tuple(float(v) for v in head_pose)
+    p = arc_poses(kappa_per_m, -half_length_m, half_length_m, start=head_pose)[-1]
+    return float(p[0]), float(p[1]), float(p[2])
+
+
+def head_path(middle, curvature_per_m: float, half_length_m: float, horizon_m: float,
+              spacing_m: float) -> Tuple[np.ndarray, np.ndarray]:
+    """(poses (N, 3), s (N,)) of the head on the middle's arc: s = the head's travel from where it
+    will be once the body has the new shape (0) to horizon_m."""
+    poses = arc_poses(curvature_per_m, half_length_m + horizon_m, spacing_m, start=middle)
+    s_mid = np.linspace(0.0, half_length_m + horizon_m, len(poses))
+    keep = s_mid >= half_length_m - 1e-9
+    return poses[keep], s_mid[keep] - half_length_m
+
+
+def middle_path(middle, curvature_per_m: float, length_m: float, spacing_m: float) -> np.ndarray:
+    """The middle's own path on the arc (what the follower tracks)."""
+    return arc_poses(curvature_per_m, length_m, spacing_m, start=middle)
+
+
+def body_poses(middle, kappa_now: float, curvature_per_m: float, half_length_m: float,
+               spacing_m: float) -> List[np.ndarray]:
+    """The body (tail to head, poses along it) in each shape from the current kappa to the new
+    curvature (RESHAPE_FRACTIONS), all about the middle: what reshaping sweeps."""
+    out = []
+    for f in RESHAPE_FRACTIONS:
+        k = kappa_now + f * (curvature_per_m - kappa_now)
+        tail = arc_poses(k, -half_length_m, spacing_m, start=middle)[::-1]
+        head = arc_poses(k, half_length_m, spacing_m, start=middle)[1:]
+        out.append(np.vstack([tail, head]))
+    return out
