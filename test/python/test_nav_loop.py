@@ -52,7 +52,14 @@ def test_no_free_arc_holds_or_turns():
     turn.on_frame(0.0, None)
     turn.tick(0.0)
     out = turn.tick(30.0)                               # kappa rate-limited towards kappa_turn_per_m
-    assert not out.hold and out.kappa_per_m != 0.0
+    assert not out.hold and out.kappa_per_m != 0.0 and not out.backwards
+    back, _ = _loop(False, goal_xy=(2.0, 0.0), on_no_free_arc="back_off")
+    back.on_pose(0.0, _pose(0.0, 0.0, 0.0))
+    back.on_frame(0.0, None)
+    out = back.tick(0.0)
+    assert out.state == NO_FREE_ARC and "backing off" in out.message
+    out = back.tick(5.0)
+    assert not out.hold and out.backwards and out.kappa_per_m == 0.0      # the reverse gait, kappa held
 
 
 def test_goal_reached_holds_for_good():

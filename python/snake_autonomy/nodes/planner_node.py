@@ -18,7 +18,8 @@ Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with cur
 Params      ~world (a world file: goal and goal radius) or ~goal ("x,y") + ~goal_radius_m; ~nav_config
             (config/nav.yaml), ~robot_config (config/robots/cobra.yaml: head width, link radius),
             ~perception (depth|mono), ~classifier (model file, mono), ~rate_hz (2: the follower's
-            command rate), ~gait (rectilinear), ~on_no_free_arc (hold|turn), ~world_frame (frame of
+            command rate), ~gait (rectilinear), ~reverse_gait (rectilinear_reverse),
+            ~on_no_free_arc (hold|turn|back_off), ~world_frame (frame of
             the path and markers; default base_pose's frame_id), ~pose_timeout_s (1.0).
 """
 import math
@@ -57,6 +58,7 @@ class PlannerNode:
             raise ValueError("~classifier: perception mono needs a model file (snake_autonomy nav train-classifier)")
         self.goal, self.goal_radius_m = self._goal()
         self.gait = rospy.get_param("~gait", "rectilinear")
+        self.reverse_gait = rospy.get_param("~reverse_gait", "rectilinear_reverse")
         self.on_no_free_arc = rospy.get_param("~on_no_free_arc", "hold")
         self.rate_hz = float(rospy.get_param("~rate_hz", 2.0))
         self.pose_timeout_s = float(rospy.get_param("~pose_timeout_s", 1.0))
@@ -151,16 +153,16 @@ class PlannerNode:
                 rospy.loginfo(f"planner: replan {self.loop.replans}: {tick.message}; goal {d:.2f} m away")
         if tick.state == "goal_reached" and (previous is None or previous.state != "goal_reached"):
             rospy.loginfo(f"planner: {tick.message}")
-        self.publish_command(tick.hold, tick.kappa_per_m)
+        self.publish_command(tick.hold, tick.kappa_per_m, tick.backwards)
         self.updater.update()
 
-    def publish_command(self, hold: bool, kappa_per_m: float):
+    def publish_command(self, hold: bool, kappa_per_m: float, backwards: bool = False):
         c = GaitCommand()
         c.header.stamp = rospy.Time.now()
         if hold:
             c.gait = "hold"
         else:
-            c.gait, c.curve, c.kappa = self.gait, True, float(kappa_per_m)
+            c.gait, c.curve, c.kappa = self.reverse_gait if backwards else self.gait, True, float(kappa_per_m)
         self.pub_cmd.publish(c)
 
     def publish_replan(self, stamp, tick):

@@ -14,10 +14,12 @@ pose (the one the driver uses, base_pose) times the mount of config/nav.yaml cam
 bobs with the gait: the mount is the camera's mean pose, the error the batch path does not have).
 
 No free arc: `on_no_free_arc` "hold" (default) stops (gait hold) until a replan finds a free arc;
-"turn" turns in place with the follower's kappa_turn_per_m (what the batch run does).
+"turn" turns in place with the follower's kappa_turn_per_m; "back_off" backs off tail first along the
+track (the reverse gait, NavTick.backwards; what the batch run does with follower.back_off).
 Goal reached (base_link within the goal radius): hold for good.
 """
 import bisect
+import dataclasses
 import math
 from collections import deque
 from dataclasses import dataclass
@@ -25,11 +27,11 @@ from typing import Callable, Optional, Tuple
 
 import numpy as np
 
-from .follower import RecedingHorizonFollower
+from .follower import BACK_OFF, RecedingHorizonFollower
 from .planner import NavPlanner, Replan, T_world_ground, ground_frame
 
 FOLLOWING, WAITING, NO_FREE_ARC, GOAL_REACHED = "following", "waiting", "no_free_arc", "goal_reached"
-NO_FREE_ARC_ACTIONS = ("hold", "turn")
+NO_FREE_ARC_ACTIONS = ("hold", "turn", "back_off")
 POSE_HISTORY = 500                 # base poses kept to match a frame's stamp (5 s of 100 Hz)
 
 
@@ -38,6 +40,7 @@ class NavTick:
     state: str                         # FOLLOWING | WAITING (no frame or pose yet) | NO_FREE_ARC | GOAL_REACHED
     hold: bool                         # command the hold gait (else rectilinear with kappa_per_m)
     kappa_per_m: float = 0.0
+    backwards: bool = False            # run the gait backwards (backing off with no free arc)
     replan: Optional[Replan] = None    # a replan happened in this tick
     ground: Optional[np.ndarray] = None   # its traversability image
     frame: Optional[np.ndarray] = None    # the frame it used
@@ -51,7 +54,7 @@ class NavLoop:
                  on_no_free_arc: str = "hold", pose_timeout_s: float = 1.0, body=None):
         """body: the robot's BodyGeometry (body_model.py), needed when cfg.sampler.body_model."""
         if on_no_free_arc not in NO_FREE_ARC_ACTIONS:
-            raise ValueError(f"on_no_free_arc: expected hold or turn, got {on_no_free_arc!r}")
+            raise ValueError(f"on_no_free_arc: expected hold, turn or back_off, got {on_no_free_arc!r}")
         if not goal_radius_m > 0:
             raise ValueError(f"goal_radius_m: must be > 0, got {goal_radius_m}")
         self.cfg = cfg
@@ -61,7 +64,8 @@ class NavLoop:
         self.on_no_free_arc = on_no_free_arc
         self.pose_timeout_s = float(pose_timeout_s)
         self.T_base_optical = cfg.mount.T_base_optical()
-        self.planner = NavPlanner(cfg.intrinsics, head_width_m, cfg.sampler, RecedingHorizonFollower(cfg.follower),
+        follower = dataclasses.replace(cfg.follower, back_off=on_no_free_arc == "back_off")
+        self.planner = NavPlanner(cfg.intrinsics, head_width_m, cfg.sampler, RecedingHorizonFollower(follower),
                                   body)
         self.replan_period_s = float(cfg.replan_period_s)
         self._T_wb = None
@@ -124,6 +128,7 @@ class NavLoop:
             out.hold, out.kappa_per_m = True, 0.0
         else:
             out.hold, out.kappa_per_m = False, float(cmd.kappa_per_m)
+            out.backwards = cmd.mode == BACK_OFF
         out.state = self.state
         if not out.message:
             out.message = cmd.reason or f"{cmd.mode}: kappa {cmd.kappa_per_m:+.2f} /m"
@@ -140,7 +145,8 @@ class NavLoop:
         if r.path_world is None:
             self.stops_no_free_arc += 1
             self.state = NO_FREE_ARC
-            action = "holding" if self.on_no_free_arc == "hold" else "turning in place"
+            action = {"hold": "holding", "turn": "turning in place", "back_off": "backing off along the track"}[
+                self.on_no_free_arc]
             msg = f"no collision-free arc ({len(r.selection.arcs)} candidates): {action} until a replan finds one"
         else:
             self.state = FOLLOWING
