@@ -162,3 +162,19 @@ def test_curvature_candidates_stay_within_the_step_and_the_range():
     assert list(s.curvatures_around(0.8)) == pytest.approx([0.3, 0.55, 0.8, 1.0])
     fixed = TrajectorySampler(PerceptionCollisionChecker(K, T_GC, 0.25), SamplerParams(num_arcs=5))
     assert list(fixed.curvatures_around(0.8)) == pytest.approx([-2.0, -1.0, 0.0, 1.0, 2.0])
+
+
+def test_after_no_free_arc_the_robot_resumes_only_with_resume_free_m_ahead():
+    sp = dataclasses.replace(CFG.sampler, resume_free_m=0.6, known_free_m=0.3, body_clearance_m=0.0)
+    fp = dataclasses.replace(CFG.follower, back_off=True)
+    planner = NavPlanner(K, 0.09, sp, RecedingHorizonFollower(fp))
+    near = drawn_mask(boxes=[(0.12, 0.6, -1.0, 1.0)])          # a wall 0.12 m ahead: nothing free
+    assert planner.replan(0.0, near, T_GC, (0.0, 0.0, 0.0), None).path_world is None
+    mid = drawn_mask(boxes=[(0.55, 0.9, -1.0, 1.0)])           # backed off: 0.55 m, free ~0.35 m
+    r = planner.replan(10.0, mid, T_GC, (0.0, 0.0, 0.0), None)
+    assert max(a.free_m for a in r.selection.arcs) >= sp.min_free_m
+    assert r.path_world is None                                 # not enough to resume: back on
+    far = drawn_mask(boxes=[(1.0, 1.2, -1.0, 1.0)])
+    assert planner.replan(20.0, far, T_GC, (0.0, 0.0, 0.0), None).path_world is not None
+    # once following, min_free_m is enough again
+    assert planner.replan(30.0, mid, T_GC, (0.0, 0.0, 0.0), None).path_world is not None

@@ -18,6 +18,7 @@ there or came from there; anywhere else it is not known to be free. Without the 
 passed obstacle beside the body is free (round 3: the head slid along the cylinder it had passed).
 """
 import math
+from typing import Optional
 
 import numpy as np
 
@@ -94,12 +95,14 @@ class PerceptionCollisionChecker:
         (hidden behind the obstacle at the edge, not known to be one)."""
         self._earlier.append(_View(self.K, ground, T_ground_camera, max_depth_m, obstacle_depth_m))
 
-    def footprint_points(self, poses: np.ndarray) -> np.ndarray:
-        """(N, 3) poses -> (N, P, 3) ground points of the footprint at each."""
+    def footprint_points(self, poses: np.ndarray, scale: Optional[np.ndarray] = None) -> np.ndarray:
+        """(N, 3) poses -> (N, P, 3) ground points of the footprint at each; scale (N,): each
+        footprint's width as a fraction of the full width (None: all full)."""
         poses = np.asarray(poses, float)
         nx, ny = -np.sin(poses[:, 2]), np.cos(poses[:, 2])           # left normal
-        x = poses[:, 0:1] + nx[:, None] * self.offsets[None, :]
-        y = poses[:, 1:2] + ny[:, None] * self.offsets[None, :]
+        off = self.offsets[None, :] if scale is None else np.asarray(scale, float)[:, None] * self.offsets[None, :]
+        x = poses[:, 0:1] + nx[:, None] * off
+        y = poses[:, 1:2] + ny[:, None] * off
         return np.dstack([x, y, np.zeros_like(x)])
 
     def point_free(self, flat: np.ndarray, ground: np.ndarray) -> np.ndarray:
@@ -127,10 +130,10 @@ class PerceptionCollisionChecker:
         known[hidden] = seen
         return free, known
 
-    def pose_state(self, poses: np.ndarray, ground: np.ndarray):
+    def pose_state(self, poses: np.ndarray, ground: np.ndarray, scale: Optional[np.ndarray] = None):
         """(N,) bool pairs (blocked, unknown): some footprint point of the pose is known and not
-        ground; none is, but some is not known and beyond the near field."""
-        pts = self.footprint_points(poses)
+        ground; none is, but some is not known and beyond the near field. scale: footprint_points."""
+        pts = self.footprint_points(poses, scale)
         n, p = pts.shape[:2]
         flat = pts.reshape(-1, 3)
         free, known = self.point_state(flat, ground)

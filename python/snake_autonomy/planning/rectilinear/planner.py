@@ -91,7 +91,8 @@ class NavPlanner:
                              self.sampler_params.obstacle_depth_m)
         if self.sampler_params.earlier_views:
             self._views.appendleft((ground_image, T_world_g @ np.asarray(T_ground_camera, float)))
-        sampler = TrajectorySampler(checker, self.sampler_params)
+        sampler = TrajectorySampler(checker, self.sampler_params,
+                                    self.head_width_m + 2.0 * self.sampler_params.lateral_margin_m)
         goal_g = None
         if goal_xy is not None:
             g = np.linalg.inv(T_world_ground(pose)) @ np.array([goal_xy[0], goal_xy[1], 0.0, 1.0])
@@ -100,7 +101,7 @@ class NavPlanner:
         if self.body is not None:
             kappa = self.follower.kappa_per_m
             body = (self.body, middle_pose((0.0, 0.0, 0.0), kappa, self.body.half_length_m), kappa)
-        sel = sampler.select(ground_image, goal_g, body)
+        sel = sampler.select(ground_image, goal_g, body, resuming=self._turning is not None)
         if sel.no_free_arc:
             # keep turning the same way as at the previous replan (no dithering); else towards the
             # side whose arcs see more free floor, ties towards the goal

@@ -34,6 +34,9 @@ class SamplerParams:
     horizon_m: float = 1.2                # length of each candidate arc
     spacing_m: float = 0.02               # poses along an arc
     min_free_m: float = 0.15              # shorter free prefixes: no candidate
+    resume_free_m: float = 0.0            # after a replan with no free arc: candidates need at
+                                          # least this (hysteresis: backing off 7 cm and driving
+                                          # back into the same gap is no way round)
     margin_m: float = 0.0                 # taken off every free prefix
     goal_tie_m: float = 0.0               # > 0: the goal bias above
     lateral_margin_m: float = 0.0         # added to each side of the head footprint (planner.py)
@@ -46,6 +49,11 @@ class SamplerParams:
                                           # (body_model.py); False: arcs of base_link (the paper)
     curvature_step_per_m: float = 0.0     # > 0: candidates within +- this of the current curvature
                                           # (clipped to +- max_curvature_per_m); 0: a fixed set
+    footprint_taper_m: float = 0.0        # > 0: the footprint grows from the head's (head width +
+                                          # lateral margins, at the start) to the full width over
+                                          # this much travel: the body's sweep beyond the head's
+                                          # path builds up as it moves; an obstacle beside the body
+                                          # now does not block every arc, those leaving it included
     known_free_m: float = math.inf        # an arc's first known_free_m of travel must be seen free;
                                           # beyond, only a point seen blocked ends its free prefix (a
                                           # point no view shows yet is seen before the robot gets
@@ -61,7 +69,8 @@ class SamplerParams:
         for key in ("max_curvature_per_m", "horizon_m", "spacing_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
-        for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "curvature_step_per_m", "known_free_m",
+        for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "curvature_step_per_m", "known_free_m", "resume_free_m",
+                    "footprint_taper_m",
                     "switch_cost_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
@@ -100,8 +109,11 @@ class Selection:
 
 
 class TrajectorySampler:
-    def __init__(self, checker: PerceptionCollisionChecker, params: Optional[SamplerParams] = None):
+    def __init__(self, checker: PerceptionCollisionChecker, params: Optional[SamplerParams] = None,
+                 start_width_m: Optional[float] = None):
+        """start_width_m: the footprint's width at an arc's start (footprint_taper_m)."""
         self.checker = checker
+        self.start_width_m = start_width_m
         self.params = params or SamplerParams()
         problems = self.params.validate()
         if problems:
@@ -126,10 +138,11 @@ class TrajectorySampler:
         return np.array(sorted(set(np.round(c, 9))))
 
     def select(self, ground: np.ndarray, goal_in_ground: Optional[Tuple[float, float]] = None,
-               body: Optional[Tuple] = None) -> Selection:
+               body: Optional[Tuple] = None, resuming: bool = False) -> Selection:
         """Check every arc against the traversability image `ground` (True = ground) and choose.
         body: (BodyGeometry, the middle's pose in the ground frame, the current kappa) for the
-        body model (arcs of the middle, the body checked); None: arcs of base_link."""
+        body model (arcs of the middle, the body checked); None: arcs of base_link. resuming: the
+        last replan found no free arc (candidates need resume_free_m)."""
         p = self.params
         kappa_now = 0.0
         if body is None:
@@ -137,7 +150,8 @@ class TrajectorySampler:
         else:
             kappa_now = float(body[2])
             arcs = self._body_arcs(ground, *body)
-        cands = [i for i, a in enumerate(arcs) if a.free_m >= p.min_free_m and a.free_m > 0]
+        need = max(p.min_free_m, p.resume_free_m) if resuming else p.min_free_m
+        cands = [i for i, a in enumerate(arcs) if a.free_m >= need and a.free_m > 0]
         if not cands:
             return Selection(arcs, None)
         longest = max(arcs[i].free_m for i in cands)
@@ -170,7 +184,12 @@ class TrajectorySampler:
 
     def _free(self, poses: np.ndarray, s_m: np.ndarray, ground) -> np.ndarray:
         """(N,) bool per pose: not blocked, and known (or near field) where s_m < known_free_m."""
-        blocked, unknown = self.checker.pose_state(poses, ground)
+        scale = None
+        if self.params.footprint_taper_m > 0 and self.start_width_m is not None:
+            full = 2.0 * float(np.max(self.checker.offsets))
+            start = min(1.0, self.start_width_m / full)
+            scale = start + (1.0 - start) * np.clip(s_m / self.params.footprint_taper_m, 0.0, 1.0)
+        blocked, unknown = self.checker.pose_state(poses, ground, scale)
         return ~blocked & ~(unknown & (s_m < self.params.known_free_m))
 
     def _body_arcs(self, ground, geometry, middle, kappa_now: float) -> List[Arc]:
