@@ -45,6 +45,8 @@ class FollowerParams:
                                           # (1/m per s; slow body reshaping keeps the robot upright:
                                           # bench/nav_roll); 0: no limit
     back_off: bool = False                # no free arc: back off along the track (else turn in place)
+    back_off_replans: int = 0             # > 0: back off for this many replans in a row, then turn
+                                          # in place with the room gained; 0: back off while no arc is free
 
     def validate(self) -> List[str]:
         p = []
@@ -56,6 +58,8 @@ class FollowerParams:
             p.append(f"omega_per_kappa: must be finite and non-zero, got {self.omega_per_kappa}")
         if self.k_heading < 0:
             p.append(f"k_heading: must be >= 0, got {self.k_heading}")
+        if not isinstance(self.back_off_replans, int) or self.back_off_replans < 0:
+            p.append(f"back_off_replans: must be an integer >= 0, got {self.back_off_replans!r}")
         if not self.kappa_rate_per_m_s >= 0:
             p.append(f"kappa_rate_per_m_s: must be >= 0, got {self.kappa_rate_per_m_s}")
         return p
@@ -89,6 +93,7 @@ class RecedingHorizonFollower:
         self.path_curvature = 0.0
         self.mode = IDLE
         self.turn_direction = 1.0
+        self._turn_kappa = self.params.kappa_turn_per_m
         self.pose = None
         self._t = None
         self._omega = 0.0
@@ -105,11 +110,13 @@ class RecedingHorizonFollower:
         self.path_curvature = float(curvature_per_m)
         self.mode = FOLLOW
 
-    def stop_and_turn(self, direction: float) -> None:
-        """No free arc: turn in place towards direction (+1 left / CCW, -1 right)."""
+    def stop_and_turn(self, direction: float, kappa_per_m: Optional[float] = None) -> None:
+        """No free arc: turn in place towards direction (+1 left / CCW, -1 right) with kappa_per_m
+        (default kappa_turn_per_m)."""
         self.path = None
         self.mode = TURN_IN_PLACE
         self.turn_direction = 1.0 if direction >= 0 else -1.0
+        self._turn_kappa = self.params.kappa_turn_per_m if kappa_per_m is None else abs(float(kappa_per_m))
 
     def back_off_now(self) -> None:
         """No free arc: back off tail first, the body's curvature held (its own track)."""
@@ -126,9 +133,10 @@ class RecedingHorizonFollower:
         self._t = t_s
         p = self.params
         if self.mode == TURN_IN_PLACE:
-            self._v, self._omega = 0.0, self.turn_direction * p.turn_in_place_rad_s
+            frac = self._turn_kappa / p.kappa_turn_per_m
+            self._v, self._omega = 0.0, self.turn_direction * p.turn_in_place_rad_s * frac
             side = "left" if self.turn_direction > 0 else "right"
-            return Command(TURN_IN_PLACE, self._limit(self.turn_direction * p.kappa_turn_per_m, elapsed),
+            return Command(TURN_IN_PLACE, self._limit(self.turn_direction * self._turn_kappa, elapsed),
                            reason=f"no collision-free arc: stopped, turning in place {side}")
         if self.mode == BACK_OFF:
             self._v, self._omega = -p.speed_m_s, -p.omega(self._kappa)

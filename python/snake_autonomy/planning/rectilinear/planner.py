@@ -13,7 +13,7 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-from .body_model import BodyGeometry, middle_path, middle_pose
+from .body_model import BodyGeometry, body_poses, middle_path, middle_pose
 from .collision_check import PerceptionCollisionChecker
 from .follower import Command, RecedingHorizonFollower
 from .sampler import Selection, TrajectorySampler
@@ -62,7 +62,9 @@ class NavPlanner:
         self.sampler_params = sampler_params
         self.follower = follower
         self.body = body if sampler_params.body_model else None
+        self.geometry = body               # the body's sweep when turning in place (body_model.py)
         self._turning = None
+        self._stops = 0                    # replans in a row without a free arc
         self._views = collections.deque(maxlen=max(1, sampler_params.earlier_views))
 
     @property
@@ -110,12 +112,23 @@ class NavPlanner:
                 right = sum(a.free_m for a in sel.arcs if a.curvature_per_m < 0)
                 goal_left = goal_g is None or goal_g[1] >= 0
                 self._turning = 1.0 if left > right or (left == right and goal_left) else -1.0
-            if self.follower.params.back_off:
+            self._stops += 1
+            fp = self.follower.params
+            if fp.back_off and (fp.back_off_replans == 0 or self._stops <= fp.back_off_replans):
                 self.follower.back_off_now()
                 return Replan(t_s, tuple(pose), sel, None, "no collision-free arc: back off along the track")
-            self.follower.stop_and_turn(self._turning)
-            return Replan(t_s, tuple(pose), sel, None, "no collision-free arc: stop and turn in place")
+            turn = self._free_turn(checker, ground_image) if self.geometry is not None else None
+            if turn is None and self.geometry is not None and fp.back_off:
+                self.follower.back_off_now()
+                return Replan(t_s, tuple(pose), sel, None,
+                              "no collision-free arc and no turn the body can sweep: back off along the track")
+            if turn is None:
+                turn = self._turning * fp.kappa_turn_per_m
+            self.follower.stop_and_turn(turn, abs(turn))
+            return Replan(t_s, tuple(pose), sel, None,
+                          f"no collision-free arc: stop and turn in place (kappa {turn:+.2f} /m)")
         self._turning = None
+        self._stops = 0
         arc = sel.arc
         keep = arc.s_m <= arc.free_m + 1e-9
         path = to_world(arc.poses[keep], pose)
@@ -125,6 +138,26 @@ class NavPlanner:
             mid = middle_path(arc.middle, arc.curvature_per_m, arc.free_m, self.sampler_params.spacing_m)
             self.follower.set_path(to_world(mid, pose), arc.curvature_per_m)
         return Replan(t_s, tuple(pose), sel, path, f"arc c {arc.curvature_per_m:+.2f}/m, free {arc.free_m:.2f} m")
+
+    def _free_turn(self, checker, ground) -> Optional[float]:
+        """A turn in place whose reshaping the body can sweep: from the current kappa to
+        +-kappa_turn_per_m, then half of it, the turning side first; every shape on the way free
+        in the current or an earlier image with the body's footprint (its width + the lateral
+        margins; points no view shows count free only near and behind the camera). None if none is.
+        Bending to kappa swings both ends (L^2/8) kappa to the inside (round 4): turning blindly
+        coiled COBRA's head and tail into what had stopped it."""
+        fp, g = self.follower.params, self.geometry
+        kappa_now = self.follower.kappa_per_m
+        middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
+        full = 2.0 * float(np.max(checker.offsets))
+        scale = min(1.0, (max(self.head_width_m, g.width_m) + 2.0 * self.sampler_params.lateral_margin_m) / full)
+        for side in (self._turning, -self._turning):
+            for k in (fp.kappa_turn_per_m, 0.5 * fp.kappa_turn_per_m):
+                shapes = np.vstack(body_poses(middle, kappa_now, side * k, g.half_length_m, 0.04))
+                blocked, unknown = checker.pose_state(shapes, ground, np.full(len(shapes), scale))
+                if not (blocked | unknown).any():
+                    return side * k
+        return None
 
     def command(self, t_s: float, pose=None) -> Command:
         """pose: base_link's (x, y, theta) on the floor, or None to predict."""
