@@ -91,8 +91,9 @@ def test_nav_config_reads_the_follower_keys_of_a_gait_map(tmp_path):
 
 
 class _AllFree:
-    def pose_free(self, poses, ground):
-        return np.ones(len(poses), dtype=bool)
+    def pose_state(self, poses, ground, scale=None):
+        none = np.zeros(len(poses), dtype=bool)
+        return none, none                    # nothing blocked, nothing unknown
 
 
 def test_with_every_arc_free_the_goal_bias_takes_the_arc_passing_closest_to_the_goal():
@@ -116,8 +117,9 @@ def test_the_lateral_margin_must_not_be_negative():
 
 class _FreeUpTo:
     """Straight arc free to its end, curved ones only to 0.6 m (the far floor unsure)."""
-    def pose_free(self, poses, ground):
-        return np.array([abs(y) < 1e-9 or x < 0.6 for x, y, _ in poses])
+    def pose_state(self, poses, ground, scale=None):
+        blocked = ~np.array([abs(y) < 1e-9 or x < 0.6 for x, y, _ in poses])
+        return blocked, np.zeros(len(poses), dtype=bool)
 
 
 def test_an_arc_free_beyond_the_goal_is_long_enough_for_the_goal_bias():
