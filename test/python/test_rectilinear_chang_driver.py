@@ -87,3 +87,18 @@ def test_a_gait_map_refuses_a_driver_gait_without_curvature_steering():
     from snake_autonomy.sim.gait_map import gait_map_points
     with pytest.raises(ValueError, match="'sidewind' is not a gait of .* with steering: curvature"):
         gait_map_points(ROBOT, "rectilinear", [0.02], [0.0], driver_gait="sidewind")
+
+
+def test_nav_run_drives_the_12_link_robot_with_its_gait_without_naming_it(root):
+    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.sim.world_file import load_world
+    world = load_world(root / "config" / "worlds" / "one_obstacle.yaml")
+    run = NavRun(NavRunSpec(world, robot=ROBOT, time_limit_s=4.0, keep_frames=False))
+    assert (run.gait_name, run.reverse_gait_name) == ("rectilinear_chang", "rectilinear_chang_reverse")
+    assert run.planner.follower.params.back_off is True                  # nav_chang_rectilinear.yaml
+    m = run.run().metrics
+    assert (m["gait"], m["nav_config"]) == ("rectilinear_chang", f"nav_{ROBOT}.yaml")
+    assert m["path_length_m"] > 0.005                                    # it moved (2 s of gait after the ramp)
+    cobra = NavRun(NavRunSpec(world, robot="cobra", time_limit_s=0.0, keep_frames=False))
+    cobra.camera.close()
+    assert (cobra.gait_name, cobra.reverse_gait_name) == ("rectilinear", "rectilinear_reverse")
