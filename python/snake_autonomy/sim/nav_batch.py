@@ -149,11 +149,14 @@ class NavRun:
         from .. import _core
         from ..planning.rectilinear.body_model import BodyGeometry
         from ..planning.rectilinear.cli import robot_yaml
-        from ..planning.rectilinear.config import NavConfig, head_width_m
+        from ..planning.rectilinear.config import NavConfig, head_width_m, nav_config_path
         from ..planning.rectilinear.follower import RecedingHorizonFollower
         from ..planning.rectilinear.planner import NavPlanner
         self.spec = spec
-        self.cfg = NavConfig.from_yaml(spec.nav_config)
+        self.nav_config = spec.nav_config or str(nav_config_path(spec.robot))
+        self.cfg = NavConfig.from_yaml(self.nav_config)
+        self.gait_name = spec.gait_name or self.cfg.gaits.forward
+        self.reverse_gait_name = spec.reverse_gait_name or self.cfg.gaits.reverse
         ry = robot_yaml(spec.robot)
         self.robot = _core.RobotModel.from_yaml(str(ry))
         sim_cfg = SimConfig.from_yaml(spec.sim_config or str(config_path("sim.yaml")))
