@@ -18,7 +18,7 @@ Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with cur
 Params      ~world (a world file: goal and goal radius) or ~goal ("x,y") + ~goal_radius_m; ~nav_config
             (config/nav.yaml), ~robot_config (config/robots/cobra.yaml: head width, link radius),
             ~perception (depth|mono), ~classifier (model file, mono), ~rate_hz (2: the follower's
-            command rate), ~gait (rectilinear), ~reverse_gait (rectilinear_reverse),
+            command rate), ~gait, ~reverse_gait (default: ~nav_config's gaits:),
             ~on_no_free_arc (hold|turn|back_off), ~world_frame (frame of
             the path and markers; default base_pose's frame_id), ~pose_timeout_s (1.0).
 """
@@ -57,8 +57,8 @@ class PlannerNode:
         if self.perception == "mono" and not self.classifier:
             raise ValueError("~classifier: perception mono needs a model file (snake_autonomy nav train-classifier)")
         self.goal, self.goal_radius_m = self._goal()
-        self.gait = rospy.get_param("~gait", "rectilinear")
-        self.reverse_gait = rospy.get_param("~reverse_gait", "rectilinear_reverse")
+        self.gait = rospy.get_param("~gait", self.cfg.gaits.forward)
+        self.reverse_gait = rospy.get_param("~reverse_gait", self.cfg.gaits.reverse)
         self.on_no_free_arc = rospy.get_param("~on_no_free_arc", "hold")
         self.rate_hz = float(rospy.get_param("~rate_hz", 2.0))
         self.pose_timeout_s = float(rospy.get_param("~pose_timeout_s", 1.0))

@@ -9,6 +9,12 @@ kappa(omega)) and the forward speed, written to YAML that config/nav.yaml's foll
         rows = run_tasks(ex, simulate_point, points)
     summary = fit_gait_map(rows, nominal_amplitude=0.02)
 
+A rectilinear point runs the Python reference (planning/rectilinear/gait.py) with its A, lambda and
+f, or, with driver_gait, that config/gaits.yaml entry (steering: curvature) through the C++ driver
+(sim/gait_driver.py: the gait nav runs drive; its wave is the entry's, amplitude and wavelength are
+then the values it was derived for, recorded as labels; its CPG ramps the wave in from the hold
+posture during ramp_s).
+
 One point: the gait ramped in over ramp_s, settle_s more to reach the steady state, then measure_s
 (whole gait cycles) sampled once per cycle at the same phase (stroboscopic: the gait's own
 oscillation cancels). xi is the centroid's displacement of the kinematic frames in the body frame of
@@ -41,15 +47,34 @@ class GaitPoint:
     ramp_s: float = 2.0
     settle_cycles: int = 1
     measure_cycles: int = 4
+    driver_gait: str = ""        # a gaits.yaml entry driven through the C++ driver (empty: the reference)
 
 
 def gait_map_points(robot: str, gait: str, amplitudes: Sequence[float], kappas: Sequence[float] = (0.0,),
                     deltas: Sequence[float] = (0.0,), **kw) -> List[GaitPoint]:
     if gait not in GAITS:
         raise ValueError(f"gait: expected one of {', '.join(GAITS)}, got {gait!r}")
+    if kw.get("driver_gait"):
+        if gait != "rectilinear":
+            raise ValueError(f"driver_gait {kw['driver_gait']!r}: only with gait rectilinear (curvature steering)")
+        kw = {**kw, "frequency_hz": driver_gait_frequency_hz(kw["driver_gait"])}
     if gait == "rectilinear":
         return [GaitPoint(robot, gait, float(a), kappa_per_m=float(k), **kw) for a in amplitudes for k in kappas]
     return [GaitPoint(robot, gait, float(a), delta_deg=float(d), **kw) for a in amplitudes for d in deltas]
+
+
+def driver_gait_frequency_hz(name: str, gaits_yaml=None) -> float:
+    """The frequency of a config/gaits.yaml entry with steering: curvature (ValueError naming it else)."""
+    from ..paths import config_path
+    from ..safe_yaml import load_yaml_file
+    path = gaits_yaml or config_path("gaits.yaml")
+    entry = ((load_yaml_file(path) or {}).get("gaits") or {}).get(name)
+    if not isinstance(entry, dict) or entry.get("steering") != "curvature":
+        raise ValueError(f"driver_gait: {name!r} is not a gait of {path} with steering: curvature")
+    f = entry.get("frequency_hz")
+    if not isinstance(f, (int, float)) or not f > 0:
+        raise ValueError(f"driver_gait: {name!r}: frequency_hz must be > 0, got {f!r}")
+    return float(f)
 
 
 def _joint_pattern(point: GaitPoint, robot):
@@ -79,11 +104,25 @@ def simulate_point(point: GaitPoint) -> Dict:
                                                           flat_belly_fraction=point.flat_belly_fraction))
     params = cfg.draw(seed=point.seed, num_joints=robot.num_joints, randomize=point.randomize)
     plant = ScaledPlant(robot, params, (0.0, 0.0, 0.0))
-    pattern, f = _joint_pattern(point, robot)
-    period, dt = 1.0 / f, 0.01
+    dt = 0.01
+    if point.driver_gait:
+        from .gait_driver import PlantGaitDriver
+        drive = PlantGaitDriver(robot, plant)
+        drive.command(point.driver_gait, kappa_per_m=point.kappa_per_m)
+        f = point.frequency_hz
+
+        def advance(t):
+            drive.step(t, dt)
+    else:
+        pattern, f = _joint_pattern(point, robot)
+
+        def advance(t):
+            ramp = min(1.0, t / point.ramp_s) if point.ramp_s > 0 else 1.0
+            plant.set_joint_targets(pattern(0.0) * ramp if t < point.ramp_s else pattern(t - point.ramp_s))
+    period = 1.0 / f
     t, max_tilt = 0.0, 0.0
     while t < point.ramp_s - 1e-9:
-        plant.set_joint_targets(pattern(0.0) * (t / point.ramp_s))
+        advance(t)
         t += dt
         plant.step_to(t)
     samples = []
@@ -91,7 +130,7 @@ def simulate_point(point: GaitPoint) -> Dict:
     for cycle in range(total + 1):
         t_end = point.ramp_s + cycle * period
         while t < t_end - 1e-9:
-            plant.set_joint_targets(pattern(t - point.ramp_s))
+            advance(t)
             t += dt
             plant.step_to(t)
             max_tilt = max(max_tilt, plant.base_tilt_deg())

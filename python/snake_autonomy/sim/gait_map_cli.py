@@ -4,6 +4,8 @@ config/nav.yaml's `follower.gait_map: FILE` reads) and DIR/gait_map.png.
 
     snake_autonomy gait-map --robot cobra --gait rectilinear --amplitudes 0.01 0.02 \\
         --kappas -1 -0.5 0 0.5 1 --out results/gait_map/cobra_rect
+    snake_autonomy gait-map --robot chang_rectilinear --driver-gait rectilinear_chang --amplitudes 0.02 \
+        --wavelength 0.5 --kappas -1.5 -1 -0.5 0 0.5 1 1.5 --flat-belly 0.8 --out DIR   # through the driver
     snake_autonomy gait-map --robot cobra --gait sidewinding --amplitudes 35 45 --deltas -10 0 10 --out DIR
     ... --engine serial|threads|dask [--scheduler tcp://HOST:8786] [--workers 2]
 """
@@ -30,6 +32,11 @@ def add_arguments(p) -> None:
                    help="rectilinear: body curvatures 1/m")
     p.add_argument("--deltas", nargs="+", type=float, default=[-10.0, 0.0, 10.0],
                    help="sidewinding: steering delta deg")
+    p.add_argument("--driver-gait", default="", metavar="NAME",
+                   help="rectilinear: run this config/gaits.yaml entry (steering: curvature) through the C++ "
+                        "driver instead of the Python reference; --amplitudes and --wavelength then only "
+                        "label it (give the A and lambda it was derived for, one amplitude)")
+    p.add_argument("--wavelength", type=float, default=1.0, metavar="M", help="rectilinear: lambda in m")
     p.add_argument("--nominal-amplitude", type=float, default=None,
                    help="the amplitude whose fit becomes the follower's keys (default: the fastest)")
     p.add_argument("--measure-cycles", type=int, default=4)
@@ -53,8 +60,18 @@ def main(args) -> int:
     from .gait_map import fit_gait_map, gait_map_points, plot_gait_map, simulate_point
     from .sweep_runner import open_executor, run_tasks
     amps = args.amplitudes or ([0.01, 0.02] if args.gait == "rectilinear" else [35.0, 45.0])
-    points = gait_map_points(args.robot, args.gait, amps, args.kappas, args.deltas, seed=args.seed,
-                             scales=args.scales, flat_belly_fraction=args.flat_belly, measure_cycles=args.measure_cycles)
+    if args.driver_gait and len(amps) != 1:
+        print(f"gait-map: --driver-gait runs one gait: give the one amplitude it was derived for, got {amps}",
+              file=sys.stderr)
+        return 1
+    try:
+        points = gait_map_points(args.robot, args.gait, amps, args.kappas, args.deltas, seed=args.seed,
+                                 scales=args.scales, flat_belly_fraction=args.flat_belly,
+                                 measure_cycles=args.measure_cycles, wavelength_m=args.wavelength,
+                                 driver_gait=args.driver_gait)
+    except ValueError as e:
+        print(f"gait-map: {e}", file=sys.stderr)
+        return 1
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -63,7 +80,8 @@ def main(args) -> int:
                          progress=not args.no_progress)
     wall = time.perf_counter() - t0
     summary = fit_gait_map(rows, args.nominal_amplitude)
-    doc = {"robot": args.robot, "gait": args.gait, "scales": bool(args.scales), "flat_belly_fraction": args.flat_belly, "seed": args.seed,
+    doc = {"robot": args.robot, "gait": args.gait, "driver_gait": args.driver_gait or None,
+           "wavelength_m": args.wavelength if args.gait == "rectilinear" else None, "scales": bool(args.scales), "flat_belly_fraction": args.flat_belly, "seed": args.seed,
            "engine": args.engine, "points": len(rows), "wall_s": round(wall, 1), **summary}
     (out / "gait_map.yaml").write_text(
         "# snake_autonomy gait-map: steady body velocity fits (sim/gait_map.py). follower: keys are\n"

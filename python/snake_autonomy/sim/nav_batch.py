@@ -20,9 +20,9 @@ Joint targets (NavRunSpec.gait_source): "driver" (default) commands config/gaits
 gait with curve + kappa through the C++ driver on the plant (sim/gait_driver.py: LockStepDriver, the
 DriverController driver_node runs; its CPG ramps the wave in from the hold posture); "reference"
 writes the Python reference's gait.joint_angles(t, kappa) (config/nav.yaml gait:) straight to the
-plant every control period, ramped in over ramp_s. gaits.yaml's `rectilinear` is derived for
-COBRA's joint spacing (its comment): another robot (the 12-link chang_rectilinear, L 0.07 m) gets a
-different wave through the driver until it has its own entry (gait_name); use the reference there.
+plant every control period, ramped in over ramp_s. The driver's gaits are the nav config's `gaits:`
+(forward, reverse); without a nav config named, the robot's own (config.nav_config_path: config/
+nav_chang_rectilinear.yaml names rectilinear_chang, derived for its 0.07 m links) or nav.yaml's.
 """
 import dataclasses
 import json
@@ -52,7 +52,7 @@ class NavRunSpec:
     seed: int = 0
     time_limit_s: float = 1200.0
     classifier: Optional[str] = None      # model file (mono)
-    nav_config: Optional[str] = None      # default config/nav.yaml
+    nav_config: Optional[str] = None      # None: config/nav_<robot>.yaml if it exists, else nav.yaml
     sim_config: Optional[str] = None      # default config/sim.yaml
     control_period_s: float = 0.01
     ramp_s: float = 2.0
@@ -61,8 +61,8 @@ class NavRunSpec:
     keep_frames: bool = True
     flat_belly_fraction: Optional[float] = None   # None: nav.yaml plant.flat_belly_fraction
     gait_source: str = "driver"           # driver (C++ gait, config/gaits.yaml) | reference (gait.py)
-    gait_name: str = "rectilinear"        # the driver's gait (steering: curvature)
-    reverse_gait_name: str = "rectilinear_reverse"   # backing off (follower back_off)
+    gait_name: Optional[str] = None       # the driver's gait (steering: curvature); None: nav config gaits.forward
+    reverse_gait_name: Optional[str] = None   # backing off (follower back_off); None: gaits.reverse
 
 
 @dataclass
@@ -149,11 +149,14 @@ class NavRun:
         from .. import _core
         from ..planning.rectilinear.body_model import BodyGeometry
         from ..planning.rectilinear.cli import robot_yaml
-        from ..planning.rectilinear.config import NavConfig, head_width_m
+        from ..planning.rectilinear.config import NavConfig, head_width_m, nav_config_path
         from ..planning.rectilinear.follower import RecedingHorizonFollower
         from ..planning.rectilinear.planner import NavPlanner
         self.spec = spec
-        self.cfg = NavConfig.from_yaml(spec.nav_config)
+        self.nav_config = spec.nav_config or str(nav_config_path(spec.robot))
+        self.cfg = NavConfig.from_yaml(self.nav_config)
+        self.gait_name = spec.gait_name or self.cfg.gaits.forward
+        self.reverse_gait_name = spec.reverse_gait_name or self.cfg.gaits.reverse
         ry = robot_yaml(spec.robot)
         self.robot = _core.RobotModel.from_yaml(str(ry))
         sim_cfg = SimConfig.from_yaml(spec.sim_config or str(config_path("sim.yaml")))
@@ -241,7 +244,7 @@ class NavRun:
                 step = spec.kappa_slew_per_m_s * dt
                 kappa += max(-step, min(step, kappa_goal - kappa))
             if self.drive is not None:
-                name = spec.reverse_gait_name if backwards else spec.gait_name
+                name = self.reverse_gait_name if backwards else self.gait_name
                 if self.drive.kappa_per_m != kappa or self.drive.gait != name:
                     self.drive.command(name, kappa_per_m=kappa)
                 self.drive.step(t, dt)
@@ -260,5 +263,7 @@ class NavRun:
                    "stops_no_free_arc": sum(1 for r in replans if r.path_world is None),
                    "rolled_over": rolled, "robot": self.robot.name, "perception": spec.perception,
                    "seed": spec.seed, "world": world.source or world.name,
-                   "flat_belly_fraction": self.flat_belly_fraction, "gait_source": spec.gait_source}
+                   "flat_belly_fraction": self.flat_belly_fraction, "gait_source": spec.gait_source,
+                   "gait": self.gait_name if self.drive is not None else "reference",
+                   "nav_config": Path(self.nav_config).name}
         return NavResult(metrics, np.array(traj), replans, frames, world)

@@ -64,7 +64,8 @@ def add_arguments(parser):
     add_engine_arguments(ex)
     for p in (tr, ev, run, ex):
         p.add_argument("--robot", default="cobra", help="robot name (config/robots/NAME.yaml) or YAML file")
-        p.add_argument("--config", default=None, help="nav config (default config/nav.yaml)")
+        p.add_argument("--config", default=None,
+                       help="nav config (default: config/nav_ROBOT.yaml if it exists, else config/nav.yaml)")
 
 
 def robot_yaml(name: str) -> Path:
@@ -75,8 +76,8 @@ def robot_yaml(name: str) -> Path:
 def _setup(args):
     from ... import _core
     from ...sim.config import SimConfig
-    from .config import NavConfig
-    cfg = NavConfig.from_yaml(args.config)
+    from .config import NavConfig, nav_config_path
+    cfg = NavConfig.from_yaml(args.config or nav_config_path(args.robot))
     robot = _core.RobotModel.from_yaml(str(robot_yaml(args.robot)))
     params = SimConfig.from_yaml(str(config_path("sim.yaml"))).draw(seed=0)
     return cfg, robot, params

@@ -1,4 +1,8 @@
-"""config/nav.yaml: camera, traversability, sampler and follower parameters, every problem listed."""
+"""config/nav.yaml: camera, traversability, sampler and follower parameters, every problem listed.
+
+A robot's own values live in config/nav_<robot>.yaml (e.g. nav_chang_rectilinear.yaml): a file with
+`base: nav.yaml` and only the keys that differ, merged key by key over its base. nav_config_path(robot)
+is the one place that picks the file a robot's runs use when none is named."""
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Dict, List
@@ -40,6 +44,29 @@ class PlantOptions:
         return []
 
 
+@dataclass(frozen=True)
+class NavGaits:
+    """config/gaits.yaml entries a navigation run drives through the driver (nav.yaml `gaits:`)."""
+    forward: str = "rectilinear"             # head first, steering: curvature
+    reverse: str = "rectilinear_reverse"     # tail first (follower back_off)
+
+    @classmethod
+    def from_dict(cls, d, problems: List[str]) -> "NavGaits":
+        d = d or {}
+        if not isinstance(d, dict):
+            problems.append(f"gaits: expected a mapping, got {d!r}")
+            return cls()
+        kwargs = {}
+        for key, value in d.items():
+            if key not in ("forward", "reverse"):
+                problems.append(f"gaits.{key}: unknown key (value {value!r}); known: forward, reverse")
+            elif not isinstance(value, str) or not value:
+                problems.append(f"gaits.{key}: expected a gait name of config/gaits.yaml, got {value!r}")
+            else:
+                kwargs[key] = value
+        return cls(**kwargs)
+
+
 @dataclass
 class NavConfig:
     intrinsics: CameraIntrinsics
@@ -51,16 +78,17 @@ class NavConfig:
     replan_period_s: float = 10.0
     gait: RectilinearGait = RectilinearGait()
     plant: PlantOptions = PlantOptions()
+    gaits: NavGaits = NavGaits()
 
     @classmethod
     def from_yaml(cls, path=None) -> "NavConfig":
         path = Path(path) if path else NAV_YAML
-        return cls.from_dict(load_yaml_file(path) or {}, str(path))
+        return cls.from_dict(_load_with_base(path), str(path))
 
     @classmethod
     def from_dict(cls, data: Dict[str, Any], source: str = "nav.yaml") -> "NavConfig":
         problems: List[str] = []
-        known = ("camera", "depth_traversability", "sampler", "follower", "classifier", "gait", "plant")
+        known = ("camera", "depth_traversability", "sampler", "follower", "classifier", "gait", "plant", "gaits")
         for key in data:
             if key not in known:
                 problems.append(f"{key}: unknown section; known: {', '.join(known)}")
@@ -93,6 +121,7 @@ class NavConfig:
         classifier = _section(ClassifierParams, data.get("classifier"), "classifier", problems)
         gait = _section(RectilinearGait, data.get("gait"), "gait", problems)
         plant = _section(PlantOptions, data.get("plant"), "plant", problems)
+        gaits = NavGaits.from_dict(data.get("gaits"), problems)
         for key in ("amplitude_m", "wavelength_m", "frequency_hz"):
             if not getattr(gait, key) > 0:
                 problems.append(f"gait.{key}: must be > 0, got {getattr(gait, key)}")
@@ -101,7 +130,37 @@ class NavConfig:
                 problems += [f"{name}.{p}" for p in obj.validate()]
         if problems:
             raise NavConfigError(source, problems)
-        return cls(intr, mount, depth, sampler, follower, classifier, float(replan), gait, plant)
+        return cls(intr, mount, depth, sampler, follower, classifier, float(replan), gait, plant, gaits)
+
+
+def nav_config_path(robot: str) -> Path:
+    """The nav config of a robot's runs when none is named: config/nav_<NAME>.yaml if it exists (a
+    robot given as a YAML file: its stem), else config/nav.yaml (COBRA's values)."""
+    own = config_path(f"nav_{Path(robot).stem}.yaml")
+    return own if own.exists() else NAV_YAML
+
+
+def _load_with_base(path: Path, depth: int = 0) -> Dict[str, Any]:
+    """The file's mapping; with `base: FILE` (relative: to the file's folder) the base's mapping with
+    this file's sections merged over it key by key (a section's keys replace the base's)."""
+    data = load_yaml_file(path) or {}
+    if not isinstance(data, dict) or "base" not in data:
+        return data
+    data = dict(data)
+    base_name = data.pop("base")
+    if not isinstance(base_name, str) or not base_name:
+        raise NavConfigError(str(path), [f"base: expected a nav config file name, got {base_name!r}"])
+    base_path = Path(path).parent / base_name
+    if not base_path.exists() or depth > 4:
+        raise NavConfigError(str(path), [f"base: no such file {base_name!r} (beside {path})" if depth <= 4
+                                         else f"base: {base_name!r}: bases nested deeper than 5"])
+    merged = dict(_load_with_base(base_path, depth + 1))
+    for key, value in data.items():
+        if isinstance(value, dict) and isinstance(merged.get(key), dict):
+            merged[key] = {**merged[key], **value}
+        else:
+            merged[key] = value
+    return merged
 
 
 def _gait_map_follower(name, source: str, problems: List[str]) -> Dict[str, Any]:
