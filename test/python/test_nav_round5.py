@@ -178,3 +178,42 @@ def test_after_no_free_arc_the_robot_resumes_only_with_resume_free_m_ahead():
     assert planner.replan(20.0, far, T_GC, (0.0, 0.0, 0.0), None).path_world is not None
     # once following, min_free_m is enough again
     assert planner.replan(30.0, mid, T_GC, (0.0, 0.0, 0.0), None).path_world is not None
+
+
+def _walled_planner(**follower_kw):
+    fp = dataclasses.replace(CFG.follower, kappa_rate_per_m_s=0.0, **follower_kw)
+    return NavPlanner(K, 0.09, CFG.sampler, RecedingHorizonFollower(fp), COBRA)
+
+
+WALL = dict(boxes=[(0.12, 0.6, -1.0, 1.0)])                    # right ahead: no arc is free
+
+
+def test_a_turn_in_place_whose_sweep_hits_a_seen_obstacle_is_not_taken():
+    # a disc seen 1.1 m ahead of an earlier pose, now beside the head on the left (y 0.35): bending
+    # left swings the head (L^2/8) kappa to the left into it (0.21 m at 0.75 /m, 0.43 m at 1.5 /m)
+    p = _walled_planner(back_off=False)
+    p.replan(0.0, drawn_mask(discs=[(1.1, 0.35, 0.1)]), T_GC, (-1.2, 0.0, 0.0), None)
+    r = p.replan(10.0, drawn_mask(**WALL), T_GC, (0.0, 0.0, 0.0), (2.0, 0.5))   # the goal on the left
+    assert r.path_world is None
+    assert p.follower.mode == "turn_in_place" and p.follower.turn_direction == -1.0, r.reason
+    assert "kappa -1.50" in r.reason
+    # without the disc the goal's side is taken
+    q = _walled_planner(back_off=False)
+    r = q.replan(0.0, drawn_mask(**WALL), T_GC, (0.0, 0.0, 0.0), (2.0, 0.5))
+    assert q.follower.turn_direction == 1.0 and "kappa +1.50" in r.reason
+
+
+def test_with_no_turn_the_body_can_sweep_the_robot_backs_off_again():
+    p = _walled_planner(back_off=True, back_off_replans=1)
+    discs = [(1.1, 0.35, 0.1), (1.1, -0.35, 0.1)]             # beside the head on both sides
+    p.replan(0.0, drawn_mask(discs=discs), T_GC, (-1.2, 0.0, 0.0), None)
+    r1 = p.replan(10.0, drawn_mask(**WALL), T_GC, (0.0, 0.0, 0.0), None)
+    assert "back off" in r1.reason and p.follower.mode == BACK_OFF           # the first stop backs off
+    r2 = p.replan(20.0, drawn_mask(**WALL), T_GC, (-0.07, 0.0, 0.0), None)
+    assert "no turn the body can sweep" in r2.reason and p.follower.mode == BACK_OFF
+    # one side free: the second stop turns there
+    q = _walled_planner(back_off=True, back_off_replans=1)
+    q.replan(0.0, drawn_mask(discs=discs[:1]), T_GC, (-1.2, 0.0, 0.0), None)
+    q.replan(10.0, drawn_mask(**WALL), T_GC, (0.0, 0.0, 0.0), None)
+    r = q.replan(20.0, drawn_mask(**WALL), T_GC, (-0.07, 0.0, 0.0), None)
+    assert q.follower.mode == "turn_in_place" and q.follower.turn_direction == -1.0, r.reason

@@ -19,7 +19,8 @@ Params      ~world (a world file: goal and goal radius) or ~goal ("x,y") + ~goal
             (config/nav.yaml), ~robot_config (config/robots/cobra.yaml: head width, link radius),
             ~perception (depth|mono), ~classifier (model file, mono), ~rate_hz (2: the follower's
             command rate), ~gait, ~reverse_gait (default: ~nav_config's gaits:),
-            ~on_no_free_arc (hold|turn|back_off), ~world_frame (frame of
+            ~on_no_free_arc (hold|turn|back_off; default back_off when the nav config's
+            follower.back_off, else hold), ~world_frame (frame of
             the path and markers; default base_pose's frame_id), ~pose_timeout_s (1.0).
 """
 import math
@@ -59,7 +60,8 @@ class PlannerNode:
         self.goal, self.goal_radius_m = self._goal()
         self.gait = rospy.get_param("~gait", self.cfg.gaits.forward)
         self.reverse_gait = rospy.get_param("~reverse_gait", self.cfg.gaits.reverse)
-        self.on_no_free_arc = rospy.get_param("~on_no_free_arc", "hold")
+        # the nav config's choice (follower.back_off: back off, else hold) unless the param says
+        self.on_no_free_arc = rospy.get_param("~on_no_free_arc", "back_off" if self.cfg.follower.back_off else "hold")
         self.rate_hz = float(rospy.get_param("~rate_hz", 2.0))
         self.pose_timeout_s = float(rospy.get_param("~pose_timeout_s", 1.0))
         self.world_frame = rospy.get_param("~world_frame", "")

@@ -2,6 +2,13 @@
 image, the camera's pose in the ground frame and the robot's pose -> the chosen arc as a world path,
 handed to the receding-horizon follower (or stop and turn in place when no arc is free).
 
+No free arc (round 5): with follower.back_off the robot first backs off tail first along its own
+track for back_off_replans replans (the reverse gait; the body retraces ground it has crawled
+over), then turns in place with a turn whose reshaping sweep (body_model.body_poses: both ends swing
+(L^2/8) kappa to the inside) the current and earlier images show free, the turning side first,
+kappa_turn_per_m then half of it; with no such turn it backs off again. A replan after a stop needs
+sampler.resume_free_m of free arc to go on.
+
 The ground frame of a replan: the robot's pose on the floor (base_link projected, heading = yaw of
 base_link's x axis). Both the simulator's batch loop and a planner node call `replan` and then
 `follower.update` at the control rate.

@@ -5,7 +5,7 @@ checked in perception space; the longest collision-free prefix wins, then the le
 An arc's free length is its collision-free prefix less margin_m (the head's front beyond base_link
 plus a safety distance: the follower runs on past a path's end until the next replan). An arc whose
 free length is shorter than min_free_m is not a candidate; when none is, the result
-says so (no_free_arc) and the caller stops and turns in place.
+says so (no_free_arc) and the caller stops (planner.py: backs off or turns in place).
 
 Optional goal bias (not in the paper, off by default): arcs whose free length is within
 goal_tie_m of the longest count as equally long, and among them the one whose free prefix passes
@@ -15,6 +15,15 @@ distance counts as long enough (the far floor is often marked unsure at the hori
 the prefix's end: with the goal nearer than the horizon every prefix ends past it and COBRA drove
 by the goal at 0.28 m). lateral_margin_m widens the checked footprint on each side (the body
 slips sideways and bends inside a turn: round 2's run touched the obstacle with its middle).
+
+Round 5 (issue 13): known_free_m: only an arc's first known_free_m must be seen free; beyond it only
+a point some view shows as not ground ends the free prefix (the paper's rule cut every curved arc
+where COBRA's 0.5 m footprint leaves the 55 deg view, so the straight arc always won).
+footprint_taper_m: the footprint grows from the head's (start_width_m) to the full width over the
+first metres of an arc (a full-width footprint at the start pose overlapped the obstacle beside the
+body and blocked every arc, those leaving it too). resume_free_m: after a stop, a longer free prefix
+to resume. body_model (off; body_model.py): arcs of the body's middle with the body's sweep
+checked, candidates within curvature_step_per_m of the current curvature, switch_cost_m.
 """
 import math
 from dataclasses import dataclass, field
