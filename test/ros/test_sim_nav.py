@@ -4,7 +4,8 @@
 Checks: the head camera's frames arrive (colour, depth, camera_info); planner_node publishes a
 non-empty nav/path, candidate arcs (nav/arcs) and the traversability overlay, and gait commands
 rectilinear with curve=true; the robot's base_link (ground truth) gets PROGRESS_M closer to the
-goal than at the first gait command (or reaches it) within the time limit.
+goal than at the first gait command (or reaches it) within the time limit; sim_node counts contact
+episodes with the obstacle in its diagnostics (obstacle_contacts), none on this way past it.
 """
 import math
 import threading
@@ -13,6 +14,7 @@ import unittest
 
 import rospy
 import rostest
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path
 from sensor_msgs.msg import CameraInfo, Image
@@ -42,6 +44,15 @@ class SimNavTest(unittest.TestCase):
         rospy.Subscriber("nav/path", Path, cls.on_path, queue_size=5)
         rospy.Subscriber("gait_command", GaitCommand, cls.on_cmd, queue_size=20)
         rospy.Subscriber("ground_truth/base_pose", PoseStamped, cls.on_truth, queue_size=5)
+        cls.sim_values = {}
+        rospy.Subscriber("/diagnostics", DiagnosticArray, cls.on_diagnostics, queue_size=20)
+
+    @classmethod
+    def on_diagnostics(cls, msg):
+        for st in msg.status:
+            if st.name.endswith("simulated robot"):
+                with cls.lock:
+                    cls.sim_values = {kv.key: kv.value for kv in st.values}
 
     @classmethod
     def on_topic(cls, msg, topic):
@@ -92,6 +103,13 @@ class SimNavTest(unittest.TestCase):
         rospy.loginfo(f"sim_nav: distance to the goal {start:.3f} -> {d:.3f} m")
         self.assertTrue(start - d >= PROGRESS_M or d <= self.world.goal_radius_m,
                         f"distance to the goal {start:.3f} -> {d:.3f} m (wanted {PROGRESS_M} m less)")
+        wait_for(lambda: "obstacle_contacts" in self.sim_values, 10, "sim_node's obstacle_contacts")
+        with self.lock:
+            values = dict(self.sim_values)
+        rospy.loginfo(f"sim_nav: obstacle_contacts {values['obstacle_contacts']}, "
+                      f"min clearance {values.get('min_clearance_m')} m")
+        self.assertEqual(values["obstacle_contacts"], "0")
+        self.assertGreater(float(values["min_clearance_m"]), 0.0)
 
 
 if __name__ == "__main__":

@@ -32,6 +32,9 @@ pair took 0.07-0.17 s, median 0.15 s, here: about 7 % of a core) and published a
             camera/color/image_raw (rgb8) + camera/color/camera_info, camera/depth/image_rect_raw
             (32FC1, m along the optical axis, 0 = nothing; ~camera_depth true), frame
             ~camera_optical_frame (camera_color_optical_frame), stamped with the snapshot's time.
+Contacts between the robot and the obstacles are counted per episode as the batch nav run counts
+them (sim/collisions.py): "obstacle_contacts" and "min_clearance_m" (sampled at 5 Hz) in the
+"sim: simulated robot" diagnostics, and a ROS_WARN at each new episode.
 """
 import math
 import threading
@@ -117,6 +120,12 @@ class SimNode:
         # command (the head is down again), the roll-over check watches the tail.
         rospy.Subscriber("driver/trajectory_status", TrajectoryStatus, self.on_trajectory_status, queue_size=10)
         rospy.Subscriber("gait_command", GaitCommand, self.on_gait_command, queue_size=10)
+        # with a world: contact episodes between the robot and the obstacles (sim/collisions.py, as the
+        # batch nav run counts them), in the diagnostics and the log
+        self.contacts = None
+        if self.world_file:
+            from snake_autonomy.sim.collisions import CollisionMonitor
+            self.contacts = CollisionMonitor(self.sim.plant.model)
         self.sim.start()
         rospy.loginfo(f"simulated {self.sim.robot.name}: seed {setup.seed}, {self.feedback} feedback, servo bus on "
                       f"{setup.port}, start {start_t}; {self.sim.params.summary()['floor_friction']:.3f} floor friction")
@@ -213,6 +222,8 @@ class SimNode:
             try:
                 out = self.sim.step(now)
                 self.publish(out, k)
+                if self.contacts is not None:
+                    self.count_contacts(k)
             except rospy.ROSException:
                 break
             k += 1
@@ -227,6 +238,12 @@ class SimNode:
                 next_t = time.monotonic()   # fell far behind (machine busy): do not burst
             elif delay > 0:
                 time.sleep(delay)
+
+    def count_contacts(self, k):
+        with self.sim.world.lock:
+            new = self.contacts.update(self.sim.plant.data, clearance=k % 40 == 0)
+        if new:
+            rospy.logwarn(f"sim: the robot touched an obstacle ({self.contacts.collisions} contact episode(s) so far)")
 
     def stamp(self, t_s):
         if not self.use_sim_time:
@@ -271,6 +288,10 @@ class SimNode:
 
     def refresh_status(self):
         s = self.sim.status()
+        if self.contacts is not None:
+            s["obstacle_contacts"] = self.contacts.collisions
+            c = self.contacts.min_clearance_m
+            s["min_clearance_m"] = float(c) if math.isfinite(c) else -1.0
         if self.camera is not None:
             s["camera_frames"] = self.camera.stats["frames"]
             s["camera_render_s_last"] = self.camera.stats["render_s_last"]
