@@ -67,9 +67,9 @@ class SamplerParams:
                                           # beyond, only a point seen blocked ends its free prefix (a
                                           # point no view shows yet is seen before the robot gets
                                           # there); inf: every point must be seen free (the paper)
-    switch_cost_m: float = 0.0            # goal bias: metres of closest approach a change of 1/m of
-                                          # curvature from the current one costs (keeps the side
-                                          # round an obstacle from one replan to the next)
+    switch_cost_m: float = 0.0            # body model's goal bias: metres of closest approach a change
+                                          # of 1/m of curvature from the current one costs (keeps the
+                                          # side round an obstacle from one replan to the next)
 
     def validate(self) -> List[str]:
         p = []
@@ -179,7 +179,7 @@ class TrajectorySampler:
                 prefix = a.poses[:max(1, n), :2]
                 d = np.hypot(prefix[:, 0] - goal_in_ground[0], prefix[:, 1] - goal_in_ground[1])
                 goal_err, end_err = float(np.min(d)), float(d[-1])
-            switch = p.switch_cost_m * abs(a.curvature_per_m - kappa_now)
+            switch = p.switch_cost_m * abs(a.curvature_per_m - kappa_now) if body is not None else 0.0
             return (round(goal_err + switch, 2), round(end_err, 2), abs(a.curvature_per_m))
         return Selection(arcs, min(best, key=key))
 
