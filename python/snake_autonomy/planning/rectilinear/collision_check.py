@@ -84,7 +84,12 @@ class PerceptionCollisionChecker:
         self._cam_fwd = fwd
         self.near_field_m = near_field(intrinsics, T, fwd, 0.5 * head_width_m)
         n = max(footprint_points, int(math.ceil(head_width_m / point_spacing_m - 1e-9)) + 1)
+        self.width_m = float(head_width_m)
         self.offsets = np.linspace(-0.5 * head_width_m, 0.5 * head_width_m, n)
+
+    def width_scale(self, width_m: float) -> float:
+        """A footprint width as the fraction of this checker's (footprint_points' scale), at most 1."""
+        return min(1.0, width_m / self.width_m)
 
     def add_view(self, ground: np.ndarray, T_ground_camera: np.ndarray, max_depth_m: float = math.inf,
                  obstacle_depth_m: float = math.inf) -> None:
@@ -111,8 +116,13 @@ class PerceptionCollisionChecker:
         shown in none: free only within the near field."""
         free, known = self.point_state(flat, ground)
         unseen = np.flatnonzero(~known)
-        free[unseen] = (flat[unseen, :2] - self._cam_xy) @ self._cam_fwd < self.near_field_m
+        free[unseen] = self._near(flat[unseen])
         return free
+
+    def _near(self, flat: np.ndarray) -> np.ndarray:
+        """Within the near field: nearer than near_field_m ahead of the camera on the floor (beside
+        and behind it included): where the robot is or came from."""
+        return (flat[:, :2] - self._cam_xy) @ self._cam_fwd < self.near_field_m
 
     def point_state(self, flat: np.ndarray, ground: np.ndarray):
         """(M, 3) ground points -> (free (M,), known (M,)): known where the current image or an
@@ -137,16 +147,15 @@ class PerceptionCollisionChecker:
         n, p = pts.shape[:2]
         flat = pts.reshape(-1, 3)
         free, known = self.point_state(flat, ground)
-        near = (flat[:, :2] - self._cam_xy) @ self._cam_fwd < self.near_field_m
         blocked = (known & ~free).reshape(n, p).any(axis=1)
-        unknown = (~known & ~near).reshape(n, p).any(axis=1) & ~blocked
+        unknown = (~known & ~self._near(flat)).reshape(n, p).any(axis=1) & ~blocked
         return blocked, unknown
 
     def pose_free(self, poses: np.ndarray, ground: np.ndarray) -> np.ndarray:
-        """(N,) bool: every footprint point of the pose is free (point_free)."""
-        pts = self.footprint_points(poses)
-        n, p = pts.shape[:2]
-        return self.point_free(pts.reshape(-1, 3), ground).reshape(n, p).all(axis=1)
+        """(N,) bool: every footprint point of the pose is free (point_free): neither blocked nor
+        unknown (pose_state)."""
+        blocked, unknown = self.pose_state(poses, ground)
+        return ~blocked & ~unknown
 
     def free_length(self, poses: np.ndarray, ground: np.ndarray, s_m: np.ndarray) -> float:
         """Arc length s_m of the last pose of the path's collision-free prefix (0 if pose 0 is not

@@ -135,6 +135,9 @@ class TrajectorySampler:
         for c in self.curvatures:
             poses = arc_poses(float(c), p.horizon_m, p.spacing_m)
             self._arcs.append((float(c), poses, np.linspace(0.0, p.horizon_m, len(poses))))
+        self._all = np.vstack([a[1] for a in self._arcs])
+        self._all_s = np.concatenate([a[2] for a in self._arcs])
+        self._splits = np.cumsum([len(a[1]) for a in self._arcs])[:-1]
 
     def curvatures_around(self, kappa_now: float) -> np.ndarray:
         """The candidates' curvatures: the fixed set, or (curvature_step_per_m > 0) the current
@@ -185,18 +188,15 @@ class TrajectorySampler:
 
     def _head_arcs(self, ground) -> List[Arc]:
         p = self.params
-        free_all = self._free(np.vstack([a[1] for a in self._arcs]), np.concatenate([a[2] for a in self._arcs]),
-                              ground)
-        splits = np.cumsum([len(a[1]) for a in self._arcs])[:-1]
+        free_all = self._free(self._all, self._all_s, ground)
         return [Arc(c, poses, s, max(0.0, prefix_length(free, s) - p.margin_m))
-                for (c, poses, s), free in zip(self._arcs, np.split(free_all, splits))]
+                for (c, poses, s), free in zip(self._arcs, np.split(free_all, self._splits))]
 
     def _free(self, poses: np.ndarray, s_m: np.ndarray, ground) -> np.ndarray:
         """(N,) bool per pose: not blocked, and known (or near field) where s_m < known_free_m."""
         scale = None
         if self.params.footprint_taper_m > 0 and self.start_width_m is not None:
-            full = 2.0 * float(np.max(self.checker.offsets))
-            start = min(1.0, self.start_width_m / full)
+            start = self.checker.width_scale(self.start_width_m)
             scale = start + (1.0 - start) * np.clip(s_m / self.params.footprint_taper_m, 0.0, 1.0)
         blocked, unknown = self.checker.pose_state(poses, ground, scale)
         return ~blocked & ~(unknown & (s_m < self.params.known_free_m))
