@@ -79,9 +79,13 @@ class NavPlanner:
         """The checked footprint: the head's width (body model: the wider of head and body) plus
         lateral_margin_m a side, at least 2 body_clearance_m (the body's swept width around the
         head's path: for the head-only model)."""
-        p = self.sampler_params
-        width = self.head_width_m if self.body is None else max(self.head_width_m, self.body.width_m)
-        return max(width + 2.0 * p.lateral_margin_m, 2.0 * p.body_clearance_m)
+        return max(self._width_with_margins(self.body), 2.0 * self.sampler_params.body_clearance_m)
+
+    def _width_with_margins(self, body: Optional[BodyGeometry]) -> float:
+        """The head's width (with a body: the wider of head and body) plus lateral_margin_m a side:
+        the footprint at an arc's start (taper), of the body model, and of a turn in place."""
+        width = self.head_width_m if body is None else max(self.head_width_m, body.width_m)
+        return width + 2.0 * self.sampler_params.lateral_margin_m
 
     def middle(self, pose):
         """The pose the follower tracks: the body's middle (body model, from base_link's pose and
@@ -100,8 +104,7 @@ class NavPlanner:
                              self.sampler_params.obstacle_depth_m)
         if self.sampler_params.earlier_views:
             self._views.appendleft((ground_image, T_world_g @ np.asarray(T_ground_camera, float)))
-        sampler = TrajectorySampler(checker, self.sampler_params,
-                                    self.head_width_m + 2.0 * self.sampler_params.lateral_margin_m)
+        sampler = TrajectorySampler(checker, self.sampler_params, self._width_with_margins(None))
         goal_g = None
         if goal_xy is not None:
             g = np.linalg.inv(T_world_ground(pose)) @ np.array([goal_xy[0], goal_xy[1], 0.0, 1.0])
@@ -110,7 +113,7 @@ class NavPlanner:
         if self.body is not None:
             kappa = self.follower.kappa_per_m
             body = (self.body, middle_pose((0.0, 0.0, 0.0), kappa, self.body.half_length_m), kappa)
-        sel = sampler.select(ground_image, goal_g, body, resuming=self._turning is not None)
+        sel = sampler.select(ground_image, goal_g, body, resuming=self._stops > 0)
         if sel.no_free_arc:
             # keep turning the same way as at the previous replan (no dithering); else towards the
             # side whose arcs see more free floor, ties towards the goal
@@ -150,14 +153,14 @@ class NavPlanner:
         """A turn in place whose reshaping the body can sweep: from the current kappa to
         +-kappa_turn_per_m, then half of it, the turning side first; every shape on the way free
         in the current or an earlier image with the body's footprint (its width + the lateral
-        margins; points no view shows count free only near and behind the camera). None if none is.
+        margins; points no view shows count free within the near field, beside and behind the
+        camera, as for the arcs). None if none is.
         Bending to kappa swings both ends (L^2/8) kappa to the inside (round 4): turning blindly
         coiled COBRA's head and tail into what had stopped it."""
         fp, g = self.follower.params, self.geometry
         kappa_now = self.follower.kappa_per_m
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
-        full = 2.0 * float(np.max(checker.offsets))
-        scale = min(1.0, (max(self.head_width_m, g.width_m) + 2.0 * self.sampler_params.lateral_margin_m) / full)
+        scale = checker.width_scale(self._width_with_margins(g))
         for side in (self._turning, -self._turning):
             for k in (fp.kappa_turn_per_m, 0.5 * fp.kappa_turn_per_m):
                 shapes = np.vstack(body_poses(middle, kappa_now, side * k, g.half_length_m, 0.04))
