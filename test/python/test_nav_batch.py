@@ -43,3 +43,19 @@ def test_cobra_goes_round_two_cylinders_to_the_goal_without_touching_them():
     # it went round the first cylinder: base_link left the straight line by more than the cylinder's
     # radius + the head's half width
     assert abs(result.trajectory[:, 2]).max() > 0.054 + 0.045
+
+
+def test_the_reference_gait_backs_off_too():
+    """nav run --gait-source reference: with nav.yaml's back_off the Python reference gait backs off
+    with its wave reversed (it used to crawl on forward with kappa held). Random world 1 seed 0: the
+    cylinder ahead stops COBRA at 0.29 m after 42 s; measured: two back-off replans take base_link
+    back 0.14 m (0.285 -> 0.148 m), then it turns. About 5 s wall."""
+    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.sim.nav_experiment import random_corridor
+    result = NavRun(NavRunSpec(random_corridor(1), seed=0, time_limit_s=63.0, keep_frames=False,
+                               gait_source="reference")).run()
+    backs = [r for r in result.replans if "back off" in r.reason]
+    assert len(backs) >= 1, [r.reason for r in result.replans]
+    x_stop = backs[0].pose[0]
+    after = result.trajectory[result.trajectory[:, 0] >= backs[0].t_s + 15.0]
+    assert len(after) and after[0, 1] < x_stop - 0.05

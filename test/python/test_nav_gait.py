@@ -32,24 +32,36 @@ def test_discretised_wave_and_curvature(cobra):
     assert g.joint_angles(cobra, 0.3 + 2.5, 1.5) == pytest.approx(q)
 
 
-def test_cobra_moves_head_first_with_isotropic_friction(cobra, root):
-    """The gait's wave travelling towards the head drives COBRA forward on the plant's isotropic
-    Coulomb floor (measured: about 7 mm/s at A 2 cm, lambda 1 m, 0.4 Hz; bench/nav_gait)."""
+def _displacement(cobra, root, gait, seconds=10.0):
+    """The links' mean displacement over `seconds` of the gait after a 2 s ramp."""
     from snake_autonomy.sim.config import SimConfig
     from snake_autonomy.sim.plant import Plant
     params = SimConfig.from_yaml(str(root / "config" / "sim.yaml")).draw(seed=0)
     plant = Plant(cobra, params, (0.0, 0.0, 0.0))
-    g = RectilinearGait(0.02, 1.0, 0.4)
     t = 0.0
     while t < 2.0:
-        plant.set_joint_targets(g.joint_angles(cobra, 0.0) * t / 2.0)
+        plant.set_joint_targets(gait.joint_angles(cobra, 0.0) * t / 2.0)
         t += 0.01
         plant.step_to(t)
     start = plant.frame_positions().mean(axis=0)
-    while t < 12.0:
-        plant.set_joint_targets(g.joint_angles(cobra, t - 2.0))
+    while t < 2.0 + seconds:
+        plant.set_joint_targets(gait.joint_angles(cobra, t - 2.0))
         t += 0.01
         plant.step_to(t)
-    d = plant.frame_positions().mean(axis=0) - start
+    return plant.frame_positions().mean(axis=0) - start, plant
+
+
+def test_the_reversed_wave_backs_cobra_off_tail_first(cobra, root):
+    """nav run --gait-source reference backs off (follower BACK_OFF) with direction negated, as the
+    driver's gaits.yaml rectilinear_reverse negates the lag: the robot must then move tail first."""
+    back, plant = _displacement(cobra, root, RectilinearGait(0.02, 1.0, 0.4, direction=-1.0))
+    assert back[0] < -0.03                 # tail first (-x): measured 6.6 mm/s, forward 6.8
+    assert abs(back[1]) < 0.01 and plant.base_tilt_deg() < 30
+
+
+def test_cobra_moves_head_first_with_isotropic_friction(cobra, root):
+    """The gait's wave travelling towards the head drives COBRA forward on the plant's isotropic
+    Coulomb floor (measured: about 7 mm/s at A 2 cm, lambda 1 m, 0.4 Hz; bench/nav_gait)."""
+    d, plant = _displacement(cobra, root, RectilinearGait(0.02, 1.0, 0.4))
     assert d[0] > 0.03                     # > 3 mm/s forward (+x: the head's direction)
     assert abs(d[1]) < 0.01 and plant.base_tilt_deg() < 30

@@ -249,7 +249,10 @@ class NavRun:
                     self.drive.command(name, kappa_per_m=kappa)
                 self.drive.step(t, dt)
             elif t >= spec.ramp_s:
-                plant.set_joint_targets(gait.joint_angles(self.robot, t - spec.ramp_s, kappa))
+                # backing off (follower BACK_OFF): the same wave travelling to the head (direction
+                # negated, as gaits.yaml's reverse gaits negate the lag)
+                g = dataclasses.replace(gait, direction=-gait.direction) if backwards else gait
+                plant.set_joint_targets(g.joint_angles(self.robot, t - spec.ramp_s, kappa))
             else:
                 plant.set_joint_targets(gait.joint_angles(self.robot, 0.0, 0.0) * (t / spec.ramp_s))
             t += dt

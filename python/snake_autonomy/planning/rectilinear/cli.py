@@ -50,7 +50,8 @@ def add_arguments(parser):
                      help="plant option: flat belly F x the link diameter wide (default nav.yaml plant:)")
     run.add_argument("--gait-source", choices=("driver", "reference"), default="driver",
                      help="driver: config/gaits.yaml's rectilinear through the C++ driver (default); "
-                          "reference: the Python reference planning/rectilinear/gait.py")
+                          "reference: the Python reference planning/rectilinear/gait.py (backing off: its "
+                          "wave reversed)")
     ex = sub.add_parser("experiment", help="random solvable corridors x seeds: success rate, collisions, time")
     ex.add_argument("--worlds", type=int, default=20, help="random corridors 0..N-1 (sim/nav_experiment.py)")
     ex.add_argument("--first-world", type=int, default=0)
