@@ -1,5 +1,8 @@
 """The closed loop in batch (sim/nav_batch.py) and `snake_autonomy nav run`: the metrics contract."""
 import json
+import math
+
+import pytest
 
 from snake_autonomy.cli import main as cli_main
 
@@ -19,6 +22,8 @@ def test_nav_run_writes_the_metrics_contract(root, tmp_path):
     # the cylinder's face is 0.6 m ahead of the head at the start, less the robot's progress
     assert 0.3 < m["min_clearance_m"] < 0.6
     assert (out / "topview.png").stat().st_size > 0
+    assert m["outcome"] == "time_limit" and m["contacts_follow"] == 0
+    assert (out / "contacts.csv").read_text() == "t_s,obstacle,link,x_m,y_m,follower_mode\n"
     assert len(list((out / "frames").glob("replan_*.png"))) == 2
 
 
@@ -54,8 +59,36 @@ def test_the_reference_gait_backs_off_too():
     from snake_autonomy.sim.nav_experiment import random_corridor
     result = NavRun(NavRunSpec(random_corridor(1), seed=0, time_limit_s=63.0, keep_frames=False,
                                gait_source="reference")).run()
+    assert result.metrics["outcome"] == "stopped"       # the last replans: back off, back off, turn
     backs = [r for r in result.replans if "back off" in r.reason]
     assert len(backs) >= 1, [r.reason for r in result.replans]
     x_stop = backs[0].pose[0]
     after = result.trajectory[result.trajectory[:, 0] >= backs[0].t_s + 15.0]
     assert len(after) and after[0, 1] < x_stop - 0.05
+
+
+def test_how_a_run_ended_is_classified():
+    """NavRun._outcome on hand-made ends: COBRA's tightest circle (gait map) is 0.82 m."""
+    import types
+    from snake_autonomy.planning.rectilinear.follower import FollowerParams
+    from snake_autonomy.sim.nav_batch import NavRun
+    from snake_autonomy.sim.nav_experiment import random_corridor
+    fp = FollowerParams(speed_m_s=0.00635, omega_per_kappa=0.0077, kappa_max_per_m=1.0)
+    assert fp.min_radius_m == pytest.approx(0.825, abs=0.001)
+
+    def outcome(reached=False, rolled=False, contacts=0, stops=(), pose=(0.0, 0.0, 0.0)):
+        run = types.SimpleNamespace(collisions=types.SimpleNamespace(collisions=contacts),
+                                    spec=types.SimpleNamespace(world=random_corridor(0)),   # goal (1.4, 0)
+                                    cfg=types.SimpleNamespace(follower=fp))
+        replans = [types.SimpleNamespace(path_world=None if s else 1) for s in stops]
+        return NavRun._outcome(run, reached, rolled, replans, pose)
+
+    assert outcome(reached=True) == "success"
+    assert outcome(reached=True, contacts=3) == "reached_with_contact"
+    assert outcome(rolled=True) == "rolled_over"
+    # world 9's end (300 s): the goal 0.33 m behind the left shoulder, inside the 0.82 m circle
+    assert outcome(pose=(1.72, -0.08, math.radians(44))) == "circling_goal"
+    # far from the goal (outside the radius) or ahead of the robot: not circling
+    assert outcome(pose=(0.3, 0.0, 0.0)) == "time_limit"
+    assert outcome(pose=(0.3, 0.0, 0.0), stops=(0, 1, 1, 0, 1)) == "stopped"
+    assert outcome(pose=(0.3, 0.0, 0.0), stops=(1, 1, 0, 0, 0, 1)) == "time_limit"

@@ -6,7 +6,7 @@ import math
 
 from snake_autonomy.cli import main as cli_main
 from snake_autonomy.planning.rectilinear.cli import parse_seeds
-from snake_autonomy.sim.nav_experiment import min_gap_m, random_corridor, summarise
+from snake_autonomy.sim.nav_experiment import min_gap_m, outcome_table, random_corridor, summarise
 
 import pytest
 
@@ -42,6 +42,20 @@ def test_summarise_counts_success_only_without_collisions():
     assert s["rolled_over"] == 1 and s["mean_time_s"] == pytest.approx(100.0)
 
 
+def test_summarise_counts_outcomes_and_contacts_by_mode():
+    base = {"robot": "cobra", "perception": "depth", "world": "w0", "stops_no_free_arc": 0, "time_s": 300.0,
+            "goal_reached": False, "collisions": 0}
+    rows = [{**base, "outcome": "circling_goal"}, {**base, "outcome": "circling_goal", "world": "w1"},
+            {**base, "outcome": "reached_with_contact", "goal_reached": True, "collisions": 5,
+             "contacts_follow": 4, "contacts_back_off": 1}]
+    s = summarise(rows)[0]
+    assert s["outcomes"]["circling_goal"] == 2 and s["outcomes"]["reached_with_contact"] == 1
+    assert s["outcomes"]["success"] == 0
+    assert s["contacts_by_mode"] == {"follow": 4, "turn_in_place": 0, "back_off": 1, "idle": 0}
+    table = outcome_table([s])
+    assert "| cobra | depth | 0 | 1 | 0 | 2 | 0 | 0 | 4 | 0 | 1 | 0 |" in table
+
+
 def test_nav_experiment_writes_runs_summary_and_table(tmp_path):
     out = tmp_path / "exp"
     # contract only: 4 s of physics (the 2 s ramp and the first replan) per run, serial engine
@@ -52,6 +66,7 @@ def test_nav_experiment_writes_runs_summary_and_table(tmp_path):
     s = summary["summary"][0]
     assert s["runs"] == 1 and s["perception"] == "depth" and s["collisions"] == 0
     assert "| cobra | depth | 1 | 1 |" in (out / "table.md").read_text()
+    assert "circling goal" in (out / "table.md").read_text()
     assert len((out / "runs.csv").read_text().splitlines()) == 2
     assert math.isfinite(summary["wall_s"])
 

@@ -70,6 +70,11 @@ def test_scene_obstacles_are_named_and_collisions_counted_per_episode(cobra_yaml
     plant.step(0.01)
     assert mon.update(plant.data) >= 1
     first = mon.collisions
+    # each episode says which obstacle and which link, and where: the box across links 3-5
+    assert len(mon.episodes) == first
+    e = mon.episodes[0]
+    assert e.obstacle == "obstacle_0" and e.link.startswith("link_") and e.t_s == plant.data.time
+    assert -0.75 < e.x_m < -0.25 and abs(e.y_m) < 0.05
     plant.step(0.01)
     assert mon.update(plant.data) == 0            # same episode: not counted again
     assert mon.collisions == first
@@ -82,6 +87,7 @@ def test_scene_obstacles_are_named_and_collisions_counted_per_episode(cobra_yaml
     mon._touching = set()
     mon._last_seen = {p: plant.data.time - 0.5 for p in pairs}
     assert mon.update(plant.data) == len(pairs)
+    assert len(mon.episodes) == mon.collisions
 
 
 def _config(name):

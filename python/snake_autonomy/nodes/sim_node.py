@@ -243,7 +243,9 @@ class SimNode:
         with self.sim.world.lock:
             new = self.contacts.update(self.sim.plant.data, clearance=k % 40 == 0)
         if new:
-            rospy.logwarn(f"sim: the robot touched an obstacle ({self.contacts.collisions} contact episode(s) so far)")
+            for e in self.contacts.episodes[-new:]:
+                rospy.logwarn(f"sim: {e.link} touched {e.obstacle} at ({e.x_m:.2f}, {e.y_m:.2f}) m "
+                              f"({self.contacts.collisions} contact episode(s) so far)")
 
     def stamp(self, t_s):
         if not self.use_sim_time:

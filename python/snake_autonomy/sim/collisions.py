@@ -4,15 +4,26 @@ A collision is any MuJoCo contact between a robot geom (a geom of a robot body) 
 geom, counted once per contact episode: an (obstacle, robot geom) pair that touches now and has not
 touched for more than gap_s (0.2 s) starts an episode (contacts flicker while a link rubs along an
 obstacle: measured, a pushing run counted 477 flickers). Call update(data, t_s) after each physics
-step or control period (an episode shorter than the update interval can be missed).
+step or control period (an episode shorter than the update interval can be missed). Each episode is
+kept (`episodes`: when, which obstacle, which link, where) so that a run can say where it touched.
 """
 import math
-from typing import Optional, Set, Tuple
+from dataclasses import dataclass
+from typing import List, Optional, Set, Tuple
 
 import mujoco
 import numpy as np
 
 from .camera import OBSTACLE_PREFIX
+
+
+@dataclass(frozen=True)
+class ContactEpisode:
+    t_s: float
+    obstacle: str          # the obstacle geom's name (obstacle_<k>)
+    link: str              # the robot geom's body (base_link, link_<k>)
+    x_m: float             # the robot geom's centre on the floor when the episode began
+    y_m: float
 
 
 class CollisionMonitor:
@@ -29,6 +40,7 @@ class CollisionMonitor:
         self._is_robot[self.robot_geoms] = True
         self._touching: Set[Tuple[int, int]] = set()
         self.collisions = 0
+        self.episodes: List[ContactEpisode] = []
         self.min_clearance_m = float("inf")
 
     def touching_pairs(self, data) -> Set[Tuple[int, int]]:
@@ -44,6 +56,10 @@ class CollisionMonitor:
                 pairs.add((g2, g1))
         return pairs
 
+    def _link(self, geom: int) -> str:
+        """The robot geom's body (base_link, link_<k>)."""
+        return self.model.body(int(self.model.geom_bodyid[geom])).name or f"geom_{geom}"
+
     def clearance_m(self, data, distmax_m: float = 1.0) -> float:
         """Smallest distance between a robot geom and an obstacle geom (distmax_m when further)."""
         best = distmax_m
@@ -57,8 +73,12 @@ class CollisionMonitor:
         t_s: simulated time (default data.time)."""
         t = float(data.time if t_s is None else t_s)
         now = self.touching_pairs(data)
-        new = sum(1 for pair in now if t - self._last_seen.get(pair, -math.inf) > self.gap_s + 1e-9
-                  and pair not in self._touching)
+        started = sorted(pair for pair in now if t - self._last_seen.get(pair, -math.inf) > self.gap_s + 1e-9
+                         and pair not in self._touching)
+        new = len(started)
+        for o, r in started:
+            x, y = (float(v) for v in data.geom_xpos[r][:2])
+            self.episodes.append(ContactEpisode(t, self.model.geom(o).name, self._link(r), x, y))
         for pair in now:
             self._last_seen[pair] = t
         self._touching = now

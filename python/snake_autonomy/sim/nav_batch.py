@@ -4,7 +4,13 @@ planner and the receding-horizon follower, closed through the rectilinear gait's
 
     run = NavRun(NavRunSpec(world=load_world(FILE), robot="cobra", perception="depth", seed=0))
     result = run.run()
-    result.write(out_dir)      # metrics.json (the issue's contract), topview.png, frames/*.png
+    result.write(out_dir)      # metrics.json (the issue's contract), topview.png, frames/*.png,
+                               # contacts.csv (each contact episode: when, which link, where, and
+                               # what the follower was doing)
+
+metrics.json adds to the contract: `outcome` (success, reached_with_contact, rolled_over,
+circling_goal, stopped, time_limit: NavRun._outcome) and contacts_follow / _turn_in_place / _back_off /
+_idle (the contact episodes by the follower's mode when they began).
 
 Pose source: the plant's ground truth of base_link (the head's front, where the camera looks and
 the arcs start; the simulated VIO's place, not wired here yet). The head's yaw answers a change of
@@ -24,6 +30,7 @@ plant every control period, ramped in over ramp_s. The driver's gaits are the na
 (forward, reverse); without a nav config named, the robot's own (config.nav_config_path: config/
 nav_chang_rectilinear.yaml names rectilinear_chang, derived for its 0.07 m links) or nav.yaml's.
 """
+import collections
 import dataclasses
 import json
 import math
@@ -35,6 +42,7 @@ import numpy as np
 
 from ..experiments.results import PathLength
 from ..paths import config_path
+from ..planning.rectilinear.follower import BACK_OFF, MODES
 from .camera import HeadCamera
 from .collisions import CollisionMonitor
 from .config import SimConfig
@@ -72,12 +80,17 @@ class NavResult:
     replans: list = field(default_factory=list)       # planner.Replan
     frames: List[np.ndarray] = field(default_factory=list)   # overlays at each replan
     world: Optional[World] = None
+    contacts: list = field(default_factory=list)     # (collisions.ContactEpisode, the follower's mode)
 
     def write(self, out_dir) -> None:
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         (out / "metrics.json").write_text(json.dumps(self.metrics, indent=2) + "\n")
         np.savetxt(out / "trajectory.csv", self.trajectory, delimiter=",", header="t_s,x_m,y_m", comments="")
+        with open(out / "contacts.csv", "w") as f:
+            f.write("t_s,obstacle,link,x_m,y_m,follower_mode\n")
+            for e, mode in self.contacts:
+                f.write(f"{e.t_s:.2f},{e.obstacle},{e.link},{e.x_m:.4f},{e.y_m:.4f},{mode}\n")
         if self.frames:
             import cv2
             (out / "frames").mkdir(exist_ok=True)
@@ -109,6 +122,9 @@ class NavResult:
                 ax.plot(r.path_world[:, 0], r.path_world[:, 1], "-", color="orange", lw=0.8)
             else:
                 ax.plot(r.pose[0], r.pose[1], "rx", ms=8)
+        if self.contacts:
+            xy = np.array([(e.x_m, e.y_m) for e, _ in self.contacts])
+            ax.plot(xy[:, 0], xy[:, 1], "o", mfc="none", mec="m", ms=7, label="contact (link centre)")
         m = self.metrics
         ax.set_title(f"goal {'reached' if m['goal_reached'] else 'NOT reached'} in {m['time_s']:.0f} s, "
                      f"{m['collisions']} collision(s), {m['replans']} replans, {m['stops_no_free_arc']} stops")
@@ -170,6 +186,7 @@ class NavRun:
                                  scene_xml=scene.scene_xml, assets_xml=scene.assets_xml)
         self.camera = HeadCamera(self.plant.model, self.cfg.intrinsics, self.cfg.mount)
         self.collisions = CollisionMonitor(self.plant.model)
+        self._contact_modes: List[str] = []
         self.planner = NavPlanner(self.cfg.intrinsics, head_width_m(ry), self.cfg.sampler,
                                   RecedingHorizonFollower(self.cfg.follower), BodyGeometry.of_robot(self.robot))
         self.rollover_deg = sim_cfg.monitor.rollover_tilt_deg
@@ -199,7 +216,6 @@ class NavRun:
 
     def run(self) -> NavResult:
         from ..planning.rectilinear.collision_check import PerceptionCollisionChecker
-        from ..planning.rectilinear.follower import BACK_OFF
         from ..planning.rectilinear.planner import T_world_ground, ground_frame
         spec, plant, gait, world = self.spec, self.plant, self.cfg.gait, self.spec.world
         dt = spec.control_period_s
@@ -215,7 +231,7 @@ class NavRun:
                 next_sample += 0.1
                 traj.append((t, pose[0], pose[1]))
                 path.add(pose[0], pose[1])
-                self.collisions.update(plant.data, clearance=True)
+                self._count_contacts(clearance=True)
                 if world.goal_reached(pose[0], pose[1]):
                     reached = True
                     break
@@ -223,7 +239,7 @@ class NavRun:
                     rolled = True
                     break
             else:
-                self.collisions.update(plant.data, clearance=False)
+                self._count_contacts(clearance=False)
             if t >= next_replan:
                 next_replan += self.cfg.replan_period_s
                 frame = self.camera.render(plant.data, T_wb, t, colour=spec.perception == "mono" or spec.keep_frames,
@@ -259,6 +275,7 @@ class NavRun:
             plant.step_to(t)
         self.camera.close()
         clearance = self.collisions.min_clearance_m
+        by_mode = collections.Counter(self._contact_modes)
         metrics = {"goal_reached": bool(reached), "time_s": round(float(t), 3),
                    "collisions": int(self.collisions.collisions),
                    "min_clearance_m": float(clearance) if math.isfinite(clearance) else None,
@@ -268,5 +285,33 @@ class NavRun:
                    "seed": spec.seed, "world": world.source or world.name,
                    "flat_belly_fraction": self.flat_belly_fraction, "gait_source": spec.gait_source,
                    "gait": self.gait_name if self.drive is not None else "reference",
-                   "nav_config": Path(self.nav_config).name}
-        return NavResult(metrics, np.array(traj), replans, frames, world)
+                   "nav_config": Path(self.nav_config).name,
+                   "outcome": self._outcome(reached, rolled, replans, pose),
+                   **{f"contacts_{m}": by_mode.get(m, 0) for m in MODES}}
+        contacts = [(e, m) for e, m in zip(self.collisions.episodes, self._contact_modes)]
+        return NavResult(metrics, np.array(traj), replans, frames, world, contacts)
+
+    def _count_contacts(self, clearance: bool) -> None:
+        """New contact episodes, each tagged with what the follower was doing (FOLLOW,
+        TURN_IN_PLACE, BACK_OFF, IDLE)."""
+        new = self.collisions.update(self.plant.data, clearance=clearance)
+        self._contact_modes += [self.planner.follower.mode] * new
+
+    def _outcome(self, reached: bool, rolled: bool, replans, pose) -> str:
+        """success | reached_with_contact | rolled_over | circling_goal (at the time limit the goal lies
+        inside the tightest circle the follower drives, within its radius: the arcs circle it) |
+        stopped (3 of the last 5 replans found no free arc) | time_limit."""
+        if reached:
+            return "success" if self.collisions.collisions == 0 else "reached_with_contact"
+        if rolled:
+            return "rolled_over"
+        goal = self.spec.world.goal
+        r = self.cfg.follower.min_radius_m
+        x, y, th = pose
+        dx, dy = goal[0] - x, goal[1] - y
+        gx, gy = math.cos(th) * dx + math.sin(th) * dy, -math.sin(th) * dx + math.cos(th) * dy
+        if math.hypot(gx, gy) < r and gx * gx + (abs(gy) - r) ** 2 < r * r:
+            return "circling_goal"
+        if sum(1 for rp in replans[-5:] if rp.path_world is None) >= 3:
+            return "stopped"
+        return "time_limit"

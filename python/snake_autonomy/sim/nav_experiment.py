@@ -17,6 +17,7 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
+from ..planning.rectilinear.follower import MODES
 from .world_file import World
 
 
@@ -103,8 +104,26 @@ def summarise(rows: List[Dict]) -> List[Dict]:
                     "collisions": sum(r["collisions"] for r in rs),
                     "rolled_over": sum(bool(r.get("rolled_over")) for r in rs),
                     "stops_no_free_arc": sum(r["stops_no_free_arc"] for r in rs),
-                    "mean_time_s": float(np.mean([r["time_s"] for r in ok])) if ok else math.nan})
+                    "mean_time_s": float(np.mean([r["time_s"] for r in ok])) if ok else math.nan,
+                    "outcomes": {o: sum(r.get("outcome") == o for r in rs) for o in OUTCOMES},
+                    "contacts_by_mode": {m: sum(int(r.get(f"contacts_{m}", 0)) for r in rs) for m in MODES}})
     return out
+
+
+OUTCOMES = ("success", "reached_with_contact", "rolled_over", "circling_goal", "stopped", "time_limit")
+
+
+def outcome_table(summary: List[Dict]) -> str:
+    """How the runs ended (nav_batch.NavRun._outcome) and, of the contact episodes, what the
+    follower was doing when each began."""
+    lines = ["| robot | perception | " + " | ".join(o.replace("_", " ") for o in OUTCOMES)
+             + " | contacts: " + " | ".join(m.replace("_", " ") for m in MODES) + " |",
+             "|---|---|" + "---|" * (len(OUTCOMES) + len(MODES))]
+    for s in summary:
+        lines.append(f"| {s['robot']} | {s['perception']} | "
+                     + " | ".join(str(s["outcomes"][o]) for o in OUTCOMES) + " | "
+                     + " | ".join(str(s["contacts_by_mode"][m]) for m in MODES) + " |")
+    return "\n".join(lines)
 
 
 def markdown_table(summary: List[Dict]) -> str:

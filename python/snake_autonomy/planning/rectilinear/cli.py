@@ -206,8 +206,8 @@ def parse_seeds(text: str):
 
 def _experiment(args) -> int:
     from ...sim.gait_map_cli import write_csv
-    from ...sim.nav_experiment import (experiment_tasks, markdown_table, random_corridor, run_nav_task,
-                                       summarise)
+    from ...sim.nav_experiment import (experiment_tasks, markdown_table, outcome_table, random_corridor,
+                                       run_nav_task, summarise)
     from ...sim.sweep_runner import open_executor, run_tasks
     from .config import head_width_m
     seeds = parse_seeds(args.seeds)
@@ -233,7 +233,7 @@ def _experiment(args) -> int:
         rows = run_tasks(ex, run_nav_task, tasks, desc=f"nav experiment {args.robot}",
                          progress=not args.no_progress)
     summary = summarise(rows)
-    table = markdown_table(summary)
+    table = markdown_table(summary) + "\n\n" + outcome_table(summary)
     write_csv(rows, out / "runs.csv")
     (out / "summary.json").write_text(json.dumps(
         {"robot": args.robot, "worlds": [w.to_dict() for w in worlds], "seeds": seeds,

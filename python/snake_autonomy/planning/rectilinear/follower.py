@@ -28,6 +28,7 @@ import numpy as np
 from .unicycle import predict, wrap
 
 FOLLOW, TURN_IN_PLACE, BACK_OFF, IDLE = "follow", "turn_in_place", "back_off", "idle"
+MODES = (FOLLOW, TURN_IN_PLACE, BACK_OFF, IDLE)
 
 
 @dataclass
@@ -63,6 +64,11 @@ class FollowerParams:
         if not self.kappa_rate_per_m_s >= 0:
             p.append(f"kappa_rate_per_m_s: must be >= 0, got {self.kappa_rate_per_m_s}")
         return p
+
+    @property
+    def min_radius_m(self) -> float:
+        """The tightest circle the follower drives: speed / |omega(kappa_max)| (drift aside)."""
+        return self.speed_m_s / abs(self.omega_per_kappa * self.kappa_max_per_m)
 
     def kappa(self, omega_rad_s: float) -> float:
         """The inverse gait map, clipped to the gait's range."""
