@@ -23,6 +23,8 @@ def test_nav_run_writes_the_metrics_contract(root, tmp_path):
     assert 0.3 < m["min_clearance_m"] < 0.6
     assert (out / "topview.png").stat().st_size > 0
     assert m["outcome"] == "time_limit" and m["contacts_follow"] == 0
+    # one_obstacle's goal disc starts 1.1 m ahead; 12 s of the gait covers about 7 cm
+    assert 0.95 < m["closest_to_goal_m"] < 1.1
     assert (out / "contacts.csv").read_text() == "t_s,obstacle,link,x_m,y_m,follower_mode\n"
     assert len(list((out / "frames").glob("replan_*.png"))) == 2
 

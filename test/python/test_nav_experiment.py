@@ -45,7 +45,8 @@ def test_summarise_counts_success_only_without_collisions():
 def test_summarise_counts_outcomes_and_contacts_by_mode():
     base = {"robot": "cobra", "perception": "depth", "world": "w0", "stops_no_free_arc": 0, "time_s": 300.0,
             "goal_reached": False, "collisions": 0}
-    rows = [{**base, "outcome": "circling_goal"}, {**base, "outcome": "circling_goal", "world": "w1"},
+    rows = [{**base, "outcome": "circling_goal", "closest_to_goal_m": 0.1},
+            {**base, "outcome": "circling_goal", "world": "w1", "closest_to_goal_m": 0.3},
             {**base, "outcome": "reached_with_contact", "goal_reached": True, "collisions": 5,
              "contacts_follow": 4, "contacts_back_off": 1}]
     s = summarise(rows)[0]
@@ -53,7 +54,8 @@ def test_summarise_counts_outcomes_and_contacts_by_mode():
     assert s["outcomes"]["success"] == 0
     assert s["contacts_by_mode"] == {"follow": 4, "turn_in_place": 0, "back_off": 1, "idle": 0}
     table = outcome_table([s])
-    assert "| cobra | depth | 0 | 1 | 0 | 2 | 0 | 0 | 4 | 0 | 1 | 0 |" in table
+    assert s["median_miss_m"] == pytest.approx(0.2)          # of the two not reached
+    assert "| cobra | depth | 0 | 1 | 0 | 2 | 0 | 0 | 0.20 | 4 | 0 | 1 | 0 |" in table
 
 
 def test_nav_experiment_writes_runs_summary_and_table(tmp_path):

@@ -8,7 +8,8 @@ planner and the receding-horizon follower, closed through the rectilinear gait's
                                # contacts.csv (each contact episode: when, which link, where, and
                                # what the follower was doing)
 
-metrics.json adds to the contract: `outcome` (success, reached_with_contact, rolled_over,
+metrics.json adds to the contract: `closest_to_goal_m` (how near base_link came to the goal's disc),
+`outcome` (success, reached_with_contact, rolled_over,
 circling_goal, stopped, time_limit: NavRun._outcome) and contacts_follow / _turn_in_place / _back_off /
 _idle (the contact episodes by the follower's mode when they began).
 
@@ -286,6 +287,7 @@ class NavRun:
                    "flat_belly_fraction": self.flat_belly_fraction, "gait_source": spec.gait_source,
                    "gait": self.gait_name if self.drive is not None else "reference",
                    "nav_config": Path(self.nav_config).name,
+                   "closest_to_goal_m": round(self._closest_to_goal(traj), 4),
                    "outcome": self._outcome(reached, rolled, replans, pose),
                    **{f"contacts_{m}": by_mode.get(m, 0) for m in MODES}}
         contacts = [(e, m) for e, m in zip(self.collisions.episodes, self._contact_modes)]
@@ -296,6 +298,15 @@ class NavRun:
         TURN_IN_PLACE, BACK_OFF, IDLE)."""
         new = self.collisions.update(self.plant.data, clearance=clearance)
         self._contact_modes += [self.planner.follower.mode] * new
+
+    def _closest_to_goal(self, traj) -> float:
+        """How near base_link came to the goal's disc (0: reached), over the 10 Hz samples."""
+        w = self.spec.world
+        if not traj:
+            return math.nan
+        xy = np.asarray(traj)[:, 1:3]
+        d = np.hypot(xy[:, 0] - w.goal[0], xy[:, 1] - w.goal[1]).min() - w.goal_radius_m
+        return float(max(0.0, d))
 
     def _outcome(self, reached: bool, rolled: bool, replans, pose) -> str:
         """success | reached_with_contact | rolled_over | circling_goal (at the time limit the goal lies

@@ -106,22 +106,30 @@ def summarise(rows: List[Dict]) -> List[Dict]:
                     "stops_no_free_arc": sum(r["stops_no_free_arc"] for r in rs),
                     "mean_time_s": float(np.mean([r["time_s"] for r in ok])) if ok else math.nan,
                     "outcomes": {o: sum(r.get("outcome") == o for r in rs) for o in OUTCOMES},
+                    "median_miss_m": _median([r.get("closest_to_goal_m") for r in rs if not r["goal_reached"]]),
                     "contacts_by_mode": {m: sum(int(r.get(f"contacts_{m}", 0)) for r in rs) for m in MODES}})
     return out
+
+
+def _median(values) -> float:
+    v = [float(x) for x in values if x is not None and x == x]
+    return float(np.median(v)) if v else math.nan
 
 
 OUTCOMES = ("success", "reached_with_contact", "rolled_over", "circling_goal", "stopped", "time_limit")
 
 
 def outcome_table(summary: List[Dict]) -> str:
-    """How the runs ended (nav_batch.NavRun._outcome) and, of the contact episodes, what the
-    follower was doing when each began."""
+    """How the runs ended (nav_batch.NavRun._outcome), how near the failed ones came to the goal,
+    and, of the contact episodes, what the follower was doing when each began."""
     lines = ["| robot | perception | " + " | ".join(o.replace("_", " ") for o in OUTCOMES)
-             + " | contacts: " + " | ".join(m.replace("_", " ") for m in MODES) + " |",
-             "|---|---|" + "---|" * (len(OUTCOMES) + len(MODES))]
+             + " | closest to the goal's disc, median of the not reached (m) | contacts: "
+             + " | ".join(m.replace("_", " ") for m in MODES) + " |",
+             "|---|---|" + "---|" * (len(OUTCOMES) + 1 + len(MODES))]
     for s in summary:
+        miss = "-" if math.isnan(s["median_miss_m"]) else f"{s['median_miss_m']:.2f}"
         lines.append(f"| {s['robot']} | {s['perception']} | "
-                     + " | ".join(str(s["outcomes"][o]) for o in OUTCOMES) + " | "
+                     + " | ".join(str(s["outcomes"][o]) for o in OUTCOMES) + f" | {miss} | "
                      + " | ".join(str(s["contacts_by_mode"][m]) for m in MODES) + " |")
     return "\n".join(lines)
 
