@@ -225,6 +225,9 @@ class NavRun:
         next_replan, next_sample = spec.ramp_s, 0.0
         path, reached, rolled = PathLength(min_step_m=0.0), False, False   # ground truth at 10 Hz: every step
         kappa_goal, next_command, backwards = 0.0, spec.ramp_s, False
+        # backing off (follower BACK_OFF) with the reference: the same wave travelling to the head
+        # (direction negated, as gaits.yaml's reverse gaits negate the lag)
+        reverse = dataclasses.replace(gait, direction=-gait.direction)
         while t < spec.time_limit_s:
             T_wb = plant.frame_transform("base_link")
             pose = ground_frame(T_wb)
@@ -266,9 +269,7 @@ class NavRun:
                     self.drive.command(name, kappa_per_m=kappa)
                 self.drive.step(t, dt)
             elif t >= spec.ramp_s:
-                # backing off (follower BACK_OFF): the same wave travelling to the head (direction
-                # negated, as gaits.yaml's reverse gaits negate the lag)
-                g = dataclasses.replace(gait, direction=-gait.direction) if backwards else gait
+                g = reverse if backwards else gait
                 plant.set_joint_targets(g.joint_angles(self.robot, t - spec.ramp_s, kappa))
             else:
                 plant.set_joint_targets(gait.joint_angles(self.robot, 0.0, 0.0) * (t / spec.ramp_s))
@@ -277,6 +278,7 @@ class NavRun:
         self.camera.close()
         clearance = self.collisions.min_clearance_m
         by_mode = collections.Counter(self._contact_modes)
+        traj = np.array(traj)
         metrics = {"goal_reached": bool(reached), "time_s": round(float(t), 3),
                    "collisions": int(self.collisions.collisions),
                    "min_clearance_m": float(clearance) if math.isfinite(clearance) else None,
@@ -291,7 +293,7 @@ class NavRun:
                    "outcome": self._outcome(reached, rolled, replans, pose),
                    **{f"contacts_{m}": by_mode.get(m, 0) for m in MODES}}
         contacts = [(e, m) for e, m in zip(self.collisions.episodes, self._contact_modes)]
-        return NavResult(metrics, np.array(traj), replans, frames, world, contacts)
+        return NavResult(metrics, traj, replans, frames, world, contacts)
 
     def _count_contacts(self, clearance: bool) -> None:
         """New contact episodes, each tagged with what the follower was doing (FOLLOW,
@@ -299,12 +301,12 @@ class NavRun:
         new = self.collisions.update(self.plant.data, clearance=clearance)
         self._contact_modes += [self.planner.follower.mode] * new
 
-    def _closest_to_goal(self, traj) -> float:
-        """How near base_link came to the goal's disc (0: reached), over the 10 Hz samples."""
+    def _closest_to_goal(self, traj: np.ndarray) -> float:
+        """How near base_link came to the goal's disc (0: reached), over the 10 Hz samples (t, x, y)."""
         w = self.spec.world
-        if not traj:
+        if not len(traj):
             return math.nan
-        xy = np.asarray(traj)[:, 1:3]
+        xy = traj[:, 1:3]
         d = np.hypot(xy[:, 0] - w.goal[0], xy[:, 1] - w.goal[1]).min() - w.goal_radius_m
         return float(max(0.0, d))
 
