@@ -165,7 +165,9 @@ def test_curvature_candidates_stay_within_the_step_and_the_range():
 
 
 def test_after_no_free_arc_the_robot_resumes_only_with_resume_free_m_ahead():
-    sp = dataclasses.replace(CFG.sampler, resume_free_m=0.6, known_free_m=0.3, body_clearance_m=0.0)
+    # arcs to 2 /m (round 6's range): round 7's 3 /m arcs (0.33 m radius) curl round before the wall
+    sp = dataclasses.replace(CFG.sampler, resume_free_m=0.6, known_free_m=0.3, body_clearance_m=0.0,
+                             max_curvature_per_m=2.0)
     fp = dataclasses.replace(CFG.follower, back_off=True)
     planner = NavPlanner(K, 0.09, sp, RecedingHorizonFollower(fp))
     near = drawn_mask(boxes=[(0.12, 0.6, -1.0, 1.0)])          # a wall 0.12 m ahead: nothing free
