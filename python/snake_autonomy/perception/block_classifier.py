@@ -7,35 +7,46 @@ and texture; 3 k^2 values (108 for k = 6). The SVM (RBF kernel, scikit-learn) si
 standard scaler. A block is labelled ground for training when at least half its pixels are ground
 in the segmentation render.
 
+Stride (round 8, ground_region.py): each cell of stride_px pixels is judged by the block centred on
+it; stride_px = block_px is the paper's tiling. Training uses the blocks of the same grid.
+
 The model is a file written by `snake_autonomy nav train-classifier --out FILE` (joblib), never a
 committed blob: the command renders its own training set.
 """
 from dataclasses import dataclass
-from typing import Iterable, Tuple
+from typing import Iterable, Optional, Tuple
 
 import cv2
 import numpy as np
-from scipy.fft import dctn
+from scipy.fft import dct
 
-from .ground_region import cell_grid, expand_cells, grow_from_bottom
+from .ground_region import cell_grid, expand_cells, grow_from_bottom, window_origins
 
 MODEL_FORMAT = "snake_autonomy.block_classifier/1"
 
 
-def block_features(rgb: np.ndarray, block_px: int = 40, k: int = 6) -> np.ndarray:
-    """(H, W, 3) uint8 RGB -> (rows, cols, 3 k^2) float32 DCT features of each whole block."""
+def block_features(rgb: np.ndarray, block_px: int = 40, k: int = 6, stride_px: Optional[int] = None) -> np.ndarray:
+    """(H, W, 3) uint8 RGB -> (rows, cols, 3 k^2) float32: the k x k lowest coefficients of the
+    orthonormal 2-D DCT-II of the block judging each cell (window_origins; stride_px default
+    block_px: whole tiles), per channel."""
     ycc = cv2.cvtColor(np.ascontiguousarray(rgb), cv2.COLOR_RGB2YCrCb).astype(np.float32) / 255.0
     h, w = ycc.shape[:2]
-    rows, cols = h // block_px, w // block_px
-    blocks = ycc[:rows * block_px, :cols * block_px].reshape(rows, block_px, cols, block_px, 3)
-    blocks = blocks.transpose(0, 2, 4, 1, 3)                     # rows, cols, ch, by, bx
-    coeffs = dctn(blocks, type=2, axes=(3, 4), norm="ortho")[..., :k, :k]
-    return coeffs.reshape(rows, cols, -1).astype(np.float32)
+    s = stride_px or block_px
+    ys, xs = window_origins(h, block_px, s), window_origins(w, block_px, s)
+    # the first k rows of the orthonormal DCT-II matrix: C B C^T is dctn(B, norm="ortho")[:k, :k]
+    c = dct(np.eye(block_px, dtype=np.float64), type=2, axis=0, norm="ortho")[:k].astype(np.float32)
+    span = np.arange(block_px)
+    cols = ycc[:, xs[:, None] + span]                            # H, cols, bx, ch
+    along_x = np.einsum("jx,hcxn->hcnj", c, cols)                # separable: x first, then y
+    rows = along_x[ys[:, None] + span]                           # rows, by, cols, ch, j
+    coeffs = np.einsum("iy,rycnj->rcnij", c, rows)
+    return np.ascontiguousarray(coeffs.reshape(len(ys), len(xs), -1), dtype=np.float32)
 
 
-def block_labels(ground: np.ndarray, block_px: int = 40) -> np.ndarray:
-    """(H, W) bool ground truth -> (rows, cols) bool: at least half the block is ground."""
-    return cell_grid(ground, block_px, 0.5)
+def block_labels(ground: np.ndarray, block_px: int = 40, stride_px: Optional[int] = None) -> np.ndarray:
+    """(H, W) bool ground truth -> (rows, cols) bool: at least half the block judging the cell is
+    ground."""
+    return cell_grid(ground, block_px, 0.5, stride_px)
 
 
 @dataclass
@@ -43,36 +54,42 @@ class BlockClassifier:
     model: object                   # sklearn Pipeline(scaler, SVC)
     block_px: int = 40
     k: int = 6
+    stride_px: Optional[int] = None   # cells judged by the block centred on each; None: block_px
+
+    @property
+    def cell_px(self) -> int:
+        """The traversability image's cell: stride_px, or the tile."""
+        return self.stride_px or self.block_px
 
     @classmethod
     def train(cls, samples: Iterable[Tuple[np.ndarray, np.ndarray]], block_px: int = 40, k: int = 6,
-              c: float = 10.0, gamma="scale") -> "BlockClassifier":
-        """samples: (rgb, ground mask) pairs."""
+              c: float = 10.0, gamma="scale", stride_px: Optional[int] = None) -> "BlockClassifier":
+        """samples: (rgb, ground mask) pairs; the blocks of every cell of stride_px."""
         from sklearn.pipeline import make_pipeline
         from sklearn.preprocessing import StandardScaler
         from sklearn.svm import SVC
         xs, ys = [], []
         for rgb, ground in samples:
-            xs.append(block_features(rgb, block_px, k).reshape(-1, 3 * k * k))
-            ys.append(block_labels(ground, block_px).ravel())
+            xs.append(block_features(rgb, block_px, k, stride_px).reshape(-1, 3 * k * k))
+            ys.append(block_labels(ground, block_px, stride_px).ravel())
         x, y = np.vstack(xs), np.concatenate(ys)
         model = make_pipeline(StandardScaler(), SVC(C=c, gamma=gamma, class_weight="balanced"))
         model.fit(x, y)
-        return cls(model, block_px, k)
+        return cls(model, block_px, k, stride_px)
 
     def classify(self, rgb: np.ndarray) -> np.ndarray:
-        """(rows, cols) bool: block looks like ground."""
-        f = block_features(rgb, self.block_px, self.k)
+        """(rows, cols) bool per cell: its block looks like ground."""
+        f = block_features(rgb, self.block_px, self.k, self.stride_px)
         return self.model.predict(f.reshape(-1, f.shape[-1])).reshape(f.shape[:2]).astype(bool)
 
     def traversable(self, rgb: np.ndarray) -> np.ndarray:
         """The binary traversability image: blocks grown from the bottom, at pixel resolution."""
-        return expand_cells(grow_from_bottom(self.classify(rgb)), self.block_px, rgb.shape[:2])
+        return expand_cells(grow_from_bottom(self.classify(rgb)), self.cell_px, rgb.shape[:2])
 
     def save(self, path) -> None:
         import joblib
         joblib.dump({"format": MODEL_FORMAT, "block_px": self.block_px, "k": self.k,
-                     "model": self.model}, path)
+                     "stride_px": self.stride_px, "model": self.model}, path)
 
     @classmethod
     def load(cls, path) -> "BlockClassifier":
@@ -83,4 +100,5 @@ class BlockClassifier:
                              f"{d.get('format') if isinstance(d, dict) else type(d).__name__!r}, "
                              f"expected {MODEL_FORMAT!r}); make one with `snake_autonomy nav "
                              f"train-classifier --out FILE`")
-        return cls(d["model"], int(d["block_px"]), int(d["k"]))
+        stride = d.get("stride_px")                   # absent in models made before round 8: tiles
+        return cls(d["model"], int(d["block_px"]), int(d["k"]), None if stride is None else int(stride))

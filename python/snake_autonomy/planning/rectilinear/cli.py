@@ -7,11 +7,11 @@
     snake_autonomy nav eval-perception [--model FILE] [--scenes N]
                                                     precision/recall and ms per frame of the depth
                                                     method (and the classifier) on held-out scenes
-    snake_autonomy nav run --world FILE [--robot R] [--perception depth|mono] [--seed N]
+    snake_autonomy nav run --world FILE [--robot R] [--perception depth|mono|truth] [--seed N]
                            [--time-limit S] [--classifier FILE] --out DIR
                                                     the closed loop in batch (sim/nav_batch.py):
                                                     DIR/metrics.json, topview.png, frames/
-    snake_autonomy nav experiment --worlds N --seeds 0-4 [--perception depth|mono|both]
+    snake_autonomy nav experiment --worlds N --seeds 0-4 [--perception depth|mono|both|truth]
                            [--robot R] [--engine dask|threads|serial] [--scheduler ADDR] --out DIR
                                                     random solvable corridors (sim/nav_experiment.py)
                                                     on Dask: DIR/runs.csv, summary.json, table.md
@@ -41,7 +41,8 @@ def add_arguments(parser):
     ev.add_argument("--seed", type=int, default=100000)
     run = sub.add_parser("run", help="the closed loop on the simulated robot in batch")
     run.add_argument("--world", required=True, metavar="FILE")
-    run.add_argument("--perception", choices=("depth", "mono"), default="depth")
+    run.add_argument("--perception", choices=("depth", "mono", "truth"), default="depth",
+                     help="truth: the segmentation render through the classifier's cells (a perfect classifier)")
     run.add_argument("--seed", type=int, default=0)
     run.add_argument("--time-limit", type=float, default=1200.0, metavar="S")
     run.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono)")
@@ -56,7 +57,8 @@ def add_arguments(parser):
     ex.add_argument("--worlds", type=int, default=20, help="random corridors 0..N-1 (sim/nav_experiment.py)")
     ex.add_argument("--first-world", type=int, default=0)
     ex.add_argument("--seeds", default="0-4", help="plant seeds: 0-4 or 0,2,3")
-    ex.add_argument("--perception", choices=("depth", "mono", "both"), default="depth")
+    ex.add_argument("--perception", choices=("depth", "mono", "both", "truth"), default="depth",
+                    help="both: depth and mono; truth: the segmentation render through the classifier's cells")
     ex.add_argument("--time-limit", type=float, default=300.0, metavar="S")
     ex.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono, both)")
     ex.add_argument("--keep-runs", action="store_true", help="each run's figures under DIR/runs/")
@@ -93,23 +95,23 @@ def evaluate(cfg, robot, frames, classifier=None) -> dict:
     from .config import T_ground_camera
     methods = {}
     dt = DepthTraversability(cfg.intrinsics, T_ground_camera(cfg.mount, robot.link_radius_m + 0.001), cfg.depth)
-    methods["depth"] = (lambda f: dt(f.depth_m), cfg.depth.block_px)
+    methods["depth"] = (lambda f: dt(f.depth_m), (cfg.depth.block_px, cfg.depth.block_px))
     if classifier is not None:
-        methods["mono"] = (lambda f: classifier.traversable(f.rgb), classifier.block_px)
+        methods["mono"] = (lambda f: classifier.traversable(f.rgb), (classifier.block_px, classifier.cell_px))
     out = {}
-    for name, (fn, block) in methods.items():
+    for name, (fn, (block, stride)) in methods.items():
         ps, rs, ms = [], [], []
         for f in frames:
             t = time.perf_counter()
             pred = fn(f)
             ms.append(1000.0 * (time.perf_counter() - t))
-            p, r = precision_recall(pred, traversable(f.ground_truth_ground(), block))
+            p, r = precision_recall(pred, traversable(f.ground_truth_ground(), block, stride_px=stride))
             ps.append(p)
             rs.append(r)
         out[name] = {"precision": float(np.mean(ps)), "recall": float(np.mean(rs)),
                      "precision_min": float(np.min(ps)), "recall_min": float(np.min(rs)),
                      "ms_per_frame_median": float(np.median(ms)), "frames": len(frames),
-                     "truth_block_px": block}
+                     "truth_block_px": block, "truth_stride_px": stride}
     return out
 
 
@@ -142,14 +144,15 @@ def main(args) -> int:
             robot, params, args.scenes, args.seed, cfg.intrinsics, cfg.mount, depth=False)]
         t1 = time.perf_counter()
         clf = BlockClassifier.train(train, cfg.classifier.block_px, cfg.classifier.dct_coefficients,
-                                    cfg.classifier.svm_c)
+                                    cfg.classifier.svm_c, stride_px=cfg.classifier.stride_px)
         t2 = time.perf_counter()
         clf.save(args.out)
         test = list(render_scenes(robot, params, args.test_scenes, args.seed + 100000, cfg.intrinsics, cfg.mount))
         results = evaluate(cfg, robot, test, clf)
         summary = {"model": str(args.out), "robot": robot.name, "training_scenes": args.scenes,
                    "seed": args.seed, "render_s": t1 - t0, "train_s": t2 - t1,
-                   "block_px": clf.block_px, "dct_coefficients": clf.k, "svm_c": cfg.classifier.svm_c,
+                   "block_px": clf.block_px, "stride_px": clf.cell_px, "dct_coefficients": clf.k,
+                   "svm_c": cfg.classifier.svm_c,
                    "held_out": results}
         Path(str(args.out) + ".json").write_text(json.dumps(summary, indent=2) + "\n")
         print(f"trained on {args.scenes} rendered scenes ({t1 - t0:.0f} s rendering, {t2 - t1:.1f} s "

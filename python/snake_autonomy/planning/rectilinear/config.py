@@ -31,6 +31,14 @@ class ClassifierParams:
     block_px: int = 40
     dct_coefficients: int = 4
     svm_c: float = 10.0
+    stride_px: int = 20       # each 20 px cell judged by the 40 px block centred on it (round 8)
+
+    def validate(self) -> List[str]:
+        p = [f"{key}: must be > 0, got {getattr(self, key)}"
+             for key in ("block_px", "dct_coefficients", "svm_c") if not getattr(self, key) > 0]
+        if not 0 < self.stride_px <= self.block_px:
+            p.append(f"stride_px: must be in (0, block_px = {self.block_px}], got {self.stride_px}")
+        return p
 
 
 @dataclass(frozen=True)
@@ -125,7 +133,8 @@ class NavConfig:
         for key in ("amplitude_m", "wavelength_m", "frequency_hz"):
             if not getattr(gait, key) > 0:
                 problems.append(f"gait.{key}: must be > 0, got {getattr(gait, key)}")
-        for name, obj in (("sampler", sampler), ("follower", follower), ("plant", plant)):
+        for name, obj in (("sampler", sampler), ("follower", follower), ("plant", plant),
+                          ("classifier", classifier)):
             if obj is not None:
                 problems += [f"{name}.{p}" for p in obj.validate()]
         if problems:
