@@ -20,9 +20,10 @@ import cv2
 import numpy as np
 from scipy.fft import dct
 
-from .ground_region import cell_grid, expand_cells, grow_from_bottom, window_origins
+from .ground_region import cell_grid, expand_cells, grow_from_bottom, traversable, window_origins
 
 MODEL_FORMAT = "snake_autonomy.block_classifier/1"
+GROUND_FRACTION = 0.5               # a block is labelled ground when at least this much of it is
 
 
 def block_features(rgb: np.ndarray, block_px: int = 40, k: int = 6, stride_px: Optional[int] = None) -> np.ndarray:
@@ -46,7 +47,13 @@ def block_features(rgb: np.ndarray, block_px: int = 40, k: int = 6, stride_px: O
 def block_labels(ground: np.ndarray, block_px: int = 40, stride_px: Optional[int] = None) -> np.ndarray:
     """(H, W) bool ground truth -> (rows, cols) bool: at least half the block judging the cell is
     ground."""
-    return cell_grid(ground, block_px, 0.5, stride_px)
+    return cell_grid(ground, block_px, GROUND_FRACTION, stride_px)
+
+
+def truth_traversable(ground: np.ndarray, block_px: int = 40, stride_px: Optional[int] = None) -> np.ndarray:
+    """(H, W) bool ground truth -> the traversability image a perfect classifier would give: the
+    training labels (block_labels) grown from the bottom, at pixel resolution."""
+    return traversable(ground, block_px, GROUND_FRACTION, stride_px)
 
 
 @dataclass

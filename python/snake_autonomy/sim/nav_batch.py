@@ -215,9 +215,9 @@ class NavRun:
         elif spec.perception == "truth":
             # a perfect classifier (round 8): the segmentation render through the classifier's
             # blocks and cells (nav.yaml classifier: block_px, stride_px): what mono could reach
-            from ..perception.ground_region import traversable
+            from ..perception.block_classifier import truth_traversable
             c = self.cfg.classifier
-            self.perceive = lambda f: traversable(f.ground_truth_ground(), c.block_px, 0.5, c.stride_px)
+            self.perceive = lambda f: truth_traversable(f.ground_truth_ground(), c.block_px, c.stride_px)
         else:
             raise ValueError(f"perception: expected depth, mono or truth, got {spec.perception!r}")
 
