@@ -81,8 +81,14 @@ def test_sim_yaml_refuses_a_flat_belly_outside_0_1(root, tmp_path):
 def test_nav_config_reads_the_follower_keys_of_a_gait_map(tmp_path):
     gm = tmp_path / "gait_map.yaml"
     gm.write_text("follower: {speed_m_s: 0.0071, omega_per_kappa: 0.02, omega_offset_rad_s: 0.001}\n")
-    cfg = NavConfig.from_dict({"follower": {"gait_map": str(gm), "speed_m_s": 0.5}})
+    cfg = NavConfig.from_dict({"follower": {"gait_map": str(gm), "kappa_max_per_m": 3.0}})
     assert cfg.follower.speed_m_s == 0.0071 and cfg.follower.omega_per_kappa == 0.02
+    assert cfg.follower.kappa_max_per_m == 3.0          # the section's own keys win over the map's
+    # a file's map stands over its base's follower keys; the file's own keys over the map
+    (tmp_path / "base.yaml").write_text("follower: {speed_m_s: 0.5, omega_per_kappa: 0.9, k_heading: 0.3}\n")
+    (tmp_path / "own.yaml").write_text(f"base: base.yaml\nfollower: {{gait_map: {gm}, omega_per_kappa: 0.04}}\n")
+    own = NavConfig.from_yaml(tmp_path / "own.yaml").follower
+    assert (own.speed_m_s, own.omega_per_kappa, own.omega_offset_rad_s, own.k_heading) == (0.0071, 0.04, 0.001, 0.3)
     with pytest.raises(NavConfigError, match="follower.gait_map: no such file 'nope.yaml'"):
         NavConfig.from_dict({"follower": {"gait_map": "nope.yaml"}})
     with pytest.raises(NavConfigError, match=r"plant.flat_belly_fraction: must be in \[0, 1\], got 2.0"):

@@ -116,10 +116,8 @@ class NavConfig:
             problems.append(f"camera.mount.rpy_deg: expected 3 numbers, got {rpy!r}")
         if _vec3(t) and _vec3(rpy):
             mount = CameraMount(tuple(float(x) for x in t), tuple(float(x) for x in rpy))
-        follower_d = dict(data.get("follower") or {})
+        follower_d = _with_gait_map(data.get("follower"), source, problems)
         replan = follower_d.pop("replan_period_s", 10.0)
-        if "gait_map" in follower_d:
-            follower_d.update(_gait_map_follower(follower_d.pop("gait_map"), source, problems))
         if not isinstance(replan, (int, float)) or replan <= 0:
             problems.append(f"follower.replan_period_s: must be > 0, got {replan!r}")
         depth = _section(DepthTraversabilityParams, data.get("depth_traversability"), "depth_traversability",
@@ -153,9 +151,18 @@ def _load_with_base(path: Path, depth: int = 0) -> Dict[str, Any]:
     """The file's mapping; with `base: FILE` (relative: to the file's folder) the base's mapping with
     this file's sections merged over it key by key (a section's keys replace the base's)."""
     data = load_yaml_file(path) or {}
-    if not isinstance(data, dict) or "base" not in data:
+    if not isinstance(data, dict):
         return data
     data = dict(data)
+    if isinstance(data.get("follower"), dict) and "gait_map" in data["follower"]:
+        # this file's gait map under this file's own follower keys, before a base is merged under
+        # them: a base's keys never override the map the file names
+        problems: List[str] = []
+        data["follower"] = _with_gait_map(data["follower"], str(path), problems)
+        if problems:
+            raise NavConfigError(str(path), problems)
+    if "base" not in data:
+        return data
     base_name = data.pop("base")
     if not isinstance(base_name, str) or not base_name:
         raise NavConfigError(str(path), [f"base: expected a nav config file name, got {base_name!r}"])
@@ -172,9 +179,24 @@ def _load_with_base(path: Path, depth: int = 0) -> Dict[str, Any]:
     return merged
 
 
+def _with_gait_map(follower, source: str, problems: List[str]):
+    """A follower section with its `gait_map: FILE` expanded: the map's follower keys, and over them
+    the keys the section names itself (e.g. a map's fit with a wider kappa_max_per_m)."""
+    follower = follower or {}
+    if not isinstance(follower, dict):
+        problems.append(f"follower: expected a mapping, got {follower!r}")
+        return {}
+    if "gait_map" not in follower:
+        return dict(follower)
+    own = dict(follower)
+    merged = _gait_map_follower(own.pop("gait_map"), source, problems)
+    merged.update(own)
+    return merged
+
+
 def _gait_map_follower(name, source: str, problems: List[str]) -> Dict[str, Any]:
     """follower.gait_map: a file of `snake_autonomy gait-map` (relative: to the nav config's folder,
-    then the package's config/); its `follower:` keys replace nav.yaml's."""
+    then the package's config/); its `follower:` keys, under the keys the section names itself."""
     if not isinstance(name, str) or not name:
         problems.append(f"follower.gait_map: expected a file name, got {name!r}")
         return {}
