@@ -1,6 +1,7 @@
 """The navigation experiment (sim/nav_experiment.py, `snake_autonomy nav experiment`): random
 corridors are solvable by construction and reproducible; the command writes its table through the
 sweep runner."""
+import csv
 import json
 import math
 
@@ -71,6 +72,14 @@ def test_nav_experiment_writes_runs_summary_and_table(tmp_path):
     assert "circling goal" in (out / "table.md").read_text()
     assert len((out / "runs.csv").read_text().splitlines()) == 2
     assert math.isfinite(summary["wall_s"])
+    # every generated world as a world file: a row of runs.csv runs again alone, with its figures
+    again = tmp_path / "again"
+    assert cli_main(["nav", "run", "--world", str(out / "worlds" / "corridor_000.yaml"), "--seed", "0",
+                     "--time-limit", "4", "--out", str(again)]) == 0
+    row = next(csv.DictReader((out / "runs.csv").open()))
+    metrics = json.loads((again / "metrics.json").read_text())
+    for key in ("time_s", "path_length_m", "replans", "closest_to_goal_m", "outcome"):
+        assert str(metrics[key]) == row[key], key
 
 
 def test_nav_experiment_mono_needs_a_classifier(tmp_path, capsys):

@@ -228,6 +228,7 @@ def _experiment(args) -> int:
     worlds = [random_corridor(k, body_width_m=body) for k in range(args.first_world, args.first_world + args.worlds)]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    _write_worlds(worlds, out / "worlds")
     tasks = experiment_tasks(worlds, seeds, perceptions, robot=args.robot, time_limit_s=args.time_limit,
                              classifier=args.classifier, nav_config=args.config,
                              out_dir=str(out / "runs") if args.keep_runs else None)
@@ -244,4 +245,17 @@ def _experiment(args) -> int:
          "wall_s": round(time.perf_counter() - t0, 1), "summary": summary}, indent=2) + "\n")
     (out / "table.md").write_text(table + "\n")
     print(table)
+    print(f"\none run again, with its figures: snake_autonomy nav run --world {out / 'worlds'}/WORLD.yaml "
+          f"--seed SEED [--perception ...] --out DIR (runs.csv: world, seed)")
     return 0
+
+
+def _write_worlds(worlds, folder: Path) -> None:
+    """Each generated world as the world file `nav run --world` reads (folder/NAME.yaml): a row of
+    runs.csv is reproduced without regenerating it."""
+    import yaml
+    folder.mkdir(parents=True, exist_ok=True)
+    for w in worlds:
+        (folder / f"{w.name}.yaml").write_text(
+            f"# {w.source or w.name} (snake_autonomy nav experiment, sim/nav_experiment.py)\n"
+            + yaml.safe_dump(w.to_dict(), sort_keys=False))
