@@ -58,6 +58,9 @@ class PlannerNode:
         if self.perception == "mono" and not self.classifier:
             raise ValueError("~classifier: perception mono needs a model file (snake_autonomy nav train-classifier)")
         self.goal, self.goal_radius_m = self._goal()
+        if self.cfg.gaits.steering != "uniform":
+            raise ValueError(f"~nav_config: gaits.steering {self.cfg.gaits.steering!r} runs in the batch simulator "
+                             "only (nav run / nav experiment); this node commands curve + kappa (uniform)")
         self.gait = rospy.get_param("~gait", self.cfg.gaits.forward)
         self.reverse_gait = rospy.get_param("~reverse_gait", self.cfg.gaits.reverse)
         # the nav config's choice (follower.back_off: back off, else hold) unless the param says

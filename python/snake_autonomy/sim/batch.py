@@ -150,9 +150,10 @@ class LockStepDriver:
             raise RuntimeError(f"the driver did not start: {self.controller.state} {self.controller.fault_reason}")
 
     def command_gait(self, gait: str, steer: bool = False, delta_rad: float = 0.0, curve: bool = False,
-                     kappa_per_m: float = 0.0) -> str:
-        return self.controller.command_gait(gait=gait, steer=steer, delta_rad=delta_rad, curve=curve,
-                                            kappa_per_m=kappa_per_m)
+                     kappa_per_m: float = 0.0, bias=()) -> str:
+        """bias: one per joint (rad), replacing the gait's; empty: the gait's."""
+        return self.controller.command_gait(gait=gait, bias=[float(b) for b in bias], steer=steer,
+                                            delta_rad=delta_rad, curve=curve, kappa_per_m=kappa_per_m)
 
     def set_base_pose(self, t_s: float, position, quat_xyzw) -> bool:
         return self.controller.set_base_pose(t_s, position, quat_xyzw)

@@ -29,10 +29,12 @@ class PlantGaitDriver:
         self._command = None
         self._sent_t = None
 
-    def command(self, gait: str, kappa_per_m: Optional[float] = None, steer_delta_rad: Optional[float] = None) -> None:
+    def command(self, gait: str, kappa_per_m: Optional[float] = None, steer_delta_rad: Optional[float] = None,
+                bias_rad=None) -> None:
         """The gait to run: kappa_per_m -> curve=True (curvature steering), steer_delta_rad -> steer=True
-        (amplitude modulation), neither -> the gait as it is. Sent at the next step."""
-        self._command = (gait, kappa_per_m, steer_delta_rad)
+        (amplitude modulation), neither -> the gait as it is; bias_rad: one bias per joint replacing
+        the gait's (follow-the-leader curvature, nav_batch). Sent at the next step."""
+        self._command = (gait, kappa_per_m, steer_delta_rad, () if bias_rad is None else tuple(bias_rad))
         self._sent_t = None
 
     @property
@@ -49,9 +51,9 @@ class PlantGaitDriver:
         pos, quat = self.plant.frame_pose("base_link")
         self.driver.set_base_pose(t_s, pos, quat)
         if self._command is not None and (self._sent_t is None or t_s - self._sent_t >= self.resend_s - 1e-9):
-            gait, kappa, delta = self._command
+            gait, kappa, delta, bias = self._command
             why = self.driver.command_gait(gait, steer=delta is not None, delta_rad=delta or 0.0,
-                                           curve=kappa is not None, kappa_per_m=kappa or 0.0)
+                                           curve=kappa is not None, kappa_per_m=kappa or 0.0, bias=bias)
             if why:
                 raise RuntimeError(f"the driver refused {gait} (kappa {kappa}, delta {delta}): {why}")
             self._sent_t = t_s

@@ -30,6 +30,10 @@ writes the Python reference's gait.joint_angles(t, kappa) (config/nav.yaml gait:
 plant every control period, ramped in over ramp_s. The driver's gaits are the nav config's `gaits:`
 (forward, reverse); without a nav config named, the robot's own (config.nav_config_path: config/
 nav_chang_rectilinear.yaml names rectilinear_chang, derived for its 0.07 m links) or nav.yaml's.
+With the nav config's gaits.steering follow_the_leader (round 9) kappa is laid along the head's path as
+it crawls (planning/rectilinear/follow_the_leader.py, the crawl measured on base_link's ground truth)
+and each yaw joint gets its own curvature: through the driver as explicit per-joint biases of the gait
+command (GaitCommand bias, every command_period_s), with the reference as its yaw angles.
 """
 import collections
 import dataclasses
@@ -234,6 +238,10 @@ class NavRun:
         # backing off (follower BACK_OFF) with the reference: the same wave travelling to the head
         # (direction negated, as gaits.yaml's reverse gaits negate the lag)
         reverse = dataclasses.replace(gait, direction=-gait.direction)
+        ftl, next_bias = None, 0.0
+        if self.cfg.gaits.steering == "follow_the_leader":
+            from ..planning.rectilinear.follow_the_leader import FollowTheLeader
+            ftl = FollowTheLeader.of_robot(self.robot)
         while t < spec.time_limit_s:
             T_wb = plant.frame_transform("base_link")
             pose = ground_frame(T_wb)
@@ -269,14 +277,21 @@ class NavRun:
                     kappa_goal, backwards = cmd.kappa_per_m, cmd.mode == BACK_OFF
                 step = spec.kappa_slew_per_m_s * dt
                 kappa += max(-step, min(step, kappa_goal - kappa))
+            if ftl is not None and t >= spec.ramp_s:
+                ftl.crawl(pose, kappa)
             if self.drive is not None:
                 name = self.reverse_gait_name if backwards else self.gait_name
-                if self.drive.kappa_per_m != kappa or self.drive.gait != name:
+                if ftl is not None:
+                    if t >= next_bias or self.drive.gait != name:
+                        next_bias = t + spec.command_period_s
+                        self.drive.command(name, bias_rad=ftl.biases())
+                elif self.drive.kappa_per_m != kappa or self.drive.gait != name:
                     self.drive.command(name, kappa_per_m=kappa)
                 self.drive.step(t, dt)
             elif t >= spec.ramp_s:
                 g = reverse if backwards else gait
-                plant.set_joint_targets(g.joint_angles(self.robot, t - spec.ramp_s, kappa))
+                yaw_kappas = None if ftl is None else ftl.joint_kappas()
+                plant.set_joint_targets(g.joint_angles(self.robot, t - spec.ramp_s, kappa, yaw_kappas))
             else:
                 plant.set_joint_targets(gait.joint_angles(self.robot, 0.0, 0.0) * (t / spec.ramp_s))
             t += dt
@@ -294,6 +309,7 @@ class NavRun:
                    "seed": spec.seed, "world": world.source or world.name,
                    "flat_belly_fraction": self.flat_belly_fraction, "gait_source": spec.gait_source,
                    "gait": self.gait_name if self.drive is not None else "reference",
+                   "steering": self.cfg.gaits.steering,
                    "nav_config": Path(self.nav_config).name,
                    "closest_to_goal_m": round(self._closest_to_goal(traj), 4),
                    "outcome": self._outcome(reached, rolled, replans, pose),

@@ -52,11 +52,17 @@ class PlantOptions:
         return []
 
 
+STEERING_LAWS = ("uniform", "follow_the_leader")
+
+
 @dataclass(frozen=True)
 class NavGaits:
     """config/gaits.yaml entries a navigation run drives through the driver (nav.yaml `gaits:`)."""
     forward: str = "rectilinear"             # head first, steering: curvature
     reverse: str = "rectilinear_reverse"     # tail first (follower back_off)
+    steering: str = "uniform"                # uniform: every yaw joint at kappa (the driver's curvature
+                                             # law); follow_the_leader: kappa laid along the head's path
+                                             # (follow_the_leader.py; the batch simulator only, round 9)
 
     @classmethod
     def from_dict(cls, d, problems: List[str]) -> "NavGaits":
@@ -66,8 +72,10 @@ class NavGaits:
             return cls()
         kwargs = {}
         for key, value in d.items():
-            if key not in ("forward", "reverse"):
-                problems.append(f"gaits.{key}: unknown key (value {value!r}); known: forward, reverse")
+            if key not in ("forward", "reverse", "steering"):
+                problems.append(f"gaits.{key}: unknown key (value {value!r}); known: forward, reverse, steering")
+            elif key == "steering" and value not in STEERING_LAWS:
+                problems.append(f"gaits.steering: expected one of {', '.join(STEERING_LAWS)}, got {value!r}")
             elif not isinstance(value, str) or not value:
                 problems.append(f"gaits.{key}: expected a gait name of config/gaits.yaml, got {value!r}")
             else:

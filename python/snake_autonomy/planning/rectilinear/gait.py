@@ -32,7 +32,9 @@ class RectilinearGait:
     pitch_sign: float = 1.0
     yaw_sign: float = 1.0
 
-    def joint_angles(self, robot, t_s: float, kappa_per_m: float = 0.0) -> np.ndarray:
+    def joint_angles(self, robot, t_s: float, kappa_per_m: float = 0.0, yaw_kappas=None) -> np.ndarray:
+        """yaw_kappas: one curvature per yaw joint, head to tail (follow_the_leader.py); None: every
+        yaw joint at kappa_per_m."""
         axes = list(robot.axes)
         H, L = robot.head_length_m, robot.link_length_m
         n = len(axes)
@@ -51,5 +53,5 @@ class RectilinearGait:
             spacing = float(np.mean(np.diff(s_joint[yaw])))
         else:
             spacing = 2 * L
-        q[yaw] = self.yaw_sign * kappa_per_m * spacing
+        q[yaw] = self.yaw_sign * (kappa_per_m if yaw_kappas is None else np.asarray(yaw_kappas, float)) * spacing
         return q

@@ -1,0 +1,88 @@
+"""One turn of the rectilinear gait on open floor, and how far the body strays from the head's track
+(issue 13 round 9; bench/nav_follow_the_leader prints it, test_nav_round9 checks it).
+
+The run: straight for start_s, kappa for turn_s, straight for 60 s; the plant with nav runs' flat
+belly (config/nav.yaml plant:), the gait through the C++ driver (config/gaits.yaml rectilinear) or
+the Python reference (planning/rectilinear/gait.py). Steering laws (nav.yaml gaits.steering):
+uniform (every yaw joint at kappa: the driver's curvature law) or follow_the_leader
+(planning/rectilinear/follow_the_leader.py: the driver gets per-joint biases).
+"""
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Tuple
+
+import numpy as np
+from shapely.geometry import LineString, Point
+
+STEERING = ("uniform", "follow_the_leader")
+
+
+@dataclass
+class TurnSweep:
+    steering: str
+    heading_change_deg: float            # the head's, from the turn's start to the run's end
+    head_sideways_m: Tuple[float, float]  # the head's sideways move 10 s and 20 s into the turn
+    off_track_m: float                   # the farthest any frame of the body gets from the track (the
+                                         # head's path so far and the straight line behind the start)
+
+
+def turn_sweep(steering: str, kappa_per_m: float = 1.5, turn_s: float = 90.0, robot_name: str = "cobra",
+               seed: int = 0, gait_source: str = "driver", start_s: float = 30.0,
+               kappa_slew_per_m_s: float = 1.0) -> TurnSweep:
+    from .. import _core
+    from ..paths import config_path
+    from ..planning.rectilinear.cli import robot_yaml
+    from ..planning.rectilinear.config import NavConfig
+    from ..planning.rectilinear.follow_the_leader import FollowTheLeader
+    from ..planning.rectilinear.planner import ground_frame
+    from .config import SimConfig
+    from .scales import ScaledPlant
+    if steering not in STEERING:
+        raise ValueError(f"steering: expected one of {', '.join(STEERING)}, got {steering!r}")
+    if gait_source not in ("driver", "reference"):
+        raise ValueError(f"gait_source: expected driver or reference, got {gait_source!r}")
+    robot = _core.RobotModel.from_yaml(str(robot_yaml(robot_name)))
+    nav = NavConfig.from_yaml()
+    sim = SimConfig.from_yaml(str(config_path("sim.yaml")))
+    sim = dataclasses.replace(sim, physics=dataclasses.replace(
+        sim.physics, flat_belly_fraction=nav.plant.flat_belly_fraction))
+    plant = ScaledPlant(robot, sim.draw(seed=seed, num_joints=robot.num_joints), (0.0, 0.0, 0.0))
+    ftl = FollowTheLeader.of_robot(robot) if steering == "follow_the_leader" else None
+    drive = None
+    if gait_source == "driver":
+        from .gait_driver import PlantGaitDriver
+        drive = PlantGaitDriver(robot, plant)
+    t, dt, t_end, ramp_s = 0.0, 0.01, start_s + turn_s + 60.0, 2.0
+    kappa, head, bodies = 0.0, [], []
+    while t < t_end:
+        pose = ground_frame(plant.frame_transform("base_link"))
+        goal = kappa_per_m if start_s <= t < start_s + turn_s else 0.0
+        kappa += max(-kappa_slew_per_m_s * dt, min(kappa_slew_per_m_s * dt, goal - kappa))
+        if ftl is not None and t >= ramp_s:
+            ftl.crawl(pose, kappa)
+        if drive is not None:
+            if ftl is None:
+                if drive.kappa_per_m != kappa:
+                    drive.command(nav.gaits.forward, kappa_per_m=kappa)
+            elif round(t / dt) % 50 == 0:                        # every 0.5 s, as nav runs
+                drive.command(nav.gaits.forward, bias_rad=ftl.biases())
+            drive.step(t, dt)
+        else:
+            q = nav.gait.joint_angles(robot, max(0.0, t - ramp_s), kappa,
+                                      None if ftl is None else ftl.joint_kappas())
+            plant.set_joint_targets(q if t >= ramp_s else q * (t / ramp_s))
+        t += dt
+        plant.step_to(t)
+        if round(t / dt) % 10 == 0:                              # 10 Hz
+            head.append((t, *ground_frame(plant.frame_transform("base_link"))))
+            bodies.append(plant.frame_positions()[1:, :2].copy())
+    head = np.array(head)
+    worst = 0.0
+    for k in range(0, len(bodies), 20):                          # every 2 s
+        track = LineString(np.vstack([[[-2.0, 0.0]], head[:k + 1, 1:3]]))
+        worst = max(worst, max(track.distance(Point(p)) for p in bodies[k]))
+    i0 = int(np.searchsorted(head[:, 0], start_s - 1e-6))
+    c, s = math.cos(head[i0, 3]), math.sin(head[i0, 3])
+    side = [-s * (head[i0 + n, 1] - head[i0, 1]) + c * (head[i0 + n, 2] - head[i0, 2]) for n in (100, 200)]
+    return TurnSweep(steering, math.degrees(head[-1, 3] - head[i0, 3]), (side[0], side[1]), worst)
