@@ -2,8 +2,8 @@
 (issue 13 round 9; bench/nav_follow_the_leader prints it, test_nav_round9 checks it).
 
 The run: straight for start_s, kappa for turn_s, straight for 60 s; the plant with nav runs' flat
-belly (config/nav.yaml plant:), the gait through the C++ driver (config/gaits.yaml rectilinear) or
-the Python reference (planning/rectilinear/gait.py). Steering laws (nav.yaml gaits.steering):
+belly (the robot's nav config plant:), the gait through the C++ driver (its gaits.forward, e.g.
+config/gaits.yaml rectilinear) or the Python reference (its gait:, planning/rectilinear/gait.py). Steering laws (nav.yaml gaits.steering):
 uniform (every yaw joint at kappa: the driver's curvature law) or follow_the_leader
 (planning/rectilinear/follow_the_leader.py: the driver gets per-joint biases).
 """
@@ -33,7 +33,7 @@ def turn_sweep(steering: str, kappa_per_m: float = 1.5, turn_s: float = 90.0, ro
     from .. import _core
     from ..paths import config_path
     from ..planning.rectilinear.cli import robot_yaml
-    from ..planning.rectilinear.config import NavConfig
+    from ..planning.rectilinear.config import NavConfig, nav_config_path
     from ..planning.rectilinear.follow_the_leader import FollowTheLeader
     from ..planning.rectilinear.planner import ground_frame
     from .config import SimConfig
@@ -43,7 +43,7 @@ def turn_sweep(steering: str, kappa_per_m: float = 1.5, turn_s: float = 90.0, ro
     if gait_source not in ("driver", "reference"):
         raise ValueError(f"gait_source: expected driver or reference, got {gait_source!r}")
     robot = _core.RobotModel.from_yaml(str(robot_yaml(robot_name)))
-    nav = NavConfig.from_yaml()
+    nav = NavConfig.from_yaml(nav_config_path(robot_name))       # the robot's gaits and plant options
     sim = SimConfig.from_yaml(str(config_path("sim.yaml")))
     sim = dataclasses.replace(sim, physics=dataclasses.replace(
         sim.physics, flat_belly_fraction=nav.plant.flat_belly_fraction))
