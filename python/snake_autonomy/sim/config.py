@@ -224,6 +224,12 @@ class SimConfig:
             non_negative(f"disturbances[{i}].time_s", d.time_s)
         return errs
 
+    def with_flat_belly(self, fraction: float) -> "SimConfig":
+        """This configuration with physics.flat_belly_fraction set (the nav runs' and gait maps' plant
+        option, sim/mjcf.py)."""
+        return dataclasses.replace(self, physics=dataclasses.replace(self.physics,
+                                                                     flat_belly_fraction=float(fraction)))
+
     def calibration_path(self) -> Path:
         path = Path(self.vio.calibration)
         return path if path.is_absolute() else self.base_dir / path

@@ -99,9 +99,8 @@ def simulate_point(point: GaitPoint) -> Dict:
     from .scales import ScaledPlant
     robot = _core.RobotModel.from_yaml(str(robot_yaml(point.robot)))
     cfg = SimConfig.from_yaml(str(config_path("sim.yaml")))
-    cfg = dataclasses.replace(cfg, scales=dataclasses.replace(cfg.scales, enabled=point.scales),
-                              physics=dataclasses.replace(cfg.physics,
-                                                          flat_belly_fraction=point.flat_belly_fraction))
+    cfg = dataclasses.replace(cfg.with_flat_belly(point.flat_belly_fraction),
+                              scales=dataclasses.replace(cfg.scales, enabled=point.scales))
     params = cfg.draw(seed=point.seed, num_joints=robot.num_joints, randomize=point.randomize)
     plant = ScaledPlant(robot, params, (0.0, 0.0, 0.0))
     dt = 0.01

@@ -182,10 +182,7 @@ class NavRun:
         self.robot = _core.RobotModel.from_yaml(str(ry))
         sim_cfg = SimConfig.from_yaml(spec.sim_config or str(config_path("sim.yaml")))
         belly = self.cfg.plant.flat_belly_fraction if spec.flat_belly_fraction is None else spec.flat_belly_fraction
-        if belly != sim_cfg.physics.flat_belly_fraction:
-            sim_cfg = dataclasses.replace(sim_cfg, physics=dataclasses.replace(sim_cfg.physics,
-                                                                               flat_belly_fraction=belly))
-        self.params = sim_cfg.draw(seed=spec.seed, num_joints=self.robot.num_joints)
+        self.params = sim_cfg.with_flat_belly(belly).draw(seed=spec.seed, num_joints=self.robot.num_joints)
         scene = build_scene(spec.world)
         self.plant = ScaledPlant(self.robot, self.params, spec.world.start_rad,
                                  scene_xml=scene.scene_xml, assets_xml=scene.assets_xml)

@@ -3,11 +3,10 @@
 
 The run: straight for start_s, kappa for turn_s, straight for 60 s; the plant with nav runs' flat
 belly (the robot's nav config plant:), the gait through the C++ driver (its gaits.forward, e.g.
-config/gaits.yaml rectilinear) or the Python reference (its gait:, planning/rectilinear/gait.py). Steering laws (nav.yaml gaits.steering):
-uniform (every yaw joint at kappa: the driver's curvature law) or follow_the_leader
+config/gaits.yaml rectilinear) or the Python reference (its gait:, planning/rectilinear/gait.py).
+Steering laws (nav.yaml gaits.steering): uniform (every yaw joint at kappa: the driver's curvature law) or follow_the_leader
 (planning/rectilinear/follow_the_leader.py: the driver gets per-joint biases).
 """
-import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Tuple
@@ -15,7 +14,7 @@ from typing import Tuple
 import numpy as np
 from shapely.geometry import LineString, Point
 
-STEERING = ("uniform", "follow_the_leader")
+from ..planning.rectilinear.config import STEERING_LAWS as STEERING, NavConfig, nav_config_path
 
 
 @dataclass
@@ -33,7 +32,6 @@ def turn_sweep(steering: str, kappa_per_m: float = 1.5, turn_s: float = 90.0, ro
     from .. import _core
     from ..paths import config_path
     from ..planning.rectilinear.cli import robot_yaml
-    from ..planning.rectilinear.config import NavConfig, nav_config_path
     from ..planning.rectilinear.follow_the_leader import FollowTheLeader
     from ..planning.rectilinear.planner import ground_frame
     from .config import SimConfig
@@ -44,9 +42,7 @@ def turn_sweep(steering: str, kappa_per_m: float = 1.5, turn_s: float = 90.0, ro
         raise ValueError(f"gait_source: expected driver or reference, got {gait_source!r}")
     robot = _core.RobotModel.from_yaml(str(robot_yaml(robot_name)))
     nav = NavConfig.from_yaml(nav_config_path(robot_name))       # the robot's gaits and plant options
-    sim = SimConfig.from_yaml(str(config_path("sim.yaml")))
-    sim = dataclasses.replace(sim, physics=dataclasses.replace(
-        sim.physics, flat_belly_fraction=nav.plant.flat_belly_fraction))
+    sim = SimConfig.from_yaml(str(config_path("sim.yaml"))).with_flat_belly(nav.plant.flat_belly_fraction)
     plant = ScaledPlant(robot, sim.draw(seed=seed, num_joints=robot.num_joints), (0.0, 0.0, 0.0))
     ftl = FollowTheLeader.of_robot(robot) if steering == "follow_the_leader" else None
     drive = None

@@ -14,7 +14,6 @@ CoM pose then and 2 s later. The monitor: roll-over (monitor.rollover_tilt_deg),
 joint goals beyond the limits. The start pose and true heading use the tracker's heading offset
 (config/sim.yaml `tracker:` over config/tracker.yaml); scene_xml adds MJCF obstacles (Plant).
 """
-import dataclasses
 import math
 import threading
 from dataclasses import dataclass, field
@@ -107,8 +106,7 @@ class SimWorld:
         self.spec = spec
         self.config = SimConfig.from_yaml(spec.sim_config)
         if spec.flat_belly_fraction is not None:
-            self.config = dataclasses.replace(self.config, physics=dataclasses.replace(
-                self.config.physics, flat_belly_fraction=float(spec.flat_belly_fraction)))
+            self.config = self.config.with_flat_belly(spec.flat_belly_fraction)
         self.defaults = load_defaults(spec.tracker_config, self.config.tracker,
                                       overrides_source=f"{spec.sim_config} (tracker:)")
         self.heading_offset_rad = math.radians(self.defaults["heading_offset_deg"])

@@ -7,8 +7,9 @@ touches that round 8 traced to turning past an obstacle. Here the commanded kapp
 of the HEAD's path where the head is now; it is laid down along the path as the head crawls, and
 each yaw joint bends to the mean curvature of the path under the span it covers (spacing_m, ending
 at the joint's own place on the path). The body then lies on the head's path like a train on its
-track (bench/nav_follow_the_leader: the farthest any frame strays from the track in a 1.5 /m turn,
-0.13 m against 0.29 m with uniform curvature; at 2.5 /m 0.12 against 0.52 m).
+track (bench/nav_follow_the_leader, the gait through the driver: the farthest any frame strays from
+the track in a 1.5 /m turn, 0.11 m against 0.37 m with uniform curvature; at 2.5 /m 0.11 against
+0.54 m).
 
 Backing off (the head's arc position decreasing) lays nothing down: the joints take the curvature of
 the path behind them again, so the body retraces its track exactly.
