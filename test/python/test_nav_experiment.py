@@ -86,3 +86,38 @@ def test_nav_experiment_mono_needs_a_classifier(tmp_path, capsys):
     assert cli_main(["nav", "experiment", "--worlds", "1", "--perception", "both", "--engine", "serial",
                      "--out", str(tmp_path / "e")]) == 1
     assert "needs --classifier FILE" in capsys.readouterr().err
+
+
+def test_the_default_time_limit_is_three_times_the_straight_line_time_at_the_robots_speed():
+    from snake_autonomy.planning.rectilinear.config import NavConfig, nav_config_path
+    from snake_autonomy.sim.nav_experiment import time_limit_s
+    w = random_corridor(0)                                   # start (0, 0), goal (1.4, 0), disc 0.2 m
+    assert time_limit_s(w, 0.01) == pytest.approx(3 * 1.2 / 0.01)
+    assert time_limit_s(w, 0.01, factor=2.0) == pytest.approx(240.0)
+    cobra = NavConfig.from_yaml(nav_config_path("cobra")).follower.speed_m_s
+    chang = NavConfig.from_yaml(nav_config_path("chang_rectilinear")).follower.speed_m_s
+    # the slower robot gets the longer limit (COBRA 567 s, the 12-link 321 s)
+    assert time_limit_s(w, cobra) == pytest.approx(3 * 1.2 / cobra, abs=0.1) and 550 < time_limit_s(w, cobra) < 580
+    assert 300 < time_limit_s(w, chang) < 340
+    with pytest.raises(ValueError, match="speed_m_s and factor must be > 0, got 0.0, 3.0"):
+        time_limit_s(w, 0.0)
+
+
+def test_nav_experiment_records_each_worlds_time_limit_and_refuses_bad_ones(tmp_path, capsys):
+    out = tmp_path / "exp"
+    # auto with a tiny factor: 0.01 x 189 s = 1.9 s (the ramp only) for COBRA's world 0
+    assert cli_main(["nav", "experiment", "--worlds", "1", "--seeds", "0", "--time-factor", "0.02",
+                     "--engine", "serial", "--no-progress", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["time_limit"] == "auto" and summary["time_factor"] == 0.02
+    assert summary["time_limits_s"]["corridor_000"] == pytest.approx(3.8, abs=0.05)
+    row = next(csv.DictReader((out / "runs.csv").open()))
+    assert float(row["time_limit_s"]) == pytest.approx(3.8, abs=0.05)
+    assert float(row["time_s"]) == pytest.approx(3.8, abs=0.05)
+    for args, message in ((["--time-limit", "soon"], "--time-limit: expected seconds or auto, got 'soon'"),
+                          (["--time-limit", "-5"], "--time-limit: must be > 0 s, got -5.0"),
+                          (["--time-limit", "60", "--time-factor", "2"], "--time-factor 2.0: only with --time-limit auto"),
+                          (["--time-factor", "0"], "--time-factor: must be > 0, got 0.0")):
+        assert cli_main(["nav", "experiment", "--worlds", "1", "--engine", "serial", "--no-progress",
+                         "--out", str(tmp_path / "bad")] + args) == 1
+        assert message in capsys.readouterr().err

@@ -56,6 +56,22 @@ def min_gap_m(world: World) -> float:
     return min(gaps) if gaps else math.inf
 
 
+TIME_FACTOR = 3.0
+
+
+def time_limit_s(world: World, speed_m_s: float, factor: float = TIME_FACTOR) -> float:
+    """The experiment's time limit for one world (issue 13 round 10): `factor` times the time the
+    robot needs, at its follower's speed (the gait map's), to crawl the straight line from its start
+    to the goal's disc. The robots differ twice in speed (COBRA 6.35 mm/s, the 12-link 11.2 mm/s):
+    a fixed 300 s gave COBRA 1.6 times its straight-line time and the 12-link 2.8 times, and most of
+    COBRA's runs that ended at 300 s reached the goal by 420 s (README round 10)."""
+    if not speed_m_s > 0 or not factor > 0:
+        raise ValueError(f"time limit: speed_m_s and factor must be > 0, got {speed_m_s}, {factor}")
+    straight = max(0.0, math.hypot(world.goal[0] - world.start[0], world.goal[1] - world.start[1])
+                   - world.goal_radius_m)
+    return round(factor * straight / speed_m_s, 1)
+
+
 @dataclass(frozen=True)
 class NavTask:
     world: dict                   # World.to_dict() (picklable, engine independent)
@@ -86,7 +102,8 @@ def run_nav_task(task: NavTask) -> Dict:
     if task.out_dir:
         from pathlib import Path
         result.write(Path(task.out_dir) / f"{world.name}_{task.perception}_s{task.seed}")
-    return {**result.metrics, "world": world.name, "wall_s": round(time.perf_counter() - t0, 1)}
+    return {**result.metrics, "world": world.name, "time_limit_s": task.time_limit_s,
+            "wall_s": round(time.perf_counter() - t0, 1)}
 
 
 def summarise(rows: List[Dict]) -> List[Dict]:

@@ -12,8 +12,10 @@
                                                     the closed loop in batch (sim/nav_batch.py):
                                                     DIR/metrics.json, topview.png, frames/
     snake_autonomy nav experiment --worlds N --seeds 0-4 [--perception depth|mono|both|truth]
-                           [--robot R] [--engine dask|threads|serial] [--scheduler ADDR] --out DIR
-                                                    random solvable corridors (sim/nav_experiment.py)
+                           [--robot R] [--time-limit S|auto] [--time-factor F]
+                           [--engine dask|threads|serial] [--scheduler ADDR] --out DIR
+                                                    random solvable corridors (sim/nav_experiment.py);
+                                                    auto: 3 x each world's straight-line time
                                                     on Dask: DIR/runs.csv, summary.json, table.md
 """
 import json
@@ -59,7 +61,11 @@ def add_arguments(parser):
     ex.add_argument("--seeds", default="0-4", help="plant seeds: 0-4 or 0,2,3")
     ex.add_argument("--perception", choices=("depth", "mono", "both", "truth"), default="depth",
                     help="both: depth and mono; truth: the segmentation render through the classifier's cells")
-    ex.add_argument("--time-limit", type=float, default=300.0, metavar="S")
+    ex.add_argument("--time-limit", default="auto", metavar="S|auto",
+                    help="seconds per run, or auto (default): --time-factor x the straight-line time from "
+                         "the start to the goal's disc at the robot's follower speed (its nav config)")
+    ex.add_argument("--time-factor", type=float, default=None, metavar="F",
+                    help="with --time-limit auto (default 3; sim/nav_experiment.py time_limit_s)")
     ex.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono, both)")
     ex.add_argument("--keep-runs", action="store_true", help="each run's figures under DIR/runs/")
     ex.add_argument("--out", required=True, metavar="DIR")
@@ -229,9 +235,15 @@ def _experiment(args) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     _write_worlds(worlds, out / "worlds")
-    tasks = experiment_tasks(worlds, seeds, perceptions, robot=args.robot, time_limit_s=args.time_limit,
-                             classifier=args.classifier, nav_config=args.config,
-                             out_dir=str(out / "runs") if args.keep_runs else None)
+    try:
+        limits = _time_limits(args, worlds)
+    except ValueError as e:
+        print(f"nav experiment: {e}", file=sys.stderr)
+        return 1
+    tasks = [t for w, limit in zip(worlds, limits)
+             for t in experiment_tasks([w], seeds, perceptions, robot=args.robot, time_limit_s=limit,
+                                       classifier=args.classifier, nav_config=args.config,
+                                       out_dir=str(out / "runs") if args.keep_runs else None)]
     t0 = time.perf_counter()
     with open_executor(args.engine, args.scheduler, args.workers) as ex:
         rows = run_tasks(ex, run_nav_task, tasks, desc=f"nav experiment {args.robot}",
@@ -241,13 +253,38 @@ def _experiment(args) -> int:
     write_csv(rows, out / "runs.csv")
     (out / "summary.json").write_text(json.dumps(
         {"robot": args.robot, "worlds": [w.to_dict() for w in worlds], "seeds": seeds,
-         "perceptions": list(perceptions), "time_limit_s": args.time_limit, "engine": args.engine,
+         "perceptions": list(perceptions), "time_limit": args.time_limit,
+         "time_factor": args.time_factor if args.time_limit == "auto" else None,
+         "time_limits_s": {w.name: limit for w, limit in zip(worlds, limits)}, "engine": args.engine,
          "wall_s": round(time.perf_counter() - t0, 1), "summary": summary}, indent=2) + "\n")
     (out / "table.md").write_text(table + "\n")
     print(table)
     print(f"\none run again, with its figures: snake_autonomy nav run --world {out / 'worlds'}/WORLD.yaml "
           f"--seed SEED [--perception ...] --out DIR (runs.csv: world, seed)")
     return 0
+
+
+def _time_limits(args, worlds):
+    """Per world: --time-limit S, or auto: --time-factor x its straight-line time at the follower's
+    speed of the robot's nav config (sim/nav_experiment.py time_limit_s). Sets args.time_factor."""
+    from ...sim.nav_experiment import TIME_FACTOR, time_limit_s
+    from .config import NavConfig, nav_config_path
+    if args.time_limit != "auto":
+        try:
+            limit = float(args.time_limit)
+        except ValueError:
+            raise ValueError(f"--time-limit: expected seconds or auto, got {args.time_limit!r}") from None
+        if not limit > 0:
+            raise ValueError(f"--time-limit: must be > 0 s, got {limit}")
+        if args.time_factor is not None:
+            raise ValueError(f"--time-factor {args.time_factor}: only with --time-limit auto")
+        return [limit] * len(worlds)
+    if args.time_factor is None:
+        args.time_factor = TIME_FACTOR
+    if not args.time_factor > 0:
+        raise ValueError(f"--time-factor: must be > 0, got {args.time_factor}")
+    speed = NavConfig.from_yaml(args.config or nav_config_path(args.robot)).follower.speed_m_s
+    return [time_limit_s(w, speed, args.time_factor) for w in worlds]
 
 
 def _write_worlds(worlds, folder: Path) -> None:
