@@ -93,7 +93,8 @@ def _truth_run(tmp_path, root, stride_px):
     from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
     from snake_autonomy.sim.nav_experiment import random_corridor
     cfg = tmp_path / f"nav_{stride_px}.yaml"
-    cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nclassifier: {{stride_px: {stride_px}}}\n")
+    cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nclassifier: {{stride_px: {stride_px}}}\n"
+                   "sampler: {blocked_wins: false}\n")
     m = NavRun(NavRunSpec(random_corridor(0), seed=1, perception="truth", time_limit_s=300.0,
                           nav_config=str(cfg), keep_frames=False)).run().metrics
     print({k: m[k] for k in ("goal_reached", "time_s", "collisions", "outcome", "stops_no_free_arc")})
@@ -103,7 +104,8 @@ def _truth_run(tmp_path, root, stride_px):
 
 def test_with_tiles_cobra_touches_the_cylinder_at_the_image_edge_and_with_cells_it_does_not(tmp_path, root):
     """Round 8 (README): tiles: 16 contact episodes, time limit; 20 px cells: reached in 217 s, no
-    contact, no stop. About 30 s wall for both."""
+    contact, no stop. Under round 8's rule for earlier views (sampler.blocked_wins false; with round
+    10's rule the tiles run reached in 237 s without contact too). About 30 s wall for both."""
     assert _truth_run(tmp_path, root, 40)["collisions"] > 0
     m = _truth_run(tmp_path, root, 20)
     assert m["goal_reached"] and m["collisions"] == 0 and m["outcome"] == "success"

@@ -10,8 +10,10 @@ homography of the floor, so only the footprint on the floor is hallucinated).
 
 A point the current image shows is judged by it, however near. A point the image does not show
 (below the bottom row, beside or beyond the field of view) is looked up in the earlier views given
-with add_view (the newest that shows it: the last few replans' images, each with its camera pose
-in the current ground frame; images, not a map: nothing is fused). Seen in none, it counts as free
+with add_view (the last few replans' images, each with its camera pose in the current ground frame;
+images, not a map: nothing is fused): free when one of them shows it as ground, or, with
+blocked_wins (round 10, config/nav.yaml), when some show it as ground and none as an obstacle (the
+monocular classifier misses a cylinder in one view and not in the next: the miss must not free it). Seen in none, it counts as free
 when nearer (ahead of the camera, along its heading on the floor) than near_field_m, the distance
 at which the view becomes as wide as the footprint (or the bottom row's, if further): the robot is
 there or came from there; anywhere else it is not known to be free. Without the earlier views a
@@ -65,8 +67,11 @@ class _View:
 
 class PerceptionCollisionChecker:
     def __init__(self, intrinsics, T_ground_camera: np.ndarray, head_width_m: float,
-                 footprint_points: int = 5, point_spacing_m: float = 0.04):
-        """head_width_m: the checked footprint's width (the head's, or the body's swept width)."""
+                 footprint_points: int = 5, point_spacing_m: float = 0.04, blocked_wins: bool = False):
+        """head_width_m: the checked footprint's width (the head's, or the body's swept width).
+        blocked_wins: a hidden point one earlier view shows as an obstacle is blocked whatever the
+        others show (False: ground in any of them frees it)."""
+        self.blocked_wins = bool(blocked_wins)
         import cv2
         self.k = intrinsics
         self.K = intrinsics.K()
@@ -131,12 +136,16 @@ class PerceptionCollisionChecker:
         known = shown.copy()
         hidden = np.flatnonzero(~shown)
         seen = np.zeros(len(hidden), bool)
+        ground_in_one = np.zeros(len(hidden), bool)
+        obstacle_in_one = np.zeros(len(hidden), bool)
         for view in self._earlier:
             if not len(hidden):
                 break
             s, f = view.look(flat[hidden])
-            free[hidden] |= s & f
+            ground_in_one |= s & f
+            obstacle_in_one |= s & ~f
             seen |= s
+        free[hidden] = ground_in_one & ~obstacle_in_one if self.blocked_wins else ground_in_one
         known[hidden] = seen
         return free, known
 

@@ -96,7 +96,8 @@ class NavPlanner:
 
     def replan(self, t_s: float, ground_image: np.ndarray, T_ground_camera: np.ndarray, pose,
                goal_xy=None) -> Replan:
-        checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera, self.footprint_width_m)
+        checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera, self.footprint_width_m,
+                                             blocked_wins=self.sampler_params.blocked_wins)
         T_world_g = T_world_ground(pose)
         T_g_world = np.linalg.inv(T_world_g)
         for ground_k, T_world_camera_k in self._views:

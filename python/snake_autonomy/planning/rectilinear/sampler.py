@@ -54,6 +54,9 @@ class SamplerParams:
     earlier_views: int = 0                # views of earlier replans kept for hidden points
     obstacle_depth_m: float = math.inf    # in those: non-ground this far beyond the ground's edge
                                           # counts as blocked, further is hidden behind it
+    blocked_wins: bool = False            # round 10: a hidden point one earlier view shows as an
+                                          # obstacle is blocked, whatever the others show (False:
+                                          # ground in any view frees it; collision_check.py)
     body_model: bool = False              # arcs of the body's middle, the whole body checked
                                           # (body_model.py); False: arcs of base_link (the paper)
     curvature_step_per_m: float = 0.0     # > 0: candidates within +- this of the current curvature
@@ -83,8 +86,9 @@ class SamplerParams:
                     "switch_cost_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
-        if not isinstance(self.body_model, bool):
-            p.append(f"body_model: must be true or false, got {self.body_model!r}")
+        for key in ("body_model", "blocked_wins"):
+            if not isinstance(getattr(self, key), bool):
+                p.append(f"{key}: must be true or false, got {getattr(self, key)!r}")
         if not isinstance(self.earlier_views, int) or self.earlier_views < 0:
             p.append(f"earlier_views: must be an integer >= 0, got {self.earlier_views!r}")
         if self.min_free_m < 0 or self.goal_tie_m < 0 or self.margin_m < 0:
