@@ -121,3 +121,14 @@ def test_nav_experiment_records_each_worlds_time_limit_and_refuses_bad_ones(tmp_
         assert cli_main(["nav", "experiment", "--worlds", "1", "--engine", "serial", "--no-progress",
                          "--out", str(tmp_path / "bad")] + args) == 1
         assert message in capsys.readouterr().err
+
+
+def test_experiment_tasks_take_one_time_limit_per_world():
+    from snake_autonomy.sim.nav_experiment import experiment_tasks
+    worlds = [random_corridor(0), random_corridor(1)]
+    tasks = experiment_tasks(worlds, [0, 1], ["depth"], time_limits_s=[100.0, 200.0])
+    assert [(t.world["name"], t.seed, t.time_limit_s) for t in tasks] == [
+        ("corridor_000", 0, 100.0), ("corridor_000", 1, 100.0), ("corridor_001", 0, 200.0), ("corridor_001", 1, 200.0)]
+    assert {t.time_limit_s for t in experiment_tasks(worlds, [0], ["depth"])} == {300.0}   # NavTask's default
+    with pytest.raises(ValueError, match=r"time_limits_s: one per world expected \(2\), got 1"):
+        experiment_tasks(worlds, [0], ["depth"], time_limits_s=[100.0])

@@ -85,8 +85,13 @@ class NavTask:
 
 
 def experiment_tasks(worlds: Sequence[World], seeds: Sequence[int], perceptions: Sequence[str],
-                     robot: str = "cobra", **kw) -> List[NavTask]:
-    return [NavTask(w.to_dict(), robot, p, int(s), **kw) for w in worlds for s in seeds for p in perceptions]
+                     robot: str = "cobra", time_limits_s: Optional[Sequence[float]] = None, **kw) -> List[NavTask]:
+    """Every world x seed x perception; time_limits_s: one per world (time_limit_s), else NavTask's."""
+    limits = [{} for _ in worlds] if time_limits_s is None else [{"time_limit_s": t} for t in time_limits_s]
+    if len(limits) != len(worlds):
+        raise ValueError(f"time_limits_s: one per world expected ({len(worlds)}), got {len(limits)}")
+    return [NavTask(w.to_dict(), robot, p, int(s), **lim, **kw)
+            for w, lim in zip(worlds, limits) for s in seeds for p in perceptions]
 
 
 def run_nav_task(task: NavTask) -> Dict:

@@ -236,14 +236,13 @@ def _experiment(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     _write_worlds(worlds, out / "worlds")
     try:
-        limits = _time_limits(args, worlds)
+        limits, factor = _time_limits(args, worlds)
     except ValueError as e:
         print(f"nav experiment: {e}", file=sys.stderr)
         return 1
-    tasks = [t for w, limit in zip(worlds, limits)
-             for t in experiment_tasks([w], seeds, perceptions, robot=args.robot, time_limit_s=limit,
-                                       classifier=args.classifier, nav_config=args.config,
-                                       out_dir=str(out / "runs") if args.keep_runs else None)]
+    tasks = experiment_tasks(worlds, seeds, perceptions, robot=args.robot, time_limits_s=limits,
+                             classifier=args.classifier, nav_config=args.config,
+                             out_dir=str(out / "runs") if args.keep_runs else None)
     t0 = time.perf_counter()
     with open_executor(args.engine, args.scheduler, args.workers) as ex:
         rows = run_tasks(ex, run_nav_task, tasks, desc=f"nav experiment {args.robot}",
@@ -254,7 +253,7 @@ def _experiment(args) -> int:
     (out / "summary.json").write_text(json.dumps(
         {"robot": args.robot, "worlds": [w.to_dict() for w in worlds], "seeds": seeds,
          "perceptions": list(perceptions), "time_limit": args.time_limit,
-         "time_factor": args.time_factor if args.time_limit == "auto" else None,
+         "time_factor": factor,
          "time_limits_s": {w.name: limit for w, limit in zip(worlds, limits)}, "engine": args.engine,
          "wall_s": round(time.perf_counter() - t0, 1), "summary": summary}, indent=2) + "\n")
     (out / "table.md").write_text(table + "\n")
@@ -265,8 +264,8 @@ def _experiment(args) -> int:
 
 
 def _time_limits(args, worlds):
-    """Per world: --time-limit S, or auto: --time-factor x its straight-line time at the follower's
-    speed of the robot's nav config (sim/nav_experiment.py time_limit_s). Sets args.time_factor."""
+    """(per world: --time-limit S, or auto: --time-factor x its straight-line time at the follower's
+    speed of the robot's nav config (sim/nav_experiment.py time_limit_s); the factor, None with S)."""
     from ...sim.nav_experiment import TIME_FACTOR, time_limit_s
     from .config import NavConfig, nav_config_path
     if args.time_limit != "auto":
@@ -278,13 +277,12 @@ def _time_limits(args, worlds):
             raise ValueError(f"--time-limit: must be > 0 s, got {limit}")
         if args.time_factor is not None:
             raise ValueError(f"--time-factor {args.time_factor}: only with --time-limit auto")
-        return [limit] * len(worlds)
-    if args.time_factor is None:
-        args.time_factor = TIME_FACTOR
-    if not args.time_factor > 0:
-        raise ValueError(f"--time-factor: must be > 0, got {args.time_factor}")
+        return [limit] * len(worlds), None
+    factor = TIME_FACTOR if args.time_factor is None else args.time_factor
+    if not factor > 0:
+        raise ValueError(f"--time-factor: must be > 0, got {factor}")
     speed = NavConfig.from_yaml(args.config or nav_config_path(args.robot)).follower.speed_m_s
-    return [time_limit_s(w, speed, args.time_factor) for w in worlds]
+    return [time_limit_s(w, speed, factor) for w in worlds], factor
 
 
 def _write_worlds(worlds, folder: Path) -> None:

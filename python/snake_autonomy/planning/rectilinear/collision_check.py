@@ -13,11 +13,12 @@ A point the current image shows is judged by it, however near. A point the image
 with add_view (the last few replans' images, each with its camera pose in the current ground frame;
 images, not a map: nothing is fused): free when one of them shows it as ground, or, with
 blocked_wins (round 10, config/nav.yaml), when some show it as ground and none as an obstacle (the
-monocular classifier misses a cylinder in one view and not in the next: the miss must not free it). Seen in none, it counts as free
-when nearer (ahead of the camera, along its heading on the floor) than near_field_m, the distance
-at which the view becomes as wide as the footprint (or the bottom row's, if further): the robot is
-there or came from there; anywhere else it is not known to be free. Without the earlier views a
-passed obstacle beside the body is free (round 3: the head slid along the cylinder it had passed).
+monocular classifier misses a cylinder in one view and not in the next: the miss must not free
+it). Seen in none, it counts as free when nearer (ahead of the camera, along its heading on the
+floor) than near_field_m, the distance at which the view becomes as wide as the footprint (or the
+bottom row's, if further): the robot is there or came from there; anywhere else it is not known to
+be free. Without the earlier views a passed obstacle beside the body is free (round 3: the head slid
+along the cylinder it had passed).
 """
 import math
 from typing import Optional
@@ -135,7 +136,6 @@ class PerceptionCollisionChecker:
         shown, free = _View(self.K, ground, self._T_gc).look(flat)
         known = shown.copy()
         hidden = np.flatnonzero(~shown)
-        seen = np.zeros(len(hidden), bool)
         ground_in_one = np.zeros(len(hidden), bool)
         obstacle_in_one = np.zeros(len(hidden), bool)
         for view in self._earlier:
@@ -144,9 +144,8 @@ class PerceptionCollisionChecker:
             s, f = view.look(flat[hidden])
             ground_in_one |= s & f
             obstacle_in_one |= s & ~f
-            seen |= s
         free[hidden] = ground_in_one & ~obstacle_in_one if self.blocked_wins else ground_in_one
-        known[hidden] = seen
+        known[hidden] = ground_in_one | obstacle_in_one
         return free, known
 
     def pose_state(self, poses: np.ndarray, ground: np.ndarray, scale: Optional[np.ndarray] = None):
