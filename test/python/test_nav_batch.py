@@ -27,6 +27,19 @@ def test_nav_run_writes_the_metrics_contract(root, tmp_path):
     assert 0.95 < m["closest_to_goal_m"] < 1.1
     assert (out / "contacts.csv").read_text() == "t_s,obstacle,link,x_m,y_m,follower_mode\n"
     assert len(list((out / "frames").glob("replan_*.png"))) == 2
+    # replans.csv: one row per replan, five candidate arcs each, the cylinder 0.6 m ahead leaves
+    # the chosen one shorter than the 1.2 m horizon
+    import csv
+    rows = list(csv.DictReader(open(out / "replans.csv")))
+    assert [float(r["t_s"]) for r in rows] == pytest.approx([2.0, 12.0], abs=0.02)
+    for r in rows:
+        arcs = dict(tuple(map(float, a.split(":"))) for a in r["arcs"].split())
+        assert len(arcs) == 5 and all(0.0 <= free <= 1.2 for free in arcs.values())
+        chosen = float(r["chosen_curvature_per_m"])
+        # the chosen arc's row matches its pair, within goal_tie_m (0.3) of the longest
+        assert float(r["chosen_free_m"]) == arcs[chosen] >= max(arcs.values()) - 0.3
+        assert r["reason"].startswith(f"arc c {chosen:+.2f}/m")
+    assert abs(float(rows[0]["x_m"])) < 0.01 and float(rows[1]["x_m"]) > 0.02
 
 
 def test_nav_run_refuses_a_bad_world(tmp_path, capsys):

@@ -6,7 +6,8 @@ planner and the receding-horizon follower, closed through the rectilinear gait's
     result = run.run()
     result.write(out_dir)      # metrics.json (the issue's contract), topview.png, frames/*.png,
                                # contacts.csv (each contact episode: when, which link, where, and
-                               # what the follower was doing)
+                               # what the follower was doing), replans.csv (each replan: the pose,
+                               # every candidate arc's free length, the choice or the stop and why)
 
 metrics.json adds to the contract: `closest_to_goal_m` (how near base_link came to the goal's disc),
 `outcome` (success, reached_with_contact, rolled_over,
@@ -96,12 +97,29 @@ class NavResult:
             f.write("t_s,obstacle,link,x_m,y_m,follower_mode\n")
             for e, mode in self.contacts:
                 f.write(f"{e.t_s:.2f},{e.obstacle},{e.link},{e.x_m:.4f},{e.y_m:.4f},{mode}\n")
+        self._write_replans(out / "replans.csv")
         if self.frames:
             import cv2
             (out / "frames").mkdir(exist_ok=True)
             for i, img in enumerate(self.frames):
                 cv2.imwrite(str(out / "frames" / f"replan_{i:03d}.png"), cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
         self._topview(out / "topview.png")
+
+    def _write_replans(self, path) -> None:
+        """One row per replan: base_link's pose, the candidate arcs as curvature:free_m pairs (path
+        curvature 1/m, free prefix m), the chosen arc's (empty when none was free) and the planner's
+        reason (back off, turn in place, ...): why a run went where it did, without re-running it."""
+        import csv
+        with open(path, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["t_s", "x_m", "y_m", "heading_deg", "arcs", "chosen_curvature_per_m", "chosen_free_m",
+                        "reason"])
+            for r in self.replans:
+                arc = r.selection.arc
+                w.writerow([f"{r.t_s:.2f}", f"{r.pose[0]:.4f}", f"{r.pose[1]:.4f}", f"{math.degrees(r.pose[2]):.1f}",
+                            " ".join(f"{a.curvature_per_m:+.2f}:{a.free_m:.2f}" for a in r.selection.arcs),
+                            "" if arc is None else f"{arc.curvature_per_m:+.2f}",
+                            "" if arc is None else f"{arc.free_m:.2f}", r.reason])
 
     def _topview(self, path) -> None:
         import matplotlib
