@@ -12,6 +12,9 @@ The commanded kappa is rate-limited (kappa_rate_per_m_s, from the last command's
 robot changes its curvature slowly; a kappa that jumps whips the body and rolls the round-linked
 simulated COBRA onto its side (bench/nav_roll). The unicycle prediction uses the limited kappa.
 
+The planner may bound the body curvature while a path is followed (set_path kappa_bounds: its swing
+guard, planner.py): the commanded kappa is clipped to the bounds before the rate limit.
+
 No free arc: the follower stops forward motion and turns in place (mode TURN_IN_PLACE, towards
 `turn_direction`), or with `back_off` it backs off tail first (mode BACK_OFF: the caller runs the
 gait backwards) with the body's curvature held, so the body retraces its own track, which it has
@@ -21,7 +24,7 @@ command's reason says so.
 """
 import math
 from dataclasses import dataclass
-from typing import List, Optional
+from typing import List, Optional, Tuple
 
 import numpy as np
 
@@ -105,16 +108,23 @@ class RecedingHorizonFollower:
         self._omega = 0.0
         self._v = 0.0
         self._kappa = 0.0
+        self._bounds = None
 
     @property
     def kappa_per_m(self) -> float:
         """The last commanded (rate-limited) body curvature."""
         return self._kappa
 
-    def set_path(self, path_world: np.ndarray, curvature_per_m: float) -> None:
+    def set_path(self, path_world: np.ndarray, curvature_per_m: float,
+                 kappa_bounds: Optional[Tuple[float, float]] = None) -> None:
+        """kappa_bounds: (lo, hi) body curvature while following this path (the planner's swing
+        guard); None: the gait's range."""
+        if kappa_bounds is not None and not kappa_bounds[0] <= kappa_bounds[1]:
+            raise ValueError(f"kappa_bounds: expected lo <= hi, got {kappa_bounds!r}")
         self.path = np.asarray(path_world, float)
         self.path_curvature = float(curvature_per_m)
         self.mode = FOLLOW
+        self._bounds = None if kappa_bounds is None else (float(kappa_bounds[0]), float(kappa_bounds[1]))
 
     def stop_and_turn(self, direction: float, kappa_per_m: Optional[float] = None) -> None:
         """No free arc: turn in place towards direction (+1 left / CCW, -1 right) with kappa_per_m
@@ -159,7 +169,10 @@ class RecedingHorizonFollower:
         at_end = math.hypot(self.path[-1, 0] - x, self.path[-1, 1] - y) <= p.lookahead_m
         # past the path's end (until the next replan): feedforward only, never turn back to it
         omega_fb = p.k_heading * wrap(bearing - th) if dist > 1e-3 and not at_end else 0.0
-        kappa = self._limit(p.kappa(omega_ff + omega_fb), elapsed)
+        kappa = p.kappa(omega_ff + omega_fb)
+        if self._bounds is not None:
+            kappa = min(self._bounds[1], max(self._bounds[0], kappa))
+        kappa = self._limit(kappa, elapsed)
         self._v, self._omega = p.speed_m_s, p.omega(kappa)
         return Command(FOLLOW, kappa, omega_ff, omega_fb, tuple(target))
 

@@ -9,6 +9,11 @@ over), then turns in place with a turn whose reshaping sweep (body_model.body_po
 kappa_turn_per_m then half of it; with no such turn it backs off again. A replan after a stop needs
 sampler.resume_free_m of free arc to go on.
 
+Swing guard (round 11, sampler.swing_guard_m): following an arc, the follower bends the body only
+within curvature bounds this replan sets (_swing_bounds): the uniform-curvature body reshapes about
+its middle, and turning towards an obstacle the head has just passed swung link 1 into it (six of
+round 10's thirteen runs with a contact).
+
 The ground frame of a replan: the robot's pose on the floor (base_link projected, heading = yaw of
 base_link's x axis). Both the simulator's batch loop and a planner node call `replan` and then
 `follower.update` at the control rate.
@@ -96,13 +101,12 @@ class NavPlanner:
 
     def replan(self, t_s: float, ground_image: np.ndarray, T_ground_camera: np.ndarray, pose,
                goal_xy=None) -> Replan:
-        checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera, self.footprint_width_m,
-                                             blocked_wins=self.sampler_params.blocked_wins)
+        sp = self.sampler_params
         T_world_g = T_world_ground(pose)
         T_g_world = np.linalg.inv(T_world_g)
-        for ground_k, T_world_camera_k in self._views:
-            checker.add_view(ground_k, T_g_world @ T_world_camera_k, self.sampler_params.horizon_m,
-                             self.sampler_params.obstacle_depth_m)
+        checker = self._checker(T_ground_camera, T_g_world, sp.obstacle_depth_m)
+        guarded = sp.swing_guard_m > 0 and self.geometry is not None and self.body is None
+        swing_checker = self._checker(T_ground_camera, T_g_world, sp.swing_obstacle_depth_m) if guarded else None
         if self.sampler_params.earlier_views:
             self._views.appendleft((ground_image, T_world_g @ np.asarray(T_ground_camera, float)))
         sampler = TrajectorySampler(checker, self.sampler_params, self._width_with_margins(None))
@@ -143,12 +147,66 @@ class NavPlanner:
         arc = sel.arc
         keep = arc.s_m <= arc.free_m + 1e-9
         path = to_world(arc.poses[keep], pose)
+        reason = f"arc c {arc.curvature_per_m:+.2f}/m, free {arc.free_m:.2f} m"
         if self.body is None:
-            self.follower.set_path(path, arc.curvature_per_m)
+            bounds = self._swing_bounds(swing_checker, ground_image) if guarded else None
+            self.follower.set_path(path, arc.curvature_per_m, bounds)
+            if bounds is not None:
+                reason += f", kappa {bounds[0]:+.2f}..{bounds[1]:+.2f} /m (swing guard)"
         else:
             mid = middle_path(arc.middle, arc.curvature_per_m, arc.free_m, self.sampler_params.spacing_m)
             self.follower.set_path(to_world(mid, pose), arc.curvature_per_m)
-        return Replan(t_s, tuple(pose), sel, path, f"arc c {arc.curvature_per_m:+.2f}/m, free {arc.free_m:.2f} m")
+        return Replan(t_s, tuple(pose), sel, path, reason)
+
+    def _checker(self, T_ground_camera, T_g_world, obstacle_depth_m: float) -> PerceptionCollisionChecker:
+        """The current image's checker with the earlier views (newest first, their cameras in the
+        current ground frame; non-ground up to obstacle_depth_m beyond a view's ground edge is an
+        obstacle)."""
+        checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera, self.footprint_width_m,
+                                             blocked_wins=self.sampler_params.blocked_wins)
+        for ground_k, T_world_camera_k in self._views:
+            checker.add_view(ground_k, T_g_world @ T_world_camera_k, self.sampler_params.horizon_m,
+                             obstacle_depth_m)
+        return checker
+
+    def _swing_bounds(self, checker, ground, step_per_m: float = 0.25) -> Tuple[float, float]:
+        """The swing guard: the body curvatures (lo, hi) around the current kappa the follower may
+        bend to until the next replan. Reshaping to kappa moves the body about its middle
+        (body_model.body_poses: the head (L^2/8) dkappa to the inside of the turn); a kappa is
+        allowed while, for every station within swing_guard_m of the head that moves, the point half
+        the body's width + lateral_margin_m ahead of its new place, in the direction it moves, is not
+        an obstacle in the current image or an earlier view (`checker`: its obstacles are
+        swing_obstacle_depth_m deep; unknown floor counts free: the body lies where the camera
+        was). Stepped step_per_m out from the current kappa to each side, up to the gait's range.
+        Only the front: further back the model's swing overstates the body's (round 11: guarding
+        the whole body held kappa for minutes after a cylinder was passed, 60 % of COBRA's depth
+        runs against 93 %)."""
+        fp, g, sp = self.follower.params, self.geometry, self.sampler_params
+        kappa_now = self.follower.kappa_per_m
+        middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
+        reach = 0.5 * g.width_m + sp.lateral_margin_m
+        now = body_poses(middle, kappa_now, kappa_now, g.half_length_m, 0.04)[-1][:, :2]
+        steps = np.hypot(*np.diff(now, axis=0).T)                       # tail to head
+        from_head = np.concatenate([np.cumsum(steps[::-1])[::-1], [0.0]])
+        front = from_head <= sp.swing_guard_m + 1e-9
+        bounds = []
+        for side in (-1.0, 1.0):
+            allowed, n = kappa_now, 1
+            while True:
+                k = max(-fp.kappa_max_per_m, min(fp.kappa_max_per_m, kappa_now + side * n * step_per_m))
+                if side * (k - allowed) <= 1e-9:
+                    break                                               # at the gait's range
+                new = body_poses(middle, kappa_now, k, g.half_length_m, 0.04)[-1][:, :2]
+                d = new - now
+                dist = np.hypot(d[:, 0], d[:, 1])
+                moving = front & (dist > 1e-3)
+                lead = new[moving] + reach * d[moving] / dist[moving, None]
+                free, known = checker.point_state(np.column_stack([lead, np.zeros(len(lead))]), ground)
+                if (known & ~free).any():
+                    break
+                allowed, n = k, n + 1
+            bounds.append(allowed)
+        return bounds[0], bounds[1]
 
     def _free_turn(self, checker, ground) -> Optional[float]:
         """A turn in place whose reshaping the body can sweep: from the current kappa to

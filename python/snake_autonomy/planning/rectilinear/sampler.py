@@ -73,17 +73,23 @@ class SamplerParams:
     switch_cost_m: float = 0.0            # body model's goal bias: metres of closest approach a change
                                           # of 1/m of curvature from the current one costs (keeps the
                                           # side round an obstacle from one replan to the next)
+    swing_guard_m: float = 0.0            # round 11: > 0: while following an arc, the body's curvature
+                                          # changes only as far as reshaping keeps the body's first
+                                          # swing_guard_m (from the head) off obstacles the views
+                                          # show (planner.py _swing_bounds); 0: off
+    swing_obstacle_depth_m: float = 0.1   # the swing guard's obstacles: non-ground up to this beyond a
+                                          # view's ground edge (the obstacle's face), not obstacle_depth_m
 
     def validate(self) -> List[str]:
         p = []
         if self.num_arcs < 1 or self.num_arcs % 2 == 0:
             p.append(f"num_arcs: must be odd and >= 1, got {self.num_arcs}")
-        for key in ("max_curvature_per_m", "horizon_m", "spacing_m"):
+        for key in ("max_curvature_per_m", "horizon_m", "spacing_m", "swing_obstacle_depth_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
         for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "curvature_step_per_m", "known_free_m", "resume_free_m",
                     "footprint_taper_m",
-                    "switch_cost_m"):
+                    "switch_cost_m", "swing_guard_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
         for key in ("body_model", "blocked_wins"):
