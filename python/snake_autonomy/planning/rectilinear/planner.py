@@ -11,7 +11,7 @@ sampler.resume_free_m of free arc to go on.
 
 Swing guard (round 11, sampler.swing_guard_m): following an arc, the follower bends the body only
 within curvature bounds this replan sets (_swing_bounds): the uniform-curvature body reshapes about
-its middle, and turning towards an obstacle the head has just passed swung link 1 into it (six of
+its middle, and turning towards an obstacle the head has just passed swung link 1 into it (five of
 round 10's thirteen runs with a contact).
 
 The ground frame of a replan: the robot's pose on the floor (base_link projected, heading = yaw of
