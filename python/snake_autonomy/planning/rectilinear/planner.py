@@ -6,8 +6,9 @@ No free arc (round 5): with follower.back_off the robot first backs off tail fir
 track for back_off_replans replans (the reverse gait; the body retraces ground it has crawled
 over), then turns in place with a turn whose reshaping sweep (body_model.body_poses: both ends swing
 (L^2/8) kappa to the inside) the current and earlier images show free, the turning side first,
-kappa_turn_per_m then half of it; with no such turn it backs off again. A replan after a stop needs
-sampler.resume_free_m of free arc to go on.
+kappa_turn_per_m then half of it; with no such turn it backs off again. Round 12 (sampler.turn_free_m):
+the gait crawls on while the body turns, so a turn also needs the tightest arc on its side free for
+turn_free_m. A replan after a stop needs sampler.resume_free_m of free arc to go on.
 
 Swing guard (round 11, sampler.swing_guard_m): following an arc, the follower bends the body only
 within curvature bounds this replan sets (_swing_bounds): the uniform-curvature body reshapes about
@@ -132,11 +133,15 @@ class NavPlanner:
             if fp.back_off and (fp.back_off_replans == 0 or self._stops <= fp.back_off_replans):
                 self.follower.back_off_now()
                 return Replan(t_s, tuple(pose), sel, None, "no collision-free arc: back off along the track")
-            turn = self._free_turn(checker, ground_image) if self.geometry is not None else None
-            if turn is None and self.geometry is not None and fp.back_off:
-                self.follower.back_off_now()
-                return Replan(t_s, tuple(pose), sel, None,
-                              "no collision-free arc and no turn the body can sweep: back off along the track")
+            turn = None
+            if self.geometry is not None:
+                turn = self._free_turn(checker, ground_image, sel, self.sampler_params.turn_free_m)
+                if turn is None and fp.back_off:
+                    self.follower.back_off_now()
+                    return Replan(t_s, tuple(pose), sel, None,
+                                  "no collision-free arc and no turn the body can sweep: back off along the track")
+                if turn is None:                  # nowhere to back off to: at least a sweep the views show free
+                    turn = self._free_turn(checker, ground_image, sel, 0.0)
             if turn is None:
                 turn = self._turning * fp.kappa_turn_per_m
             self.follower.stop_and_turn(turn, abs(turn))
@@ -208,12 +213,15 @@ class NavPlanner:
             bounds.append(allowed)
         return bounds[0], bounds[1]
 
-    def _free_turn(self, checker, ground) -> Optional[float]:
+    def _free_turn(self, checker, ground, sel: Selection, crawl_m: float) -> Optional[float]:
         """A turn in place whose reshaping the body can sweep: from the current kappa to
         +-kappa_turn_per_m, then half of it, the turning side first; every shape on the way free
         in the current or an earlier image with the body's footprint (its width + the lateral
         margins; points no view shows count free within the near field, beside and behind the
-        camera, as for the arcs). None if none is.
+        camera, as for the arcs), and (crawl_m > 0: sampler.turn_free_m) the tightest candidate arc
+        on that side free for crawl_m: the gait crawls on while the body turns, and turning on
+        into a cylinder right ahead of the head was COBRA's last contact with depth (round 12,
+        world 6 seed 2: every arc 0.00 m free, kappa +1.5 held for 30 s). None if none is.
         Bending to kappa swings both ends (L^2/8) kappa to the inside (round 4): turning blindly
         coiled COBRA's head and tail into what had stopped it."""
         fp, g = self.follower.params, self.geometry
@@ -221,6 +229,10 @@ class NavPlanner:
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
         scale = checker.width_scale(self._width_with_margins(g))
         for side in (self._turning, -self._turning):
+            tightest = max((a for a in sel.arcs if a.curvature_per_m * side > 0),
+                           key=lambda a: abs(a.curvature_per_m), default=None)
+            if crawl_m > 0 and (tightest is None or tightest.free_m < crawl_m):
+                continue
             for k in (fp.kappa_turn_per_m, 0.5 * fp.kappa_turn_per_m):
                 shapes = np.vstack(body_poses(middle, kappa_now, side * k, g.half_length_m, 0.04))
                 blocked, unknown = checker.pose_state(shapes, ground, np.full(len(shapes), scale))

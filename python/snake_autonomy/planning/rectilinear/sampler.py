@@ -79,6 +79,10 @@ class SamplerParams:
                                           # show (planner.py _swing_bounds); 0: off
     swing_obstacle_depth_m: float = 0.1   # the swing guard's obstacles: non-ground up to this beyond a
                                           # view's ground edge (the obstacle's face), not obstacle_depth_m
+    turn_free_m: float = 0.0              # round 12: > 0: a turn in place needs the tightest arc on its
+                                          # side free for this much (after margin_m): the gait crawls on
+                                          # while it turns (COBRA at kappa 1.5 /m: 4-5 mm/s, so 4-5 cm a
+                                          # replan); else it backs off. 0: off
 
     def validate(self) -> List[str]:
         p = []
@@ -89,7 +93,7 @@ class SamplerParams:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
         for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "curvature_step_per_m", "known_free_m", "resume_free_m",
                     "footprint_taper_m",
-                    "switch_cost_m", "swing_guard_m"):
+                    "switch_cost_m", "swing_guard_m", "turn_free_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
         for key in ("body_model", "blocked_wins"):
