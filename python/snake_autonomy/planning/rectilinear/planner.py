@@ -31,6 +31,8 @@ from .collision_check import PerceptionCollisionChecker
 from .follower import Command, RecedingHorizonFollower
 from .sampler import Selection, TrajectorySampler
 
+STATION_SPACING_M = 0.04        # stations along the body model's shapes (swing guard, turn in place)
+
 
 def ground_frame(T_world_base: np.ndarray) -> Tuple[float, float, float]:
     """(x, y, heading) of base_link on the floor."""
@@ -135,7 +137,7 @@ class NavPlanner:
                 return Replan(t_s, tuple(pose), sel, None, "no collision-free arc: back off along the track")
             turn = None
             if self.geometry is not None:
-                turn = self._free_turn(checker, ground_image, sel, self.sampler_params.turn_free_m)
+                turn = self._free_turn(checker, ground_image, sel, sp.turn_free_m)
                 if turn is None and fp.back_off:
                     self.follower.back_off_now()
                     return Replan(t_s, tuple(pose), sel, None,
@@ -190,7 +192,7 @@ class NavPlanner:
         kappa_now = self.follower.kappa_per_m
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
         reach = 0.5 * g.width_m + sp.lateral_margin_m
-        now = body_poses(middle, kappa_now, kappa_now, g.half_length_m, 0.04)[-1][:, :2]
+        now = body_poses(middle, kappa_now, kappa_now, g.half_length_m, STATION_SPACING_M)[-1][:, :2]
         steps = np.hypot(*np.diff(now, axis=0).T)                       # tail to head
         from_head = np.concatenate([np.cumsum(steps[::-1])[::-1], [0.0]])
         front = from_head <= sp.swing_guard_m + 1e-9
@@ -201,7 +203,7 @@ class NavPlanner:
                 k = max(-fp.kappa_max_per_m, min(fp.kappa_max_per_m, kappa_now + side * n * step_per_m))
                 if side * (k - allowed) <= 1e-9:
                     break                                               # at the gait's range
-                new = body_poses(middle, kappa_now, k, g.half_length_m, 0.04)[-1][:, :2]
+                new = body_poses(middle, kappa_now, k, g.half_length_m, STATION_SPACING_M)[-1][:, :2]
                 d = new - now
                 dist = np.hypot(d[:, 0], d[:, 1])
                 moving = front & (dist > 1e-3)
@@ -229,12 +231,13 @@ class NavPlanner:
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
         scale = checker.width_scale(self._width_with_margins(g))
         for side in (self._turning, -self._turning):
-            tightest = max((a for a in sel.arcs if a.curvature_per_m * side > 0),
-                           key=lambda a: abs(a.curvature_per_m), default=None)
-            if crawl_m > 0 and (tightest is None or tightest.free_m < crawl_m):
-                continue
+            if crawl_m > 0:
+                tightest = max((a for a in sel.arcs if a.curvature_per_m * side > 0),
+                               key=lambda a: abs(a.curvature_per_m), default=None)
+                if tightest is None or tightest.free_m < crawl_m:
+                    continue
             for k in (fp.kappa_turn_per_m, 0.5 * fp.kappa_turn_per_m):
-                shapes = np.vstack(body_poses(middle, kappa_now, side * k, g.half_length_m, 0.04))
+                shapes = np.vstack(body_poses(middle, kappa_now, side * k, g.half_length_m, STATION_SPACING_M))
                 blocked, unknown = checker.pose_state(shapes, ground, np.full(len(shapes), scale))
                 if not (blocked | unknown).any():
                     return side * k
