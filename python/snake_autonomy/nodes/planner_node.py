@@ -119,7 +119,8 @@ class PlannerNode:
             perceive = DepthTraversability(intr, T_ground_camera(cfg.mount, radius), cfg.depth)
         else:
             from snake_autonomy.perception.block_classifier import BlockClassifier
-            perceive = BlockClassifier.load(self.classifier).traversable
+            clf, margin = BlockClassifier.load(self.classifier), cfg.classifier.ground_margin
+            perceive = lambda rgb: clf.traversable(rgb, margin)
         self.loop = NavLoop(cfg, self.head_width_m, perceive, self.goal, self.goal_radius_m,
                             self.on_no_free_arc, self.pose_timeout_s,
                             BodyGeometry.of_robot(_core.RobotModel.from_yaml(self.robot_yaml)))

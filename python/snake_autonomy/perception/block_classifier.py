@@ -84,14 +84,19 @@ class BlockClassifier:
         model.fit(x, y)
         return cls(model, block_px, k, stride_px)
 
-    def classify(self, rgb: np.ndarray) -> np.ndarray:
-        """(rows, cols) bool per cell: its block looks like ground."""
+    def classify(self, rgb: np.ndarray, ground_margin: float = 0.0) -> np.ndarray:
+        """(rows, cols) bool per cell: its block looks like ground (ground_margin != 0: its SVM
+        decision value exceeds ground_margin; > 0 calls fewer blocks ground)."""
         f = block_features(rgb, self.block_px, self.k, self.stride_px)
-        return self.model.predict(f.reshape(-1, f.shape[-1])).reshape(f.shape[:2]).astype(bool)
+        x = f.reshape(-1, f.shape[-1])
+        if ground_margin == 0.0:
+            return self.model.predict(x).reshape(f.shape[:2]).astype(bool)
+        sign = 1.0 if bool(self.model.classes_[1]) else -1.0       # decision > 0: classes_[1]
+        return (sign * self.model.decision_function(x) > ground_margin).reshape(f.shape[:2])
 
-    def traversable(self, rgb: np.ndarray) -> np.ndarray:
+    def traversable(self, rgb: np.ndarray, ground_margin: float = 0.0) -> np.ndarray:
         """The binary traversability image: blocks grown from the bottom, at pixel resolution."""
-        return expand_cells(grow_from_bottom(self.classify(rgb)), self.cell_px, rgb.shape[:2])
+        return expand_cells(grow_from_bottom(self.classify(rgb, ground_margin)), self.cell_px, rgb.shape[:2])
 
     def save(self, path) -> None:
         import joblib

@@ -230,7 +230,8 @@ class NavRun:
                 raise ValueError("perception mono needs a classifier model (snake_autonomy nav "
                                  "train-classifier --out FILE; then --classifier FILE)")
             clf = BlockClassifier.load(spec.classifier)
-            self.perceive = lambda f: clf.traversable(f.rgb)
+            margin = self.cfg.classifier.ground_margin
+            self.perceive = lambda f: clf.traversable(f.rgb, margin)
         elif spec.perception == "truth":
             # a perfect classifier (round 8): the segmentation render through the classifier's
             # blocks and cells (nav.yaml classifier: block_px, stride_px): what mono could reach

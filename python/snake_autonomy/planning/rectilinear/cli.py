@@ -103,7 +103,8 @@ def evaluate(cfg, robot, frames, classifier=None) -> dict:
     dt = DepthTraversability(cfg.intrinsics, T_ground_camera(cfg.mount, robot.link_radius_m + 0.001), cfg.depth)
     methods["depth"] = (lambda f: dt(f.depth_m), (cfg.depth.block_px, cfg.depth.block_px))
     if classifier is not None:
-        methods["mono"] = (lambda f: classifier.traversable(f.rgb), (classifier.block_px, classifier.cell_px))
+        margin = cfg.classifier.ground_margin
+        methods["mono"] = (lambda f: classifier.traversable(f.rgb, margin), (classifier.block_px, classifier.cell_px))
     out = {}
     for name, (fn, (block, stride)) in methods.items():
         ps, rs, ms = [], [], []

@@ -3,6 +3,7 @@
 A robot's own values live in config/nav_<robot>.yaml (e.g. nav_chang_rectilinear.yaml): a file with
 `base: nav.yaml` and only the keys that differ, merged key by key over its base. nav_config_path(robot)
 is the one place that picks the file a robot's runs use when none is named."""
+import math
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Dict, List
@@ -32,10 +33,15 @@ class ClassifierParams:
     dct_coefficients: int = 4
     svm_c: float = 10.0
     stride_px: int = 20       # each 20 px cell judged by the 40 px block centred on it (round 8)
+    ground_margin: float = 0.0   # round 13: a block is ground when the SVM's decision value exceeds this
+                                 # (0: the SVM's own class; > 0: fewer obstacles taken for floor, more
+                                 # floor for obstacles); applied when classifying, not stored in the model
 
     def validate(self) -> List[str]:
         p = [f"{key}: must be > 0, got {getattr(self, key)}"
              for key in ("block_px", "dct_coefficients", "svm_c") if not getattr(self, key) > 0]
+        if not math.isfinite(self.ground_margin):
+            p.append(f"ground_margin: must be finite, got {self.ground_margin}")
         if not 0 < self.stride_px <= self.block_px:
             p.append(f"stride_px: must be in (0, block_px = {self.block_px}], got {self.stride_px}")
         return p
