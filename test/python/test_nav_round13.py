@@ -19,8 +19,7 @@ def trained():
 def test_margin_zero_is_the_svm_own_class(trained):
     clf, img, _ = trained
     assert np.array_equal(clf.classify(img, 0.0), clf.classify(img))
-    # and the decision value's sign is the class: a small margin either side changes only blocks
-    # whose decision value lies between
+    # any other margin: exactly the blocks whose decision value exceeds it (positive: ground)
     d = clf.model.decision_function(block_features(img, 40, 4).reshape(-1, 48)).reshape(12, 16)
     assert np.array_equal(clf.classify(img, 0.3), d > 0.3)
     assert np.array_equal(clf.classify(img, -0.3), d > -0.3)
