@@ -44,7 +44,7 @@ def test_classifier_learns_texture_and_grows_from_the_bottom(tmp_path):
     prec, rec = precision_recall(pred, traversable(ground, 40))
     assert prec > 0.97 and rec > 0.97
     assert not pred[40:120, 0:40].any()
-    path = tmp_path / "m.joblib"
+    path = tmp_path / "results" / "nav" / "m.joblib"      # a folder that does not exist yet
     clf.save(path)
     assert np.array_equal(BlockClassifier.load(path).traversable(img), pred)
     (tmp_path / "bad.joblib").write_bytes(b"")

@@ -99,7 +99,11 @@ class BlockClassifier:
         return expand_cells(grow_from_bottom(self.classify(rgb, ground_margin)), self.cell_px, rgb.shape[:2])
 
     def save(self, path) -> None:
+        """Writes the model; creates the parent folder (`--out results/nav/block_svm.joblib` on a fresh
+        checkout, where results/nav does not exist yet)."""
         import joblib
+        from pathlib import Path
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
         joblib.dump({"format": MODEL_FORMAT, "block_px": self.block_px, "k": self.k,
                      "stride_px": self.stride_px, "model": self.model}, path)
 
