@@ -5,7 +5,7 @@ Features of a block: per colour channel (YCrCb), the k x k lowest-frequency coef
 block's 2-D DCT-II (orthonormal), the DC term and the low frequencies carrying colour, brightness
 and texture; 3 k^2 values (108 for k = 6). The SVM (RBF kernel, scikit-learn) sits behind a
 standard scaler. A block is labelled ground for training when at least half its pixels are ground
-in the segmentation render.
+in the segmentation render (nav.yaml classifier.ground_fraction, kept in the model file).
 
 Stride (round 8, ground_region.py): each cell of stride_px pixels is judged by the block centred on
 it; stride_px = block_px is the paper's tiling. Training uses the blocks of the same grid.
@@ -44,16 +44,18 @@ def block_features(rgb: np.ndarray, block_px: int = 40, k: int = 6, stride_px: O
     return np.ascontiguousarray(coeffs.reshape(len(ys), len(xs), -1), dtype=np.float32)
 
 
-def block_labels(ground: np.ndarray, block_px: int = 40, stride_px: Optional[int] = None) -> np.ndarray:
-    """(H, W) bool ground truth -> (rows, cols) bool: at least half the block judging the cell is
-    ground."""
-    return cell_grid(ground, block_px, GROUND_FRACTION, stride_px)
+def block_labels(ground: np.ndarray, block_px: int = 40, stride_px: Optional[int] = None,
+                 ground_fraction: float = GROUND_FRACTION) -> np.ndarray:
+    """(H, W) bool ground truth -> (rows, cols) bool: at least ground_fraction of the block judging
+    the cell is ground (0.5: half; 1.0: a block that shows any obstacle is not ground)."""
+    return cell_grid(ground, block_px, ground_fraction, stride_px)
 
 
-def truth_traversable(ground: np.ndarray, block_px: int = 40, stride_px: Optional[int] = None) -> np.ndarray:
+def truth_traversable(ground: np.ndarray, block_px: int = 40, stride_px: Optional[int] = None,
+                      ground_fraction: float = GROUND_FRACTION) -> np.ndarray:
     """(H, W) bool ground truth -> the traversability image a perfect classifier would give: the
     training labels (block_labels) grown from the bottom, at pixel resolution."""
-    return traversable(ground, block_px, GROUND_FRACTION, stride_px)
+    return traversable(ground, block_px, ground_fraction, stride_px)
 
 
 @dataclass
@@ -62,6 +64,7 @@ class BlockClassifier:
     block_px: int = 40
     k: int = 6
     stride_px: Optional[int] = None   # cells judged by the block centred on each; None: block_px
+    ground_fraction: float = GROUND_FRACTION   # the training labels' threshold (block_labels)
 
     @property
     def cell_px(self) -> int:
@@ -70,19 +73,21 @@ class BlockClassifier:
 
     @classmethod
     def train(cls, samples: Iterable[Tuple[np.ndarray, np.ndarray]], block_px: int = 40, k: int = 6,
-              c: float = 10.0, gamma="scale", stride_px: Optional[int] = None) -> "BlockClassifier":
-        """samples: (rgb, ground mask) pairs; the blocks of every cell of stride_px."""
+              c: float = 10.0, gamma="scale", stride_px: Optional[int] = None,
+              ground_fraction: float = GROUND_FRACTION) -> "BlockClassifier":
+        """samples: (rgb, ground mask) pairs; the blocks of every cell of stride_px, labelled ground
+        when at least ground_fraction of the block is."""
         from sklearn.pipeline import make_pipeline
         from sklearn.preprocessing import StandardScaler
         from sklearn.svm import SVC
         xs, ys = [], []
         for rgb, ground in samples:
             xs.append(block_features(rgb, block_px, k, stride_px).reshape(-1, 3 * k * k))
-            ys.append(block_labels(ground, block_px, stride_px).ravel())
+            ys.append(block_labels(ground, block_px, stride_px, ground_fraction).ravel())
         x, y = np.vstack(xs), np.concatenate(ys)
         model = make_pipeline(StandardScaler(), SVC(C=c, gamma=gamma, class_weight="balanced"))
         model.fit(x, y)
-        return cls(model, block_px, k, stride_px)
+        return cls(model, block_px, k, stride_px, ground_fraction)
 
     def classify(self, rgb: np.ndarray, ground_margin: float = 0.0) -> np.ndarray:
         """(rows, cols) bool per cell: its block looks like ground (ground_margin != 0: its SVM
@@ -105,7 +110,8 @@ class BlockClassifier:
         from pathlib import Path
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         joblib.dump({"format": MODEL_FORMAT, "block_px": self.block_px, "k": self.k,
-                     "stride_px": self.stride_px, "model": self.model}, path)
+                     "stride_px": self.stride_px, "ground_fraction": self.ground_fraction,
+                     "model": self.model}, path)
 
     @classmethod
     def load(cls, path) -> "BlockClassifier":
@@ -117,4 +123,5 @@ class BlockClassifier:
                              f"expected {MODEL_FORMAT!r}); make one with `snake_autonomy nav "
                              f"train-classifier --out FILE`")
         stride = d.get("stride_px")                   # absent in models made before round 8: tiles
-        return cls(d["model"], int(d["block_px"]), int(d["k"]), None if stride is None else int(stride))
+        return cls(d["model"], int(d["block_px"]), int(d["k"]), None if stride is None else int(stride),
+                   float(d.get("ground_fraction", GROUND_FRACTION)))   # absent before round 14: 0.5

@@ -237,7 +237,8 @@ class NavRun:
             # blocks and cells (nav.yaml classifier: block_px, stride_px): what mono could reach
             from ..perception.block_classifier import truth_traversable
             c = self.cfg.classifier
-            self.perceive = lambda f: truth_traversable(f.ground_truth_ground(), c.block_px, c.stride_px)
+            self.perceive = lambda f: truth_traversable(f.ground_truth_ground(), c.block_px, c.stride_px,
+                                                        c.ground_fraction)
         else:
             raise ValueError(f"perception: expected depth, mono or truth, got {spec.perception!r}")
 

@@ -151,7 +151,8 @@ def main(args) -> int:
             robot, params, args.scenes, args.seed, cfg.intrinsics, cfg.mount, depth=False)]
         t1 = time.perf_counter()
         clf = BlockClassifier.train(train, cfg.classifier.block_px, cfg.classifier.dct_coefficients,
-                                    cfg.classifier.svm_c, stride_px=cfg.classifier.stride_px)
+                                    cfg.classifier.svm_c, stride_px=cfg.classifier.stride_px,
+                                    ground_fraction=cfg.classifier.ground_fraction)
         t2 = time.perf_counter()
         clf.save(args.out)
         test = list(render_scenes(robot, params, args.test_scenes, args.seed + 100000, cfg.intrinsics, cfg.mount))
@@ -159,7 +160,7 @@ def main(args) -> int:
         summary = {"model": str(args.out), "robot": robot.name, "training_scenes": args.scenes,
                    "seed": args.seed, "render_s": t1 - t0, "train_s": t2 - t1,
                    "block_px": clf.block_px, "stride_px": clf.cell_px, "dct_coefficients": clf.k,
-                   "svm_c": cfg.classifier.svm_c,
+                   "svm_c": cfg.classifier.svm_c, "ground_fraction": clf.ground_fraction,
                    "held_out": results}
         Path(str(args.out) + ".json").write_text(json.dumps(summary, indent=2) + "\n")
         print(f"trained on {args.scenes} rendered scenes ({t1 - t0:.0f} s rendering, {t2 - t1:.1f} s "

@@ -36,12 +36,16 @@ class ClassifierParams:
     ground_margin: float = 0.0   # round 13: a block is ground when the SVM's decision value exceeds this
                                  # (0: the SVM's own class; > 0: fewer obstacles taken for floor, more
                                  # floor for obstacles); applied when classifying, not stored in the model
+    ground_fraction: float = 0.5  # round 14: a block's training label (and perception truth's cell) is
+                                  # ground when at least this fraction of it is; stored in the model
 
     def validate(self) -> List[str]:
         p = [f"{key}: must be > 0, got {getattr(self, key)}"
              for key in ("block_px", "dct_coefficients", "svm_c") if not getattr(self, key) > 0]
         if not math.isfinite(self.ground_margin):
             p.append(f"ground_margin: must be finite, got {self.ground_margin}")
+        if not 0 < self.ground_fraction <= 1:
+            p.append(f"ground_fraction: must be in (0, 1], got {self.ground_fraction}")
         if not 0 < self.stride_px <= self.block_px:
             p.append(f"stride_px: must be in (0, block_px = {self.block_px}], got {self.stride_px}")
         return p
