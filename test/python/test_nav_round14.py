@@ -33,7 +33,13 @@ def test_the_model_keeps_its_training_fraction(tmp_path):
     clf = BlockClassifier.train(samples, 40, 4, stride_px=20, ground_fraction=0.9)
     clf.save(tmp_path / "m.joblib")
     assert BlockClassifier.load(tmp_path / "m.joblib").ground_fraction == 0.9
-    assert BlockClassifier.train(samples, 40, 4, stride_px=20).ground_fraction == 0.5
+    half = BlockClassifier.train(samples, 40, 4, stride_px=20)
+    assert half.ground_fraction == 0.5
+    # trained on its labels: the cells whose block straddles the floor's edge (half floor: ground at
+    # 0.5, not at 0.9) are floor for the 0.5 model and not for the 0.9 one
+    img, _ = synthetic(rng, [200] * 8 + [400] * 8)
+    strict, loose = clf.classify(img), half.classify(img)
+    assert not (strict & ~loose).any() and (loose & ~strict).sum() >= 16, (loose & ~strict).sum()
 
 
 def test_the_config_key(tmp_path):
