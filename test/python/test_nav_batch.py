@@ -76,7 +76,8 @@ def test_the_reference_gait_backs_off_too(root, tmp_path):
     cfg = tmp_path / "nav_round6.yaml"
     cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nsampler: {{max_curvature_per_m: 2.0}}\n"
                    f"follower: {{gait_map: {root / 'config' / 'gait_maps' / 'cobra_rectilinear.yaml'}, "
-                   "lookahead_m: 0.06, k_heading: 0.008, kappa_rate_per_m_s: 0.05}\n")
+                   "lookahead_m: 0.06, k_heading: 0.008, kappa_rate_per_m_s: 0.05}\n"
+                   "map: {source: none, route: false}\n")     # round 15's route goes round without a stop
     result = NavRun(NavRunSpec(random_corridor(1), seed=0, time_limit_s=63.0, keep_frames=False,
                                gait_source="reference", nav_config=str(cfg))).run()
     assert result.metrics["outcome"] == "stopped"       # the last replans: back off, back off, turn

@@ -71,10 +71,11 @@ def test_cobra_no_longer_turns_its_head_into_the_cylinder_of_world_6_seed_2(tmp_
     Both runs to 160 s, ~15 s wall."""
     from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
     from snake_autonomy.sim.nav_experiment import random_corridor
-    off = tmp_path / "off.yaml"
-    off.write_text(f"base: {root / 'config' / 'nav.yaml'}\nsampler: {{turn_free_m: 0.0}}\n")
+    off, on = tmp_path / "off.yaml", tmp_path / "on.yaml"      # round 12's planner: without round 15's map
+    off.write_text(f"base: {root / 'config' / 'nav.yaml'}\nsampler: {{turn_free_m: 0.0}}\nmap: {{source: none, route: false}}\n")
+    on.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{source: none, route: false}}\n")
     runs = {}
-    for name, cfg in (("on", None), ("off", str(off))):
+    for name, cfg in (("on", str(on)), ("off", str(off))):
         runs[name] = NavRun(NavRunSpec(random_corridor(6), seed=2, time_limit_s=160.0, nav_config=cfg,
                                        keep_frames=False)).run()
     on, off_run = runs["on"], runs["off"]

@@ -42,6 +42,7 @@ class SimNavTest(unittest.TestCase):
                             ("nav/traversability", Image)):
             rospy.Subscriber(topic, kind, cls.on_topic, callback_args=topic, queue_size=1, buff_size=2 ** 24)
         rospy.Subscriber("nav/path", Path, cls.on_path, queue_size=5)
+        rospy.Subscriber("nav/route", Path, cls.on_topic, callback_args="nav/route", queue_size=1)
         rospy.Subscriber("gait_command", GaitCommand, cls.on_cmd, queue_size=20)
         rospy.Subscriber("ground_truth/base_pose", PoseStamped, cls.on_truth, queue_size=5)
         cls.sim_values = {}
@@ -91,6 +92,13 @@ class SimNavTest(unittest.TestCase):
         with self.lock:
             arcs = self.seen["nav/arcs"]
         self.assertGreaterEqual(len([m for m in arcs.markers if m.points]), 5)
+        # config/nav.yaml map.route: the route on the obstacle map, from the robot to the goal
+        wait_for(lambda: "nav/route" in self.seen, 30, "nav/route")
+        with self.lock:
+            route = self.seen["nav/route"].poses
+        self.assertGreaterEqual(len(route), 2)
+        end = route[-1].pose.position
+        self.assertAlmostEqual(math.hypot(end.x - self.world.goal[0], end.y - self.world.goal[1]), 0.0, places=3)
         wait_for(lambda: self.first_curve_distance is not None, 10, "the ground truth")
         start = self.first_curve_distance
         deadline = time.monotonic() + TIMEOUT_S

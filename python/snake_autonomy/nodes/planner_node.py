@@ -10,7 +10,8 @@ Subscribes  base_pose (geometry_msgs/PoseWithCovarianceStamped): base_link's pos
             the first camera_info), camera/depth/image_rect_raw (32FC1 m or 16UC1 mm; ~perception depth).
 Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with curve=true and kappa;
             hold while waiting for a pose and a frame, with no free arc and once the goal is reached),
-            nav/path (nav_msgs/Path: the chosen arc's free prefix, latched), nav/arcs
+            nav/path (nav_msgs/Path: the chosen arc's free prefix, latched), nav/route (nav_msgs/Path:
+            the route on the obstacle map the goal bias steers by, latched; nav config map.route), nav/arcs
             (visualization_msgs/MarkerArray: every candidate, chosen green, free parts yellow,
             blocked red), nav/traversability (sensor_msgs/Image rgb8: the frame with non-ground tinted
             red and the arcs drawn), /diagnostics ("planner: navigation": WARN with no free arc,
@@ -74,6 +75,7 @@ class PlannerNode:
         self.last_tick = None
         self.pub_cmd = rospy.Publisher("gait_command", GaitCommand, queue_size=10)
         self.pub_path = rospy.Publisher("nav/path", Path, queue_size=1, latch=True)
+        self.pub_route = rospy.Publisher("nav/route", Path, queue_size=1, latch=True)
         self.pub_arcs = rospy.Publisher("nav/arcs", MarkerArray, queue_size=1, latch=True)
         self.pub_trav = rospy.Publisher("nav/traversability", Image, queue_size=1, latch=True)
         self.updater = diagnostic_updater.Updater()
@@ -174,15 +176,11 @@ class PlannerNode:
     def publish_replan(self, stamp, tick):
         from snake_autonomy.planning.rectilinear.planner import to_world
         r = tick.replan
-        path = Path()
-        path.header.stamp, path.header.frame_id = stamp, self.world_frame
-        for x, y, th in (r.path_world if r.path_world is not None else []):
-            ps = PoseStamped()
-            ps.header = path.header
-            ps.pose.position.x, ps.pose.position.y = float(x), float(y)
-            ps.pose.orientation.z, ps.pose.orientation.w = math.sin(th / 2), math.cos(th / 2)
-            path.poses.append(ps)
-        self.pub_path.publish(path)
+        self.pub_path.publish(self.path_msg(stamp, r.path_world))
+        if r.route_world is not None:
+            xy = r.route_world
+            heading = np.arctan2(np.diff(xy[:, 1], append=xy[-1, 1]), np.diff(xy[:, 0], append=xy[-1, 0]))
+            self.pub_route.publish(self.path_msg(stamp, np.column_stack([xy, heading])))
         arcs = MarkerArray()
         clear = Marker()
         clear.action = Marker.DELETEALL
@@ -202,6 +200,18 @@ class PlannerNode:
             arcs.markers.append(m)
         self.pub_arcs.publish(arcs)
         self.pub_trav.publish(to_image(self.overlay(tick), "rgb8", stamp, "camera_color_optical_frame"))
+
+    def path_msg(self, stamp, poses) -> Path:
+        """(N, 3) x, y, heading in the world frame (or None) -> nav_msgs/Path."""
+        path = Path()
+        path.header.stamp, path.header.frame_id = stamp, self.world_frame
+        for x, y, th in (poses if poses is not None else []):
+            ps = PoseStamped()
+            ps.header = path.header
+            ps.pose.position.x, ps.pose.position.y = float(x), float(y)
+            ps.pose.orientation.z, ps.pose.orientation.w = math.sin(th / 2), math.cos(th / 2)
+            path.poses.append(ps)
+        return path
 
     def overlay(self, tick) -> np.ndarray:
         from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker

@@ -132,13 +132,13 @@ class NavResult:
             if ob.kind == "cylinder":
                 ax.add_patch(Circle((ob.x_m, ob.y_m), ob.radius_m, color="0.4"))
             else:
-                c, s = math.cos(math.radians(ob.yaw_deg)), math.sin(math.radians(ob.yaw_deg))
-                hx, hy = 0.5 * ob.size_m[0], 0.5 * ob.size_m[1]
-                corners = [(ob.x_m + c * x - s * y, ob.y_m + s * x + c * y)
-                           for x, y in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]
-                ax.add_patch(Polygon(corners, color="0.4"))
+                ax.add_patch(Polygon(ob.corners(), color="0.4"))
         ax.add_patch(Circle(w.goal, w.goal_radius_m, fill=False, color="g", lw=2))
         ax.plot(self.trajectory[:, 1], self.trajectory[:, 2], "b-", lw=1.5, label="base_link")
+        routes = [r.route_world for r in self.replans if r.route_world is not None]
+        for i, route in enumerate(routes):
+            ax.plot(route[:, 0], route[:, 1], "--", color="g", lw=0.6, alpha=0.35,
+                    label="route at each replan (map.route)" if i == 0 else None)
         for r in self.replans:
             ax.plot(r.pose[0], r.pose[1], "k.", ms=4)
             if r.path_world is not None:
@@ -208,8 +208,12 @@ class NavRun:
         self.collisions = CollisionMonitor(self.plant.model)
         self._contact_modes: List[str] = []
         self.planner = NavPlanner(self.cfg.intrinsics, head_width_m(ry), self.cfg.sampler,
-                                  RecedingHorizonFollower(self.cfg.follower), BodyGeometry.of_robot(self.robot))
+                                  RecedingHorizonFollower(self.cfg.follower), BodyGeometry.of_robot(self.robot),
+                                  self.cfg.map)
         self.rollover_deg = sim_cfg.monitor.rollover_tilt_deg
+        if self.cfg.map.source == "truth":          # the diagnostic: the planner knows every obstacle
+            from ..planning.rectilinear.obstacle_map import ObstacleMap
+            self.planner.obstacle_map = ObstacleMap.from_world(spec.world.obstacles)
         if spec.gait_source not in ("driver", "reference"):
             raise ValueError(f"gait_source: expected driver or reference, got {spec.gait_source!r}")
         self.drive = None

@@ -57,6 +57,15 @@ class Obstacle:
             return self.radius_m
         return 0.5 * math.hypot(self.size_m[0], self.size_m[1])
 
+    def corners(self) -> List[Tuple[float, float]]:
+        """A box's footprint corners on the floor (counter-clockwise); a cylinder: none."""
+        if self.kind == "cylinder":
+            return []
+        c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
+        hx, hy = 0.5 * self.size_m[0], 0.5 * self.size_m[1]
+        return [(self.x_m + c * x - s * y, self.y_m + s * x + c * y)
+                for x, y in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]
+
     def distance_m(self, x_m: float, y_m: float) -> float:
         """Distance in the floor plane from a point to the footprint (0 inside)."""
         dx, dy = x_m - self.x_m, y_m - self.y_m

@@ -68,11 +68,15 @@ class _View:
 
 class PerceptionCollisionChecker:
     def __init__(self, intrinsics, T_ground_camera: np.ndarray, head_width_m: float,
-                 footprint_points: int = 5, point_spacing_m: float = 0.04, blocked_wins: bool = False):
+                 footprint_points: int = 5, point_spacing_m: float = 0.04, blocked_wins: bool = False,
+                 hidden_obstacles=None):
         """head_width_m: the checked footprint's width (the head's, or the body's swept width).
         blocked_wins: a hidden point one earlier view shows as an obstacle is blocked whatever the
-        others show (False: ground in any of them frees it)."""
+        others show (False: ground in any of them frees it). hidden_obstacles: None, or a callable
+        (M, 2) ground-frame points -> (M,) bool: a point the current image does not show is blocked
+        where it says so, whatever the earlier views show (obstacle_map.py)."""
         self.blocked_wins = bool(blocked_wins)
+        self.hidden_obstacles = hidden_obstacles
         import cv2
         self.k = intrinsics
         self.K = intrinsics.K()
@@ -146,6 +150,9 @@ class PerceptionCollisionChecker:
             obstacle_in_one |= s & ~f
         free[hidden] = ground_in_one & ~obstacle_in_one if self.blocked_wins else ground_in_one
         known[hidden] = ground_in_one | obstacle_in_one
+        if self.hidden_obstacles is not None and len(hidden):
+            inside = hidden[np.asarray(self.hidden_obstacles(flat[hidden, :2]), bool)]
+            free[inside], known[inside] = False, True
         return free, known
 
     def pose_state(self, poses: np.ndarray, ground: np.ndarray, scale: Optional[np.ndarray] = None):

@@ -16,6 +16,7 @@ from ...perception.depth_traversability import DepthTraversabilityParams
 from ...sim.camera import CameraIntrinsics, CameraMount
 from .follower import FollowerParams
 from .gait import RectilinearGait
+from .obstacle_map import MapParams
 from .sampler import SamplerParams
 
 NAV_YAML = config_path("nav.yaml")
@@ -105,6 +106,7 @@ class NavConfig:
     gait: RectilinearGait = RectilinearGait()
     plant: PlantOptions = PlantOptions()
     gaits: NavGaits = NavGaits()
+    map: MapParams = MapParams()
 
     @classmethod
     def from_yaml(cls, path=None) -> "NavConfig":
@@ -114,7 +116,8 @@ class NavConfig:
     @classmethod
     def from_dict(cls, data: Dict[str, Any], source: str = "nav.yaml") -> "NavConfig":
         problems: List[str] = []
-        known = ("camera", "depth_traversability", "sampler", "follower", "classifier", "gait", "plant", "gaits")
+        known = ("camera", "depth_traversability", "sampler", "follower", "classifier", "gait", "plant", "gaits",
+                 "map")
         for key in data:
             if key not in known:
                 problems.append(f"{key}: unknown section; known: {', '.join(known)}")
@@ -146,16 +149,17 @@ class NavConfig:
         gait = _section(RectilinearGait, data.get("gait"), "gait", problems)
         plant = _section(PlantOptions, data.get("plant"), "plant", problems)
         gaits = NavGaits.from_dict(data.get("gaits"), problems)
+        omap = _section(MapParams, data.get("map"), "map", problems)
         for key in ("amplitude_m", "wavelength_m", "frequency_hz"):
             if not getattr(gait, key) > 0:
                 problems.append(f"gait.{key}: must be > 0, got {getattr(gait, key)}")
         for name, obj in (("sampler", sampler), ("follower", follower), ("plant", plant),
-                          ("classifier", classifier)):
+                          ("classifier", classifier), ("map", omap)):
             if obj is not None:
                 problems += [f"{name}.{p}" for p in obj.validate()]
         if problems:
             raise NavConfigError(source, problems)
-        return cls(intr, mount, depth, sampler, follower, classifier, float(replan), gait, plant, gaits)
+        return cls(intr, mount, depth, sampler, follower, classifier, float(replan), gait, plant, gaits, omap)
 
 
 def nav_config_path(robot: str) -> Path:
@@ -252,6 +256,11 @@ def _section(cls, d, name: str, problems: List[str]):
                 kwargs[key] = value
             else:
                 problems.append(f"{name}.{key}: must be true or false, got {value!r}")
+        elif isinstance(getattr(cls(), key), str):
+            if isinstance(value, str):
+                kwargs[key] = value
+            else:
+                problems.append(f"{name}.{key}: must be a string, got {value!r}")
         elif not isinstance(value, (int, float)) or isinstance(value, bool):
             problems.append(f"{name}.{key}: must be a number, got {value!r}")
         else:

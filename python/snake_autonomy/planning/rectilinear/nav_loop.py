@@ -65,8 +65,11 @@ class NavLoop:
         self.pose_timeout_s = float(pose_timeout_s)
         self.T_base_optical = cfg.mount.T_base_optical()
         follower = dataclasses.replace(cfg.follower, back_off=on_no_free_arc == "back_off")
+        if cfg.map.source == "truth":
+            raise ValueError("map.source: truth is the simulator's diagnostic (the world's obstacles); "
+                             "a robot's planner maps the faces it sees: use faces or none")
         self.planner = NavPlanner(cfg.intrinsics, head_width_m, cfg.sampler, RecedingHorizonFollower(follower),
-                                  body)
+                                  body, cfg.map)
         self.replan_period_s = float(cfg.replan_period_s)
         self._T_wb = None
         self._pose_t = None

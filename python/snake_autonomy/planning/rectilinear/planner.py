@@ -15,6 +15,11 @@ within curvature bounds this replan sets (_swing_bounds): the uniform-curvature 
 its middle, and turning towards an obstacle the head has just passed swung link 1 into it (five of
 round 10's thirteen runs with a contact).
 
+Obstacle map and route (round 15, config/nav.yaml map:): each replan adds its view to a world-frame
+map (obstacle_map.py: the floor it shows clears the map, its faces are grown into prior discs); the
+checks ask the map about points no image shows, and the goal bias steers by the cost to go of a route
+on the map (route.py), so the robot goes round clusters whose gaps are narrower than its footprint.
+
 The ground frame of a replan: the robot's pose on the floor (base_link projected, heading = yaw of
 base_link's x axis). Both the simulator's batch loop and a planner node call `replan` and then
 `follower.update` at the control rate.
@@ -29,6 +34,8 @@ import numpy as np
 from .body_model import BodyGeometry, body_poses, middle_path, middle_pose
 from .collision_check import PerceptionCollisionChecker
 from .follower import Command, RecedingHorizonFollower
+from .obstacle_map import MapParams, ObstacleMap, view_on_floor
+from .route import Route
 from .sampler import Selection, TrajectorySampler
 
 STATION_SPACING_M = 0.04        # stations along the body model's shapes (swing guard, turn in place)
@@ -63,13 +70,16 @@ class Replan:
     selection: Selection
     path_world: Optional[np.ndarray]      # the chosen arc's free prefix, world frame
     reason: str = ""
+    route_world: Optional[np.ndarray] = None   # map.route: the route to the goal, world frame
 
 
 class NavPlanner:
     def __init__(self, intrinsics, head_width_m: float, sampler_params, follower: RecedingHorizonFollower,
-                 body: Optional[BodyGeometry] = None):
+                 body: Optional[BodyGeometry] = None, map_params: Optional[MapParams] = None):
         """body: the robot's body (BodyGeometry.of_robot), needed by sampler_params.body_model:
-        arcs of the body's middle, the whole body checked, the follower tracking the middle."""
+        arcs of the body's middle, the whole body checked, the follower tracking the middle.
+        map_params: config/nav.yaml map: (obstacle_map.py, route.py); source truth leaves
+        obstacle_map for the simulator to set (ObstacleMap.from_world)."""
         if sampler_params.body_model and body is None:
             raise ValueError("sampler.body_model: true needs the robot's body geometry (BodyGeometry.of_robot)")
         self.intrinsics = intrinsics
@@ -81,6 +91,13 @@ class NavPlanner:
         self._turning = None
         self._stops = 0                    # replans in a row without a free arc
         self._views = collections.deque(maxlen=max(1, sampler_params.earlier_views))
+        self.map_params = map_params or MapParams()
+        mp = self.map_params
+        # obstacle_map.ObstacleMap: answers for the points no image shows; route.Route: the goal
+        # bias steers by its cost to go
+        self.obstacle_map = ObstacleMap() if mp.source == "faces" else None
+        self.route = Route(mp.cell_m, 0.5 * self.footprint_width_m, pad_m=mp.pad_m,
+                           inflated_cost=mp.inflated_cost) if mp.route else None
 
     @property
     def footprint_width_m(self) -> float:
@@ -110,10 +127,22 @@ class NavPlanner:
         checker = self._checker(T_ground_camera, T_g_world, sp.obstacle_depth_m)
         guarded = sp.swing_guard_m > 0 and self.geometry is not None and self.body is None
         swing_checker = self._checker(T_ground_camera, T_g_world, sp.swing_obstacle_depth_m) if guarded else None
+        T_world_camera = T_world_g @ np.asarray(T_ground_camera, float)
         if self.sampler_params.earlier_views:
-            self._views.appendleft((ground_image, T_world_g @ np.asarray(T_ground_camera, float)))
+            self._views.appendleft((ground_image, T_world_camera))
+        if self.map_params.source == "faces":
+            mp = self.map_params
+            self.obstacle_map.add_view(*view_on_floor(ground_image, self.intrinsics.K(), T_world_camera,
+                                                      mp.max_range_m, mp.column_step_px, mp.edge_px),
+                                       mp.prior_radius_m)
         sampler = TrajectorySampler(checker, self.sampler_params, self._width_with_margins(None))
         goal_g = None
+        cost_to_go = route_path = None
+        if goal_xy is not None and self.route is not None and self.obstacle_map is not None:
+            self.route.update(self.obstacle_map.geometry(), pose[:2], goal_xy)
+            route = self.route
+            route_path = route.path.copy()
+            cost_to_go = lambda xy: route.cost_to_go(xy @ T_world_g[:2, :2].T + T_world_g[:2, 3])
         if goal_xy is not None:
             g = np.linalg.inv(T_world_ground(pose)) @ np.array([goal_xy[0], goal_xy[1], 0.0, 1.0])
             goal_g = (float(g[0]), float(g[1]))
@@ -121,7 +150,7 @@ class NavPlanner:
         if self.body is not None:
             kappa = self.follower.kappa_per_m
             body = (self.body, middle_pose((0.0, 0.0, 0.0), kappa, self.body.half_length_m), kappa)
-        sel = sampler.select(ground_image, goal_g, body, resuming=self._stops > 0)
+        sel = sampler.select(ground_image, goal_g, body, resuming=self._stops > 0, cost_to_go=cost_to_go)
         if sel.no_free_arc:
             # keep turning the same way as at the previous replan (no dithering); else towards the
             # side whose arcs see more free floor, ties towards the goal
@@ -134,21 +163,23 @@ class NavPlanner:
             fp = self.follower.params
             if fp.back_off and (fp.back_off_replans == 0 or self._stops <= fp.back_off_replans):
                 self.follower.back_off_now()
-                return Replan(t_s, tuple(pose), sel, None, "no collision-free arc: back off along the track")
+                return Replan(t_s, tuple(pose), sel, None, "no collision-free arc: back off along the track",
+                              route_path)
             turn = None
             if self.geometry is not None:
                 turn = self._free_turn(checker, ground_image, sel, sp.turn_free_m)
                 if turn is None and fp.back_off:
                     self.follower.back_off_now()
                     return Replan(t_s, tuple(pose), sel, None,
-                                  "no collision-free arc and no turn the body can sweep: back off along the track")
+                                  "no collision-free arc and no turn the body can sweep: back off along the track",
+                                  route_path)
                 if turn is None:                  # nowhere to back off to: at least a sweep the views show free
                     turn = self._free_turn(checker, ground_image, sel, 0.0)
             if turn is None:
                 turn = self._turning * fp.kappa_turn_per_m
             self.follower.stop_and_turn(turn, abs(turn))
             return Replan(t_s, tuple(pose), sel, None,
-                          f"no collision-free arc: stop and turn in place (kappa {turn:+.2f} /m)")
+                          f"no collision-free arc: stop and turn in place (kappa {turn:+.2f} /m)", route_path)
         self._turning = None
         self._stops = 0
         arc = sel.arc
@@ -163,14 +194,20 @@ class NavPlanner:
         else:
             mid = middle_path(arc.middle, arc.curvature_per_m, arc.free_m, self.sampler_params.spacing_m)
             self.follower.set_path(to_world(mid, pose), arc.curvature_per_m)
-        return Replan(t_s, tuple(pose), sel, path, reason)
+        return Replan(t_s, tuple(pose), sel, path, reason, route_path)
 
     def _checker(self, T_ground_camera, T_g_world, obstacle_depth_m: float) -> PerceptionCollisionChecker:
         """The current image's checker with the earlier views (newest first, their cameras in the
         current ground frame; non-ground up to obstacle_depth_m beyond a view's ground edge is an
         obstacle)."""
+        hidden = None
+        if self.obstacle_map is not None:
+            T_world_g = np.linalg.inv(T_g_world)
+            omap = self.obstacle_map
+            hidden = lambda xy: omap.blocked(xy @ T_world_g[:2, :2].T + T_world_g[:2, 3])
         checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera, self.footprint_width_m,
-                                             blocked_wins=self.sampler_params.blocked_wins)
+                                             blocked_wins=self.sampler_params.blocked_wins,
+                                             hidden_obstacles=hidden)
         for ground_k, T_world_camera_k in self._views:
             checker.add_view(ground_k, T_g_world @ T_world_camera_k, self.sampler_params.horizon_m,
                              obstacle_depth_m)

@@ -164,11 +164,13 @@ class TrajectorySampler:
         return np.array(sorted(set(np.round(c, 9))))
 
     def select(self, ground: np.ndarray, goal_in_ground: Optional[Tuple[float, float]] = None,
-               body: Optional[Tuple] = None, resuming: bool = False) -> Selection:
+               body: Optional[Tuple] = None, resuming: bool = False, cost_to_go=None) -> Selection:
         """Check every arc against the traversability image `ground` (True = ground) and choose.
         body: (BodyGeometry, the middle's pose in the ground frame, the current kappa) for the
         body model (arcs of the middle, the body checked); None: arcs of base_link. resuming: the
-        last replan found no free arc (candidates need resume_free_m)."""
+        last replan found no free arc (candidates need resume_free_m). cost_to_go: None, or a
+        callable (M, 2) ground-frame points -> (M,) the route's cost to the goal (route.py): the goal
+        bias then takes the arc whose free prefix reaches the least cost, not the least distance."""
         p = self.params
         kappa_now = 0.0
         if body is None:
@@ -194,7 +196,8 @@ class TrajectorySampler:
             if goal_in_ground is not None and p.goal_tie_m > 0:
                 n = np.searchsorted(a.s_m, a.free_m, side="right")
                 prefix = a.poses[:max(1, n), :2]
-                d = np.hypot(prefix[:, 0] - goal_in_ground[0], prefix[:, 1] - goal_in_ground[1])
+                d = (np.hypot(prefix[:, 0] - goal_in_ground[0], prefix[:, 1] - goal_in_ground[1])
+                     if cost_to_go is None else np.asarray(cost_to_go(prefix), float))
                 goal_err, end_err = float(np.min(d)), float(d[-1])
             switch = p.switch_cost_m * abs(a.curvature_per_m - kappa_now) if body is not None else 0.0
             return (round(goal_err + switch, 2), round(end_err, 2), abs(a.curvature_per_m))

@@ -1,0 +1,93 @@
+"""A coarse route to the goal on the obstacle map (issue 13 round 15), ROS-free: the cost to go the
+perception-space planner's goal bias steers by, instead of the distance to the goal.
+
+The paper's planner is local: its arcs see 1.2 m, and the goal bias (sampler.goal_tie_m) pulled them
+straight at the goal. Where obstacles stand closer together than the checked footprint (2 x
+sampler.body_clearance_m) the robot drove into the funnel between them, found no free arc, and
+touched while backing off and turning in place (round 15: world 6, even with every obstacle known).
+A route on a grid over the map (scipy.sparse.csgraph.dijkstra from the goal, 8-connected) keeps the
+robot out of such funnels from the moment the views show them: the goal bias takes the arc whose
+free prefix reaches the least cost to go (sampler.py). Cells within inflation_m of an obstacle (the
+planner passes half its checked footprint) cost inflated_cost per metre (passable, so that a route
+always exists, even from inside the inflation), cells inside one blocked_cost; unknown floor is free
+(optimistic, as the arcs' known_free_m beyond their first metres).
+"""
+import math
+
+import numpy as np
+import shapely
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
+
+
+class Route:
+    def __init__(self, cell_m: float = 0.04, inflation_m: float = 0.25, pad_m: float = 1.0,
+                 inflated_cost: float = 20.0, blocked_cost: float = 1000.0):
+        self.cell_m, self.inflation_m, self.pad_m = cell_m, inflation_m, pad_m
+        self.inflated_cost, self.blocked_cost = inflated_cost, blocked_cost
+        self.path = None                       # (K, 2) world points of the last route, robot to goal
+        self._field = None
+        self._goal = None
+
+    def update(self, geometry, start_xy, goal_xy) -> None:
+        """The cost-to-go field to goal_xy around `geometry` (a shapely geometry in the world frame,
+        or None / empty: straight lines) and the route from start_xy."""
+        start, goal = np.asarray(start_xy, float), np.asarray(goal_xy, float)
+        self._goal = goal
+        if geometry is None or geometry.is_empty:
+            self._field = None
+            self.path = np.array([start, goal])
+            return
+        lo = np.minimum(start, goal) - self.pad_m
+        hi = np.maximum(start, goal) + self.pad_m
+        nx, ny = (np.ceil((hi - lo) / self.cell_m).astype(int) + 1)
+        xs, ys = lo[0] + self.cell_m * np.arange(nx), lo[1] + self.cell_m * np.arange(ny)
+        X, Y = np.meshgrid(xs, ys, indexing="ij")
+        cost = np.ones((nx, ny))
+        near = geometry.buffer(self.inflation_m, 8)
+        cost[shapely.contains_xy(near, X, Y)] = self.inflated_cost
+        cost[shapely.contains_xy(geometry, X, Y)] = self.blocked_cost
+        self._lo, self._shape = lo, (nx, ny)
+        g, s = self._cell(goal), self._cell(start)
+        dist, pred = dijkstra(_grid_graph(cost, self.cell_m), directed=False, indices=g,
+                              return_predecessors=True)
+        self._field = dist.reshape(nx, ny)
+        cells = [s]
+        while cells[-1] != g and pred[cells[-1]] >= 0:
+            cells.append(int(pred[cells[-1]]))
+        pts = np.column_stack([xs[np.array(cells) // ny], ys[np.array(cells) % ny]])
+        self.path = np.vstack([start, pts[1:-1], goal]) if len(pts) > 2 else np.array([start, goal])
+
+    def _cell(self, p) -> int:
+        nx, ny = self._shape
+        i = int(np.clip(round((p[0] - self._lo[0]) / self.cell_m), 0, nx - 1))
+        j = int(np.clip(round((p[1] - self._lo[1]) / self.cell_m), 0, ny - 1))
+        return i * ny + j
+
+    def cost_to_go(self, xy: np.ndarray) -> np.ndarray:
+        """(M, 2) world points -> (M,) the route's cost from each to the goal (metres, inflated
+        cells counted inflated_cost times); off the grid: its nearest cell's plus the way there."""
+        xy = np.asarray(xy, float).reshape(-1, 2)
+        if self._field is None:
+            return np.hypot(xy[:, 0] - self._goal[0], xy[:, 1] - self._goal[1])
+        nx, ny = self._shape
+        ij = np.rint((xy - self._lo) / self.cell_m).astype(np.int64)
+        i, j = np.clip(ij[:, 0], 0, nx - 1), np.clip(ij[:, 1], 0, ny - 1)
+        snapped = self._lo + self.cell_m * np.column_stack([i, j])
+        return self._field[i, j] + np.hypot(*(xy - snapped).T)
+
+
+def _grid_graph(cost: np.ndarray, cell_m: float):
+    """8-connected grid, each edge its length times the mean cost of its two cells."""
+    nx, ny = cost.shape
+    ids = np.arange(nx * ny).reshape(nx, ny)
+    rows, cols, w = [], [], []
+    for dx, dy in ((1, 0), (0, 1), (1, 1), (1, -1)):
+        a = ids[0:nx - dx, max(0, -dy):ny - max(0, dy)]
+        b = ids[dx:nx, max(0, dy):ny + min(0, dy)]
+        length = cell_m * math.hypot(dx, dy)
+        rows.append(a.ravel())
+        cols.append(b.ravel())
+        w.append(length * 0.5 * (cost.ravel()[a.ravel()] + cost.ravel()[b.ravel()]))
+    n = nx * ny
+    return coo_matrix((np.concatenate(w), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
