@@ -158,3 +158,17 @@ def test_a_rotated_box_is_mapped_by_its_corners():
     m = ObstacleMap.from_world([box])
     assert m.blocked(np.array([[1.0, 0.68], [1.0, 0.32]])).all()        # along its long side, now y
     assert not m.blocked(np.array([[1.15, 0.5], [0.85, 0.5]])).any()
+
+
+def test_a_run_returns_its_map_and_draws_it(tmp_path):
+    """The first replans of world 6 (start facing the cylinder on the start-goal line, 0.72 m ahead of
+    the camera): the map holds that cylinder's near side; the run's top view is written with it."""
+    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
+    world = random_corridor(6)
+    result = NavRun(NavRunSpec(world, seed=7, time_limit_s=25.0, keep_frames=False)).run()
+    geom = result.obstacle_map
+    assert geom is not None and geom.area > 0
+    ahead = world.obstacles[0]                       # (0.78, 0.02), radius 0.06
+    assert geom.contains(Point(ahead.x_m - ahead.radius_m + 0.01, ahead.y_m))
+    result.write(tmp_path / "run")
+    assert (tmp_path / "run" / "topview.png").stat().st_size > 10000

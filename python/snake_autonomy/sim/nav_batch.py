@@ -42,7 +42,7 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import List, Optional
+from typing import Any, List, Optional
 
 import numpy as np
 
@@ -87,6 +87,7 @@ class NavResult:
     frames: List[np.ndarray] = field(default_factory=list)   # overlays at each replan
     world: Optional[World] = None
     contacts: list = field(default_factory=list)     # (collisions.ContactEpisode, the follower's mode)
+    obstacle_map: Any = None                          # the planner's map at the end (shapely; map.source)
 
     def write(self, out_dir) -> None:
         out = Path(out_dir)
@@ -133,6 +134,11 @@ class NavResult:
                 ax.add_patch(Circle((ob.x_m, ob.y_m), ob.radius_m, color="0.4"))
             else:
                 ax.add_patch(Polygon(ob.corners(), color="0.4"))
+        if self.obstacle_map is not None and not self.obstacle_map.is_empty:
+            polys = [g for g in getattr(self.obstacle_map, "geoms", [self.obstacle_map]) if g.geom_type == "Polygon"]
+            for i, poly in enumerate(polys):
+                ax.add_patch(Polygon(np.asarray(poly.exterior.coords), color="r", alpha=0.25, lw=0,
+                                     label="obstacle map at the end (map.source)" if i == 0 else None))
         ax.add_patch(Circle(w.goal, w.goal_radius_m, fill=False, color="g", lw=2))
         ax.plot(self.trajectory[:, 1], self.trajectory[:, 2], "b-", lw=1.5, label="base_link")
         routes = [r.route_world for r in self.replans if r.route_world is not None]
@@ -336,7 +342,9 @@ class NavRun:
                    "outcome": self._outcome(reached, rolled, replans, pose),
                    **{f"contacts_{m}": by_mode.get(m, 0) for m in MODES}}
         contacts = [(e, m) for e, m in zip(self.collisions.episodes, self._contact_modes)]
-        return NavResult(metrics, traj, replans, frames, world, contacts)
+        omap = self.planner.obstacle_map
+        return NavResult(metrics, traj, replans, frames, world, contacts,
+                         None if omap is None else omap.geometry())
 
     def _count_contacts(self, clearance: bool) -> None:
         """New contact episodes, each tagged with what the follower was doing (FOLLOW,
