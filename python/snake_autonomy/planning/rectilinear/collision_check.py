@@ -42,11 +42,7 @@ class _View:
             # behind the obstacle there, not known to be one
             h, w = ground.shape
             top = np.where(ground.any(axis=0), np.argmax(ground, axis=0), h) - 0.5
-            T = np.asarray(T_ground_camera, float)
-            rays = np.column_stack([(np.arange(w) - K[0, 2]) / K[0, 0], (top - K[1, 2]) / K[1, 1],
-                                    np.ones(w)]) @ T[:3, :3].T
-            down = rays[:, 2] < -1e-9
-            depth = np.where(down, -T[2, 3] / np.where(down, rays[:, 2], -1.0), np.inf)
+            _, depth, _ = floor_rays(np.arange(w), top, K, T_ground_camera)
             self.edge_depth = depth + obstacle_depth_m
 
     def look(self, pts: np.ndarray):
@@ -178,6 +174,18 @@ class PerceptionCollisionChecker:
         return prefix_length(self.pose_free(poses, ground), s_m)
 
 
+def floor_rays(u: np.ndarray, v: np.ndarray, K: np.ndarray, T_frame_camera: np.ndarray):
+    """Pixels (u, v) -> (their rays in the frame of T_frame_camera (N, 3), each ray's parameter s at
+    the floor z = 0 of that frame (inf where the ray does not go down), whether it goes down). The
+    floor point is camera + s * ray."""
+    T = np.asarray(T_frame_camera, float)
+    rays = np.column_stack([(np.asarray(u, float) - K[0, 2]) / K[0, 0], (np.asarray(v, float) - K[1, 2]) / K[1, 1],
+                            np.ones(len(u))]) @ T[:3, :3].T
+    down = rays[:, 2] < -1e-9
+    s = np.where(down, -T[2, 3] / np.where(down, rays[:, 2], -1.0), np.inf)
+    return rays, s, down
+
+
 def near_field(intrinsics, T_ground_camera: np.ndarray, fwd: np.ndarray, half_width_m: float) -> float:
     """Forward distance from the camera (along fwd on the floor) at which the image shows the floor
     at least half_width_m to both sides of the camera's heading, and below which it shows none:
@@ -187,9 +195,8 @@ def near_field(intrinsics, T_ground_camera: np.ndarray, fwd: np.ndarray, half_wi
     v = np.arange(k.height - 1, -1, -1, dtype=float)
     best = None
     for u in (0.0, k.width - 1.0):
-        rays = np.column_stack([np.full_like(v, (u - k.cx) / k.fx), (v - k.cy) / k.fy, np.ones_like(v)]) @ T[:3, :3].T
-        down = rays[:, 2] < -1e-9
-        s = np.where(down, -T[2, 3] / np.where(down, rays[:, 2], -1.0), 0.0)
+        rays, s, down = floor_rays(np.full_like(v, u), v, k.K(), T)
+        s = np.where(down, s, 0.0)
         pts = T[:2, 3] + s[:, None] * rays[:, :2]
         d = (pts - T[:2, 3]) @ fwd
         lateral = np.abs((pts - T[:2, 3]) @ np.array([-fwd[1], fwd[0]]))

@@ -23,6 +23,8 @@ import numpy as np
 import shapely
 from shapely.geometry import Point, Polygon
 
+from .collision_check import floor_rays
+
 MAP_SOURCES = ("none", "faces", "truth")
 
 
@@ -91,13 +93,11 @@ def view_on_floor(ground: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray,
 def _on_floor(cols, rows, K, T, max_range_m):
     """Pixels -> (floor points (N, 2) at most max_range_m from the camera along their rays, that range,
     the rays' unit directions on the floor, whether the ray meets the floor at all)."""
-    rays = np.column_stack([(cols - K[0, 2]) / K[0, 0], (rows - K[1, 2]) / K[1, 1], np.ones(len(cols))]) @ T[:3, :3].T
+    rays, s, down = floor_rays(cols, rows, K, T)
     horiz = np.maximum(np.hypot(rays[:, 0], rays[:, 1]), 1e-9)
-    down = rays[:, 2] < -1e-9
-    s = np.where(down, -T[2, 3] / np.where(down, rays[:, 2], -1.0), np.inf)
     rng = np.minimum(s * horiz, max_range_m)
     dirs = rays[:, :2] / horiz[:, None]
-    return T[:2, 3] + rng[:, None] * dirs, np.where(down, s * horiz, np.inf), dirs, down
+    return T[:2, 3] + rng[:, None] * dirs, s * horiz, dirs, down
 
 
 class ObstacleMap:

@@ -55,6 +55,11 @@ def T_world_ground(pose) -> np.ndarray:
     return T
 
 
+def world_xy(T_world_g: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """(M, 2) points in a ground frame -> world (T_world_g: T_world_ground of that frame)."""
+    return np.asarray(xy, float) @ T_world_g[:2, :2].T + T_world_g[:2, 3]
+
+
 def to_world(poses: np.ndarray, pose) -> np.ndarray:
     """(N, 3) poses in the ground frame of `pose` -> world."""
     x, y, th = pose
@@ -142,7 +147,7 @@ class NavPlanner:
             self.route.update(self.obstacle_map.geometry(), pose[:2], goal_xy)
             route = self.route
             route_path = route.path.copy()
-            cost_to_go = lambda xy: route.cost_to_go(xy @ T_world_g[:2, :2].T + T_world_g[:2, 3])
+            cost_to_go = lambda xy: route.cost_to_go(world_xy(T_world_g, xy))
         if goal_xy is not None:
             g = np.linalg.inv(T_world_ground(pose)) @ np.array([goal_xy[0], goal_xy[1], 0.0, 1.0])
             goal_g = (float(g[0]), float(g[1]))
@@ -204,7 +209,7 @@ class NavPlanner:
         if self.obstacle_map is not None:
             T_world_g = np.linalg.inv(T_g_world)
             omap = self.obstacle_map
-            hidden = lambda xy: omap.blocked(xy @ T_world_g[:2, :2].T + T_world_g[:2, 3])
+            hidden = lambda xy: omap.blocked(world_xy(T_world_g, xy))
         checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera, self.footprint_width_m,
                                              blocked_wins=self.sampler_params.blocked_wins,
                                              hidden_obstacles=hidden)

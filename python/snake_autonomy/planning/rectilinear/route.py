@@ -58,11 +58,15 @@ class Route:
         pts = np.column_stack([xs[np.array(cells) // ny], ys[np.array(cells) % ny]])
         self.path = np.vstack([start, pts[1:-1], goal]) if len(pts) > 2 else np.array([start, goal])
 
-    def _cell(self, p) -> int:
+    def _indices(self, xy: np.ndarray):
+        """(M, 2) world points -> the (i, j) of their nearest grid cells, clipped to the grid."""
         nx, ny = self._shape
-        i = int(np.clip(round((p[0] - self._lo[0]) / self.cell_m), 0, nx - 1))
-        j = int(np.clip(round((p[1] - self._lo[1]) / self.cell_m), 0, ny - 1))
-        return i * ny + j
+        ij = np.rint((np.asarray(xy, float).reshape(-1, 2) - self._lo) / self.cell_m).astype(np.int64)
+        return np.clip(ij[:, 0], 0, nx - 1), np.clip(ij[:, 1], 0, ny - 1)
+
+    def _cell(self, p) -> int:
+        i, j = self._indices(p)
+        return int(i[0]) * self._shape[1] + int(j[0])
 
     def cost_to_go(self, xy: np.ndarray) -> np.ndarray:
         """(M, 2) world points -> (M,) the route's cost from each to the goal (metres, inflated
@@ -70,9 +74,7 @@ class Route:
         xy = np.asarray(xy, float).reshape(-1, 2)
         if self._field is None:
             return np.hypot(xy[:, 0] - self._goal[0], xy[:, 1] - self._goal[1])
-        nx, ny = self._shape
-        ij = np.rint((xy - self._lo) / self.cell_m).astype(np.int64)
-        i, j = np.clip(ij[:, 0], 0, nx - 1), np.clip(ij[:, 1], 0, ny - 1)
+        i, j = self._indices(xy)
         snapped = self._lo + self.cell_m * np.column_stack([i, j])
         return self._field[i, j] + np.hypot(*(xy - snapped).T)
 
