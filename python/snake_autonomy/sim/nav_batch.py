@@ -291,7 +291,7 @@ class NavRun:
                                            depth=spec.perception == "depth", labels=spec.perception == "truth")
                 ground = self.perceive(frame)
                 T_gc = np.linalg.inv(T_world_ground(pose)) @ frame.T_world_camera
-                r = self.planner.replan(t, ground, T_gc, pose, world.goal)
+                r = self.planner.replan(t, ground, T_gc, pose, world.goal, world.goal_radius_m)
                 replans.append(r)
                 if spec.keep_frames:
                     frames.append(overlay(frame.rgb, ground, r.selection,

@@ -143,7 +143,7 @@ class NavLoop:
         T_wb = self.pose_at(t_frame)           # where the camera was when it took the frame
         pose = ground_frame(T_wb)
         T_gc = np.linalg.inv(T_world_ground(pose)) @ T_wb @ self.T_base_optical
-        r = self.planner.replan(t_s, ground, T_gc, pose, self.goal_xy)
+        r = self.planner.replan(t_s, ground, T_gc, pose, self.goal_xy, self.goal_radius_m)
         self.replans += 1
         if r.path_world is None:
             self.stops_no_free_arc += 1

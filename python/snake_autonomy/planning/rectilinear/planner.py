@@ -8,7 +8,10 @@ over), then turns in place with a turn whose reshaping sweep (body_model.body_po
 (L^2/8) kappa to the inside) the current and earlier images show free, the turning side first,
 kappa_turn_per_m then half of it; with no such turn it backs off again. Round 12 (sampler.turn_free_m):
 the gait crawls on while the body turns, so a turn also needs the tightest arc on its side free for
-turn_free_m. A replan after a stop needs sampler.resume_free_m of free arc to go on.
+turn_free_m. A replan after a stop needs sampler.resume_free_m of free arc to go on. Round 16
+(sampler.turn_keeps_side): the turn keeps the side the stop chose first; when that side cannot be
+swept the robot backs off rather than turn the other way (turns to alternate sides swung the head
+both ways beside a cylinder).
 
 Swing guard (round 11, sampler.swing_guard_m): following an arc, the follower bends the body only
 within curvature bounds this replan sets (_swing_bounds): the uniform-curvature body reshapes about
@@ -125,7 +128,7 @@ class NavPlanner:
         return middle_pose(pose, self.follower.kappa_per_m, self.body.half_length_m)
 
     def replan(self, t_s: float, ground_image: np.ndarray, T_ground_camera: np.ndarray, pose,
-               goal_xy=None) -> Replan:
+               goal_xy=None, goal_radius_m: float = 0.0) -> Replan:
         sp = self.sampler_params
         T_world_g = T_world_ground(pose)
         T_g_world = np.linalg.inv(T_world_g)
@@ -155,7 +158,8 @@ class NavPlanner:
         if self.body is not None:
             kappa = self.follower.kappa_per_m
             body = (self.body, middle_pose((0.0, 0.0, 0.0), kappa, self.body.half_length_m), kappa)
-        sel = sampler.select(ground_image, goal_g, body, resuming=self._stops > 0, cost_to_go=cost_to_go)
+        sel = sampler.select(ground_image, goal_g, body, resuming=self._stops > 0, cost_to_go=cost_to_go,
+                             goal_radius_m=goal_radius_m if sp.goal_disc else 0.0)
         if sel.no_free_arc:
             # keep turning the same way as at the previous replan (no dithering); else towards the
             # side whose arcs see more free floor, ties towards the goal
@@ -272,7 +276,8 @@ class NavPlanner:
         kappa_now = self.follower.kappa_per_m
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
         scale = checker.width_scale(self._width_with_margins(g))
-        for side in (self._turning, -self._turning):
+        sides = (self._turning,) if self.sampler_params.turn_keeps_side else (self._turning, -self._turning)
+        for side in sides:
             if crawl_m > 0:
                 tightest = max((a for a in sel.arcs if a.curvature_per_m * side > 0),
                                key=lambda a: abs(a.curvature_per_m), default=None)

@@ -24,6 +24,10 @@ first metres of an arc (a full-width footprint at the start pose overlapped the 
 body and blocked every arc, those leaving it too). resume_free_m: after a stop, a longer free prefix
 to resume. body_model (off; body_model.py): arcs of the body's middle with the body's sweep
 checked, candidates within curvature_step_per_m of the current curvature, switch_cost_m.
+
+Round 16 (goal_disc): the goal bias aims at the goal's disc, not its centre: a free prefix that
+enters the disc costs 0 (whatever the route says there), and an arc free as far as the disc's edge
+is long enough. A phantom on the disc's edge had sent the route round it, and COBRA circled the goal.
 """
 import math
 from dataclasses import dataclass, field
@@ -83,6 +87,13 @@ class SamplerParams:
                                           # side free for this much (after margin_m): the gait crawls on
                                           # while it turns (COBRA at kappa 1.5 /m: 4-5 mm/s, so 4-5 cm a
                                           # replan); else it backs off. 0: off
+    turn_keeps_side: bool = False         # round 16: a turn in place only to the side chosen at the
+                                          # stop's first replan (planner._turning); that side not free:
+                                          # back off. False: the other side is tried next (round 5)
+    goal_disc: bool = False               # round 16: the goal bias aims at the goal's disc (the caller's
+                                          # goal_radius_m), not its centre: a free prefix that enters the
+                                          # disc reaches the goal (goal_err 0), and an arc free as far as
+                                          # the disc's edge is long enough. False: the centre (radius 0)
 
     def validate(self) -> List[str]:
         p = []
@@ -96,7 +107,7 @@ class SamplerParams:
                     "switch_cost_m", "swing_guard_m", "turn_free_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
-        for key in ("body_model", "blocked_wins"):
+        for key in ("body_model", "blocked_wins", "turn_keeps_side", "goal_disc"):
             if not isinstance(getattr(self, key), bool):
                 p.append(f"{key}: must be true or false, got {getattr(self, key)!r}")
         if not isinstance(self.earlier_views, int) or self.earlier_views < 0:
@@ -164,13 +175,15 @@ class TrajectorySampler:
         return np.array(sorted(set(np.round(c, 9))))
 
     def select(self, ground: np.ndarray, goal_in_ground: Optional[Tuple[float, float]] = None,
-               body: Optional[Tuple] = None, resuming: bool = False, cost_to_go=None) -> Selection:
+               body: Optional[Tuple] = None, resuming: bool = False, cost_to_go=None,
+               goal_radius_m: float = 0.0) -> Selection:
         """Check every arc against the traversability image `ground` (True = ground) and choose.
         body: (BodyGeometry, the middle's pose in the ground frame, the current kappa) for the
         body model (arcs of the middle, the body checked); None: arcs of base_link. resuming: the
         last replan found no free arc (candidates need resume_free_m). cost_to_go: None, or a
         callable (M, 2) ground-frame points -> (M,) the route's cost to the goal (route.py): the goal
-        bias then takes the arc whose free prefix reaches the least cost, not the least distance."""
+        bias then takes the arc whose free prefix reaches the least cost, not the least distance.
+        goal_radius_m: the goal is a disc this size (points in it cost 0; round 16, goal_disc)."""
         p = self.params
         kappa_now = 0.0
         if body is None:
@@ -186,8 +199,8 @@ class TrajectorySampler:
         tie = max(p.goal_tie_m, 0.5 * p.spacing_m)
         enough = longest - tie
         if goal_in_ground is not None and p.goal_tie_m > 0:
-            # an arc free beyond the goal's distance is long enough (the far floor is often unsure)
-            enough = min(enough, math.hypot(goal_in_ground[0], goal_in_ground[1]))
+            # an arc free as far as the goal (its disc's edge) is long enough (the far floor is often unsure)
+            enough = min(enough, max(0.0, math.hypot(goal_in_ground[0], goal_in_ground[1]) - goal_radius_m))
         best = [i for i in cands if arcs[i].free_m >= enough]
 
         def key(i):
@@ -196,8 +209,9 @@ class TrajectorySampler:
             if goal_in_ground is not None and p.goal_tie_m > 0:
                 n = np.searchsorted(a.s_m, a.free_m, side="right")
                 prefix = a.poses[:max(1, n), :2]
-                d = (np.hypot(prefix[:, 0] - goal_in_ground[0], prefix[:, 1] - goal_in_ground[1])
-                     if cost_to_go is None else np.asarray(cost_to_go(prefix), float))
+                dist = np.hypot(prefix[:, 0] - goal_in_ground[0], prefix[:, 1] - goal_in_ground[1])
+                d = dist if cost_to_go is None else np.asarray(cost_to_go(prefix), float)
+                d = np.where(dist <= goal_radius_m, 0.0, d)      # in the goal's disc: there
                 goal_err, end_err = float(np.min(d)), float(d[-1])
             switch = p.switch_cost_m * abs(a.curvature_per_m - kappa_now) if body is not None else 0.0
             return (round(goal_err + switch, 2), round(end_err, 2), abs(a.curvature_per_m))
