@@ -1,7 +1,8 @@
 """Issue 13 round 16: a turn in place keeps the side chosen at the stop's first replan
-(sampler.turn_keeps_side, planner._free_turn): when that side cannot be swept the robot backs off
-instead of turning the other way. Round 15's last COBRA depth contact (world 4 seed 3) came from
-turns to alternate sides that swung the head both ways next to a cylinder."""
+(sampler.turn_keeps_side, planner._free_turn, on in nav.yaml): when that side cannot be swept the
+robot backs off instead of turning the other way. Round 15's last COBRA depth contact (world 4 seed
+3) came from turns to alternate sides that swung the head both ways next to a cylinder.
+sampler.goal_disc (measured, off in nav.yaml): the goal bias aims at the goal's disc."""
 import dataclasses
 
 import pytest
@@ -26,9 +27,9 @@ def test_a_turn_never_takes_the_other_side_when_turn_keeps_side():
         assert free_turn(blocked_left, 0.05, turning=-1.0, sampler=keeps_side(on)) == pytest.approx(-kt)
 
 
-def test_both_are_on_in_nav_yaml_and_checked():
+def test_nav_yaml_keeps_the_side_not_the_disc_and_both_are_checked():
     sp = NavConfig.from_yaml().sampler
-    assert sp.turn_keeps_side is True and sp.goal_disc is True
+    assert sp.turn_keeps_side is True and sp.goal_disc is False
     with pytest.raises(NavConfigError, match=r"sampler.goal_disc: must be true or false, got 'yes'"):
         NavConfig.from_dict({"sampler": {"goal_disc": "yes"}})
     with pytest.raises(NavConfigError, match=r"sampler.turn_keeps_side: must be true or false, got 1"):
@@ -40,14 +41,14 @@ def test_cobra_world_4_seed_3_backs_off_instead_of_swinging_its_head_back(tmp_pa
     right (kappa -1.5), at 122 s left (+1.5), swinging the head ~0.2 m each way beside a cylinder;
     backing off at 132 s base_link touched obstacle_1. Keeping the side, no contact to 150 s (the
     whole run: goal reached, measured in the 20x5 experiment). Both runs to 150 s: round 15's
-    planner (both round-16 keys off) and nav.yaml's."""
+    planner (turn_keeps_side off) and nav.yaml's."""
     from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
     from snake_autonomy.sim.nav_experiment import random_corridor
     runs = {}
     for on in (False, True):
         cfg = tmp_path / f"keep_{on}.yaml"
         cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\n" +
-                       ("" if on else "sampler: {turn_keeps_side: false, goal_disc: false}\n"))
+                       ("" if on else "sampler: {turn_keeps_side: false}\n"))
         runs[on] = NavRun(NavRunSpec(random_corridor(4), seed=3, time_limit_s=150.0, nav_config=str(cfg),
                                      keep_frames=False)).run()
     turns = lambda run: [r.reason for r in run.replans if "turn in place (kappa" in r.reason]
@@ -55,6 +56,24 @@ def test_cobra_world_4_seed_3_backs_off_instead_of_swinging_its_head_back(tmp_pa
     assert off.metrics["collisions"] > 0, off.metrics
     assert any("+1.50" in t for t in turns(off)) and any("-1.50" in t for t in turns(off)), turns(off)
     assert on.metrics["collisions"] == 0, on.metrics
+
+
+def test_nowhere_to_back_off_to_a_turn_may_still_take_the_other_side():
+    """Keeping the side falls back to backing off; without back_off (follower.back_off false) the
+    planner still turns to whichever side it can sweep rather than blindly to the stop's side."""
+    from test_nav_round5 import WALL, _walled_planner
+    from test_nav_planning import T_GC, drawn_mask
+    for back_off in (True, False):
+        p = _walled_planner(back_off=back_off, back_off_replans=1)
+        p.sampler_params = dataclasses.replace(p.sampler_params, turn_keeps_side=True)
+        p.replan(0.0, drawn_mask(discs=[(1.1, 0.35, 0.1)]), T_GC, (-1.2, 0.0, 0.0), None)   # seen on the left
+        r = p.replan(10.0, drawn_mask(**WALL), T_GC, (0.0, 0.0, 0.0), (2.0, 0.5))        # the goal on the left
+        if back_off:            # the first stop backs off; the second cannot sweep left and backs off again
+            assert p.follower.mode == "back_off", r.reason
+            r = p.replan(20.0, drawn_mask(**WALL), T_GC, (-0.07, 0.0, 0.0), (2.0, 0.5))
+            assert p._turning == 1.0 and "no turn the body can sweep: back off" in r.reason, r.reason
+        else:
+            assert p.follower.mode == "turn_in_place" and "kappa -1.50" in r.reason, r.reason
 
 
 def arcs_near_the_goal(goal_disc_radius_m: float):

@@ -182,8 +182,8 @@ class NavPlanner:
                     return Replan(t_s, tuple(pose), sel, None,
                                   "no collision-free arc and no turn the body can sweep: back off along the track",
                                   route_path)
-                if turn is None:                  # nowhere to back off to: at least a sweep the views show free
-                    turn = self._free_turn(checker, ground_image, sel, 0.0)
+                if turn is None:                  # nowhere to back off to: at least a sweep the views show free,
+                    turn = self._free_turn(checker, ground_image, sel, 0.0, both_sides=True)   # either side
             if turn is None:
                 turn = self._turning * fp.kappa_turn_per_m
             self.follower.stop_and_turn(turn, abs(turn))
@@ -261,7 +261,8 @@ class NavPlanner:
             bounds.append(allowed)
         return bounds[0], bounds[1]
 
-    def _free_turn(self, checker, ground, sel: Selection, crawl_m: float) -> Optional[float]:
+    def _free_turn(self, checker, ground, sel: Selection, crawl_m: float,
+                   both_sides: bool = False) -> Optional[float]:
         """A turn in place whose reshaping the body can sweep: from the current kappa to
         +-kappa_turn_per_m, then half of it, the turning side first; every shape on the way free
         in the current or an earlier image with the body's footprint (its width + the lateral
@@ -276,7 +277,8 @@ class NavPlanner:
         kappa_now = self.follower.kappa_per_m
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
         scale = checker.width_scale(self._width_with_margins(g))
-        sides = (self._turning,) if self.sampler_params.turn_keeps_side else (self._turning, -self._turning)
+        keep = self.sampler_params.turn_keeps_side and not both_sides   # round 16: that side or back off
+        sides = (self._turning,) if keep else (self._turning, -self._turning)
         for side in sides:
             if crawl_m > 0:
                 tightest = max((a for a in sel.arcs if a.curvature_per_m * side > 0),

@@ -211,7 +211,8 @@ class TrajectorySampler:
                 prefix = a.poses[:max(1, n), :2]
                 dist = np.hypot(prefix[:, 0] - goal_in_ground[0], prefix[:, 1] - goal_in_ground[1])
                 d = dist if cost_to_go is None else np.asarray(cost_to_go(prefix), float)
-                d = np.where(dist <= goal_radius_m, 0.0, d)      # in the goal's disc: there
+                if goal_radius_m > 0:
+                    d = np.where(dist <= goal_radius_m, 0.0, d)  # in the goal's disc: there
                 goal_err, end_err = float(np.min(d)), float(d[-1])
             switch = p.switch_cost_m * abs(a.curvature_per_m - kappa_now) if body is not None else 0.0
             return (round(goal_err + switch, 2), round(end_err, 2), abs(a.curvature_per_m))
