@@ -25,7 +25,7 @@ body and blocked every arc, those leaving it too). resume_free_m: after a stop, 
 to resume. body_model (off; body_model.py): arcs of the body's middle with the body's sweep
 checked, candidates within curvature_step_per_m of the current curvature, switch_cost_m.
 
-Round 16 (goal_disc): the goal bias aims at the goal's disc, not its centre: a free prefix that
+Round 16 (goal_disc, measured, off in nav.yaml): the goal bias aims at the goal's disc, not its centre: a free prefix that
 enters the disc costs 0 (whatever the route says there), and an arc free as far as the disc's edge
 is long enough. A phantom on the disc's edge had sent the route round it, and COBRA circled the goal.
 """
