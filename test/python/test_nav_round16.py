@@ -83,7 +83,8 @@ def arcs_near_the_goal(goal_disc_radius_m: float):
     from snake_autonomy.planning.rectilinear.sampler import Arc, TrajectorySampler
     from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
     from test_nav_planning import K, T_GC, drawn_mask
-    s = TrajectorySampler(PerceptionCollisionChecker(K, T_GC, 0.09), CFG.sampler, None)
+    s = TrajectorySampler(PerceptionCollisionChecker(K, T_GC, 0.09),
+                          dataclasses.replace(CFG.sampler, goal_disc=True), None)
     free = {-3.0: 0.06, -1.5: 0.10, 0.0: 0.16, 1.5: 0.20, 3.0: 0.20}
     s._head_arcs = lambda ground: [Arc(c, poses, sm, free_m=free[float(c)]) for c, poses, sm in s._arcs]
     route_goes_left = lambda xy: 1.0 - 2.0 * xy[:, 1]

@@ -152,14 +152,14 @@ class NavPlanner:
             route_path = route.path.copy()
             cost_to_go = lambda xy: route.cost_to_go(world_xy(T_world_g, xy))
         if goal_xy is not None:
-            g = np.linalg.inv(T_world_ground(pose)) @ np.array([goal_xy[0], goal_xy[1], 0.0, 1.0])
+            g = T_g_world @ np.array([goal_xy[0], goal_xy[1], 0.0, 1.0])
             goal_g = (float(g[0]), float(g[1]))
         body = None
         if self.body is not None:
             kappa = self.follower.kappa_per_m
             body = (self.body, middle_pose((0.0, 0.0, 0.0), kappa, self.body.half_length_m), kappa)
         sel = sampler.select(ground_image, goal_g, body, resuming=self._stops > 0, cost_to_go=cost_to_go,
-                             goal_radius_m=goal_radius_m if sp.goal_disc else 0.0)
+                             goal_radius_m=goal_radius_m)
         if sel.no_free_arc:
             # keep turning the same way as at the previous replan (no dithering); else towards the
             # side whose arcs see more free floor, ties towards the goal

@@ -183,8 +183,10 @@ class TrajectorySampler:
         last replan found no free arc (candidates need resume_free_m). cost_to_go: None, or a
         callable (M, 2) ground-frame points -> (M,) the route's cost to the goal (route.py): the goal
         bias then takes the arc whose free prefix reaches the least cost, not the least distance.
-        goal_radius_m: the goal is a disc this size (points in it cost 0; round 16, goal_disc)."""
+        goal_radius_m: the goal's radius; with params.goal_disc the goal is that disc (points in it
+        cost 0, round 16), else its centre."""
         p = self.params
+        goal_radius_m = goal_radius_m if p.goal_disc else 0.0
         kappa_now = 0.0
         if body is None:
             arcs = self._head_arcs(ground)
