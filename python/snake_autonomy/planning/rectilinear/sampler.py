@@ -25,9 +25,12 @@ body and blocked every arc, those leaving it too). resume_free_m: after a stop, 
 to resume. body_model (off; body_model.py): arcs of the body's middle with the body's sweep
 checked, candidates within curvature_step_per_m of the current curvature, switch_cost_m.
 
-Round 16 (goal_disc, measured, off in nav.yaml): the goal bias aims at the goal's disc, not its centre: a free prefix that
-enters the disc costs 0 (whatever the route says there), and an arc free as far as the disc's edge
-is long enough. A phantom on the disc's edge had sent the route round it, and COBRA circled the goal.
+Round 16 (goal_disc): the goal bias aims at the goal's disc, not its centre: a free prefix that
+enters the disc costs 0 (whatever the route says there); among those, the one passing nearest the
+centre wins (round 17: the robot turns less tightly than the tightest arcs, and one grazing the disc
+missed it). A phantom on the disc's edge had sent the route round it, and COBRA circled the goal. An arc free as far as the goal's centre is long enough,
+not as far as the disc's edge (round 16 measured that too: it let a 0.58 m arc into a gap narrower
+than the body, depth world 0 seed 0).
 """
 import math
 from dataclasses import dataclass, field
@@ -90,10 +93,12 @@ class SamplerParams:
     turn_keeps_side: bool = False         # round 16: a turn in place only to the side chosen at the
                                           # stop's first replan (planner._turning); that side not free:
                                           # back off. False: the other side is tried next (round 5)
+    near_field_max_m: float = math.inf    # round 17: caps the near field (collision_check.py: unseen
+                                          # points nearer than it ahead of the camera count as free;
+                                          # for the full 0.5 m footprint that is 0.5 m, sideways too)
     goal_disc: bool = False               # round 16: the goal bias aims at the goal's disc (the caller's
                                           # goal_radius_m), not its centre: a free prefix that enters the
-                                          # disc reaches the goal (goal_err 0), and an arc free as far as
-                                          # the disc's edge is long enough. False: the centre (radius 0)
+                                          # disc reaches the goal (goal_err 0). False: the centre (radius 0)
 
     def validate(self) -> List[str]:
         p = []
@@ -104,7 +109,7 @@ class SamplerParams:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
         for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "curvature_step_per_m", "known_free_m", "resume_free_m",
                     "footprint_taper_m",
-                    "switch_cost_m", "swing_guard_m", "turn_free_m"):
+                    "switch_cost_m", "swing_guard_m", "turn_free_m", "near_field_max_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
         for key in ("body_model", "blocked_wins", "turn_keeps_side", "goal_disc"):
@@ -201,23 +206,29 @@ class TrajectorySampler:
         tie = max(p.goal_tie_m, 0.5 * p.spacing_m)
         enough = longest - tie
         if goal_in_ground is not None and p.goal_tie_m > 0:
-            # an arc free as far as the goal (its disc's edge) is long enough (the far floor is often unsure)
-            enough = min(enough, max(0.0, math.hypot(goal_in_ground[0], goal_in_ground[1]) - goal_radius_m))
+            # an arc free as far as the goal is long enough (the far floor is often unsure); as far as
+            # the goal's centre, not its disc's edge, even with goal_disc (round 16: the disc's edge let
+            # a 0.58 m arc into a gap narrower than the body, depth world 0 seed 0)
+            enough = min(enough, math.hypot(goal_in_ground[0], goal_in_ground[1]))
         best = [i for i in cands if arcs[i].free_m >= enough]
 
         def key(i):
             a = arcs[i]
-            goal_err = end_err = 0.0
+            goal_err = depth_err = end_err = 0.0
             if goal_in_ground is not None and p.goal_tie_m > 0:
                 n = np.searchsorted(a.s_m, a.free_m, side="right")
                 prefix = a.poses[:max(1, n), :2]
                 dist = np.hypot(prefix[:, 0] - goal_in_ground[0], prefix[:, 1] - goal_in_ground[1])
                 d = dist if cost_to_go is None else np.asarray(cost_to_go(prefix), float)
-                if goal_radius_m > 0:
-                    d = np.where(dist <= goal_radius_m, 0.0, d)  # in the goal's disc: there
+                if goal_radius_m > 0 and np.min(dist) <= goal_radius_m:
+                    # in the goal's disc: there. Among the arcs that enter it, the one passing nearest
+                    # the centre: the robot turns less tightly than the tightest arcs, and an arc
+                    # grazing the disc on paper missed it (round 17: 12-link depth world 9 seed 5)
+                    d = np.where(dist <= goal_radius_m, 0.0, d)
+                    depth_err = float(np.min(dist))
                 goal_err, end_err = float(np.min(d)), float(d[-1])
             switch = p.switch_cost_m * abs(a.curvature_per_m - kappa_now) if body is not None else 0.0
-            return (round(goal_err + switch, 2), round(end_err, 2), abs(a.curvature_per_m))
+            return (round(goal_err + switch, 2), round(depth_err, 2), round(end_err, 2), abs(a.curvature_per_m))
         return Selection(arcs, min(best, key=key))
 
     def _head_arcs(self, ground) -> List[Arc]:
