@@ -28,9 +28,9 @@ checked, candidates within curvature_step_per_m of the current curvature, switch
 Round 16 (goal_disc): the goal bias aims at the goal's disc, not its centre: a free prefix that
 enters the disc costs 0 (whatever the route says there); among those, the one passing nearest the
 centre wins (round 17: the robot turns less tightly than the tightest arcs, and one grazing the disc
-missed it). A phantom on the disc's edge had sent the route round it, and COBRA circled the goal. An arc free as far as the goal's centre is long enough,
-not as far as the disc's edge (round 16 measured that too: it let a 0.58 m arc into a gap narrower
-than the body, depth world 0 seed 0).
+missed it). A phantom on the disc's edge had sent the route round it, and COBRA circled the goal.
+An arc free as far as the goal's centre is long enough, not as far as the disc's edge (round 16
+measured that too: it let a 0.58 m arc into a gap narrower than the body, depth world 0 seed 0).
 """
 import math
 from dataclasses import dataclass, field
