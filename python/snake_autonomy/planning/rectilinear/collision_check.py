@@ -65,12 +65,13 @@ class _View:
 class PerceptionCollisionChecker:
     def __init__(self, intrinsics, T_ground_camera: np.ndarray, head_width_m: float,
                  footprint_points: int = 5, point_spacing_m: float = 0.04, blocked_wins: bool = False,
-                 hidden_obstacles=None):
+                 hidden_obstacles=None, near_field_max_m: float = math.inf):
         """head_width_m: the checked footprint's width (the head's, or the body's swept width).
         blocked_wins: a hidden point one earlier view shows as an obstacle is blocked whatever the
         others show (False: ground in any of them frees it). hidden_obstacles: None, or a callable
         (M, 2) ground-frame points -> (M,) bool: a point the current image does not show is blocked
-        where it says so, whatever the earlier views show (obstacle_map.py)."""
+        where it says so, whatever the earlier views show (obstacle_map.py). near_field_max_m: caps
+        the near field (sampler.near_field_max_m)."""
         self.blocked_wins = bool(blocked_wins)
         self.hidden_obstacles = hidden_obstacles
         import cv2
@@ -88,7 +89,7 @@ class PerceptionCollisionChecker:
         self._cam_xy = T[:2, 3]
         fwd = T[:2, 2] / max(1e-9, np.linalg.norm(T[:2, 2]))
         self._cam_fwd = fwd
-        self.near_field_m = near_field(intrinsics, T, fwd, 0.5 * head_width_m)
+        self.near_field_m = min(near_field(intrinsics, T, fwd, 0.5 * head_width_m), near_field_max_m)
         n = max(footprint_points, int(math.ceil(head_width_m / point_spacing_m - 1e-9)) + 1)
         self.width_m = float(head_width_m)
         self.offsets = np.linspace(-0.5 * head_width_m, 0.5 * head_width_m, n)

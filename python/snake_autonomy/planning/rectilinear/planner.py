@@ -216,8 +216,8 @@ class NavPlanner:
             hidden = lambda xy: omap.blocked(world_xy(T_world_g, xy))
         checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera, self.footprint_width_m,
                                              blocked_wins=self.sampler_params.blocked_wins,
-                                             hidden_obstacles=hidden)
-        checker.near_field_m = min(checker.near_field_m, self.sampler_params.near_field_max_m)
+                                             hidden_obstacles=hidden,
+                                             near_field_max_m=self.sampler_params.near_field_max_m)
         for ground_k, T_world_camera_k in self._views:
             checker.add_view(ground_k, T_g_world @ T_world_camera_k, self.sampler_params.horizon_m,
                              obstacle_depth_m)
