@@ -190,7 +190,11 @@ def floor_rays(u: np.ndarray, v: np.ndarray, K: np.ndarray, T_frame_camera: np.n
 def near_field(intrinsics, T_ground_camera: np.ndarray, fwd: np.ndarray, half_width_m: float) -> float:
     """Forward distance from the camera (along fwd on the floor) at which the image shows the floor
     at least half_width_m to both sides of the camera's heading, and below which it shows none:
-    where the image's side columns (or its bottom row) meet the floor, row by row from the bottom."""
+    where the image's side columns (or its bottom row) meet the floor, row by row from the bottom.
+    A view that never gets that wide (the camera pitched down steeply and low: its top row meets
+    the floor nearer than the footprint's reach) gives the distance of the furthest floor it shows,
+    not infinity: an infinite near field counted every point no view showed as free, beside the
+    camera at any distance (round 18: the 12-link robot's turns in place, mono world 16 seed 8)."""
     T = np.asarray(T_ground_camera, float)
     k = intrinsics
     v = np.arange(k.height - 1, -1, -1, dtype=float)
@@ -202,7 +206,10 @@ def near_field(intrinsics, T_ground_camera: np.ndarray, fwd: np.ndarray, half_wi
         d = (pts - T[:2, 3]) @ fwd
         lateral = np.abs((pts - T[:2, 3]) @ np.array([-fwd[1], fwd[0]]))
         ok = down & (lateral >= half_width_m)
-        reach = float(d[np.argmax(ok)]) if ok.any() else math.inf
+        if ok.any():
+            reach = float(d[np.argmax(ok)])
+        else:                                   # never that wide: as far as the view shows floor
+            reach = float(np.max(d[down])) if down.any() else 0.0
         best = reach if best is None else max(best, reach)
     return max(best, float(d[0]) if down[0] else 0.0)
 

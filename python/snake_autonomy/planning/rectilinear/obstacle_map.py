@@ -47,6 +47,8 @@ class MapParams:
     inflated_cost: float = 20.0   # route: a metre within half the checked footprint (the arcs' reach,
                                   # sampler.body_clearance_m) of an obstacle costs this many
     pad_m: float = 1.0            # route grid: the start-goal box grown by this
+    priors_off_own_floor: bool = False   # round 18: a view's prior discs are not laid on the floor
+                                  # the same view shows (ObstacleMap.add_view)
 
     def validate(self) -> List[str]:
         p = []
@@ -61,6 +63,8 @@ class MapParams:
             p.append(f"edge_px: must be an integer >= 0, got {self.edge_px!r}")
         if not isinstance(self.column_step_px, int) or self.column_step_px < 1:
             p.append(f"column_step_px: must be an integer >= 1, got {self.column_step_px!r}")
+        if not isinstance(self.priors_off_own_floor, bool):
+            p.append(f"priors_off_own_floor: must be true or false, got {self.priors_off_own_floor!r}")
         if not isinstance(self.route, bool):
             p.append(f"route: must be true or false, got {self.route!r}")
         if self.route and self.source == "none":
@@ -105,17 +109,23 @@ class ObstacleMap:
         self._geom = Polygon() if geometry is None else geometry
         self._prepared = False
 
-    def add_view(self, faces_xy: np.ndarray, dirs: np.ndarray, floor, prior_radius_m: float) -> None:
+    def add_view(self, faces_xy: np.ndarray, dirs: np.ndarray, floor, prior_radius_m: float,
+                 priors_off_own_floor: bool = False) -> None:
         """One view (view_on_floor): the floor it shows clears what the map held there (an older view's
         face behind which this one sees floor: a cylinder's prior where its side is not, a far edge
         the depth test marked unsure), then each face point is grown into the disc of
-        prior_radius_m behind it along its ray."""
-        geom = self._geom.difference(floor) if floor is not None and not floor.is_empty else self._geom
+        prior_radius_m behind it along its ray. priors_off_own_floor (round 18, MapParams): the discs
+        are not laid on floor this same view shows: a disc behind a cylinder's outermost face
+        reaches prior_radius_m beyond the cylinder's side, onto floor the view shows beside it."""
+        seen = floor is not None and not floor.is_empty
+        geom = self._geom.difference(floor) if seen else self._geom
         faces_xy = np.asarray(faces_xy, float).reshape(-1, 2)
         if len(faces_xy):
             centres = faces_xy + prior_radius_m * np.asarray(dirs, float).reshape(-1, 2)
-            discs = shapely.buffer(shapely.points(centres), prior_radius_m, quad_segs=4)
-            geom = shapely.union_all([geom, *discs])
+            discs = shapely.union_all(shapely.buffer(shapely.points(centres), prior_radius_m, quad_segs=4))
+            if priors_off_own_floor and seen:
+                discs = discs.difference(floor)
+            geom = shapely.union_all([geom, discs])
         self._geom = geom.simplify(0.002)
         self._prepared = False
 

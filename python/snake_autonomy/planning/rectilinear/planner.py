@@ -142,7 +142,7 @@ class NavPlanner:
             mp = self.map_params
             self.obstacle_map.add_view(*view_on_floor(ground_image, self.intrinsics.K(), T_world_camera,
                                                       mp.max_range_m, mp.column_step_px, mp.edge_px),
-                                       mp.prior_radius_m)
+                                       mp.prior_radius_m, mp.priors_off_own_floor)
         sampler = TrajectorySampler(checker, self.sampler_params, self._width_with_margins(None))
         goal_g = None
         cost_to_go = route_path = None
