@@ -28,10 +28,11 @@ def test_a_turn_never_takes_the_other_side_when_turn_keeps_side():
         assert free_turn(blocked_left, 0.05, turning=-1.0, sampler=keeps_side(on)) == pytest.approx(-kt)
 
 
-def test_nav_yaml_keeps_the_side_not_the_disc_and_both_are_checked():
-    """goal_disc stays off (round 17's tie-break is not measured at scale); the near field uncapped."""
+def test_nav_yaml_keeps_the_side_and_aims_at_the_disc_and_both_are_checked():
+    """goal_disc on since round 18 (round 17's tie-break measured on all eight experiments); the near
+    field uncapped."""
     sp = NavConfig.from_yaml().sampler
-    assert sp.turn_keeps_side is True and sp.goal_disc is False and sp.near_field_max_m == float("inf")
+    assert sp.turn_keeps_side is True and sp.goal_disc is True and sp.near_field_max_m == float("inf")
     with pytest.raises(NavConfigError, match=r"sampler.goal_disc: must be true or false, got 'yes'"):
         NavConfig.from_dict({"sampler": {"goal_disc": "yes"}})
     with pytest.raises(NavConfigError, match=r"sampler.turn_keeps_side: must be true or false, got 1"):
