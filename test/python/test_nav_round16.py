@@ -2,7 +2,7 @@
 (sampler.turn_keeps_side, planner._free_turn, on in nav.yaml): when that side cannot be swept the
 robot backs off instead of turning the other way. Round 15's last COBRA depth contact (world 4 seed
 3) came from turns to alternate sides that swung the head both ways next to a cylinder.
-sampler.goal_disc (measured, off in nav.yaml): the goal bias aims at the goal's disc.
+sampler.goal_disc (on in nav.yaml since round 18): the goal bias aims at the goal's disc.
 Round 17: sampler.near_field_max_m (an option, off): caps where unseen floor counts as free."""
 import dataclasses
 
@@ -29,8 +29,8 @@ def test_a_turn_never_takes_the_other_side_when_turn_keeps_side():
 
 
 def test_nav_yaml_keeps_the_side_and_aims_at_the_disc_and_both_are_checked():
-    """goal_disc on since round 18 (round 17's tie-break measured on all eight experiments); the near
-    field uncapped."""
+    """goal_disc on since round 18 (round 17's tie-break measured alone on seven of the eight
+    experiments, the eighth with the near-field fix); the near field uncapped."""
     sp = NavConfig.from_yaml().sampler
     assert sp.turn_keeps_side is True and sp.goal_disc is True and sp.near_field_max_m == float("inf")
     with pytest.raises(NavConfigError, match=r"sampler.goal_disc: must be true or false, got 'yes'"):
@@ -143,7 +143,6 @@ def test_among_arcs_entering_the_disc_the_one_passing_nearest_the_centre():
     free = {-3.0: 0.52, -1.5: 0.82, 0.0: 1.1, 1.5: 1.1, 3.0: 1.1}
     for radius in (0.0, 0.2):
         assert arcs_near_the_goal(radius, free, (0.435, -0.207), None) == pytest.approx(-1.5)
-
 
 
 def test_near_field_max_m_caps_where_unseen_floor_counts_as_free():
