@@ -14,7 +14,8 @@ with add_view (the last few replans' images, each with its camera pose in the cu
 images, not a map: nothing is fused): free when one of them shows it as ground, or, with
 blocked_wins (round 10, config/nav.yaml), when some show it as ground and none as an obstacle (the
 monocular classifier misses a cylinder in one view and not in the next: the miss must not free
-it). Seen in none, it counts as free when nearer (ahead of the camera, along its heading on the
+it); with blocked_wins_depth_m (round 19) only an obstacle's face wins so, not the shadow behind it
+(an old view's shadow blocked the floor beside the head that every later view showed). Seen in none, it counts as free when nearer (ahead of the camera, along its heading on the
 floor) than near_field_m, the distance at which the view becomes as wide as the footprint (or the
 bottom row's, if further): the robot is there or came from there; anywhere else it is not known to
 be free. Without the earlier views a passed obstacle beside the body is free (round 3: the head slid
@@ -30,23 +31,27 @@ class _View:
     """One traversability image and the projection of ground points into it."""
 
     def __init__(self, K, ground: np.ndarray, T_ground_camera: np.ndarray, max_depth_m: float = math.inf,
-                 obstacle_depth_m: float = math.inf):
+                 obstacle_depth_m: float = math.inf, face_depth_m: float = math.inf):
         self.max_depth_m = max_depth_m
         T_cam_ground = np.linalg.inv(np.asarray(T_ground_camera, float))
         self.R, self.t = T_cam_ground[:3, :3], T_cam_ground[:3, 3]
         self.K, self.ground = K, ground
-        self.edge_depth = None
-        if math.isfinite(obstacle_depth_m):
+        self.edge_depth = self.face_depth = None
+        face_depth_m = min(face_depth_m, obstacle_depth_m)
+        if math.isfinite(face_depth_m):
             # per column, the depth of the floor at the ground region's top edge (the region is
             # grown from the bottom): non-ground further than obstacle_depth_m beyond it is hidden
-            # behind the obstacle there, not known to be one
+            # behind the obstacle there, not known to be one; up to face_depth_m it is the face
             h, w = ground.shape
             top = np.where(ground.any(axis=0), np.argmax(ground, axis=0), h) - 0.5
             _, depth, _ = floor_rays(np.arange(w), top, K, T_ground_camera)
             self.edge_depth = depth + obstacle_depth_m
+            self.face_depth = depth + face_depth_m
 
-    def look(self, pts: np.ndarray):
-        """(M, 3) ground points -> (shown (M,) bool, ground (M,) bool where shown)."""
+    def look(self, pts: np.ndarray, faces: bool = False):
+        """(M, 3) ground points -> (shown (M,) bool, ground (M,) bool where shown); faces: and (M,)
+        bool, shown as an obstacle within face_depth_m of the ground region's edge (the face, not
+        the shadow behind it)."""
         c = pts @ self.R.T + self.t
         z = c[:, 2]
         zs = np.where(z > 1e-9, z, 1.0)
@@ -59,20 +64,31 @@ class _View:
         if self.edge_depth is not None:
             idx = np.flatnonzero(shown & ~free)
             shown[idx[z[idx] > self.edge_depth[u[idx]]]] = False
-        return shown, free
+        if not faces:
+            return shown, free
+        face = shown & ~free
+        if self.face_depth is not None:
+            idx = np.flatnonzero(face)
+            face[idx[z[idx] > self.face_depth[u[idx]]]] = False
+        return shown, free, face
 
 
 class PerceptionCollisionChecker:
     def __init__(self, intrinsics, T_ground_camera: np.ndarray, head_width_m: float,
                  footprint_points: int = 5, point_spacing_m: float = 0.04, blocked_wins: bool = False,
-                 hidden_obstacles=None, near_field_max_m: float = math.inf):
+                 hidden_obstacles=None, near_field_max_m: float = math.inf,
+                 blocked_wins_depth_m: float = math.inf):
         """head_width_m: the checked footprint's width (the head's, or the body's swept width).
         blocked_wins: a hidden point one earlier view shows as an obstacle is blocked whatever the
         others show (False: ground in any of them frees it). hidden_obstacles: None, or a callable
         (M, 2) ground-frame points -> (M,) bool: a point the current image does not show is blocked
         where it says so, whatever the earlier views show (obstacle_map.py). near_field_max_m: caps
-        the near field (sampler.near_field_max_m)."""
+        the near field (sampler.near_field_max_m). blocked_wins_depth_m (round 19): with
+        blocked_wins, only non-ground within this of a view's ground edge (the obstacle's face) wins
+        over ground other views show; further (the shadow behind the face, up to the view's
+        obstacle_depth_m) is freed by a view showing ground there (inf: every obstacle wins)."""
         self.blocked_wins = bool(blocked_wins)
+        self.blocked_wins_depth_m = float(blocked_wins_depth_m)
         self.hidden_obstacles = hidden_obstacles
         import cv2
         self.k = intrinsics
@@ -105,7 +121,8 @@ class PerceptionCollisionChecker:
         max_depth_m along its optical axis: the far floor is often marked unsure). Non-ground further
         than obstacle_depth_m beyond the ground region's edge in its column is not shown there
         (hidden behind the obstacle at the edge, not known to be one)."""
-        self._earlier.append(_View(self.K, ground, T_ground_camera, max_depth_m, obstacle_depth_m))
+        self._earlier.append(_View(self.K, ground, T_ground_camera, max_depth_m, obstacle_depth_m,
+                                   self.blocked_wins_depth_m))
 
     def footprint_points(self, poses: np.ndarray, scale: Optional[np.ndarray] = None) -> np.ndarray:
         """(N, 3) poses -> (N, P, 3) ground points of the footprint at each; scale (N,): each
@@ -139,13 +156,15 @@ class PerceptionCollisionChecker:
         hidden = np.flatnonzero(~shown)
         ground_in_one = np.zeros(len(hidden), bool)
         obstacle_in_one = np.zeros(len(hidden), bool)
+        face_in_one = np.zeros(len(hidden), bool)
         for view in self._earlier:
             if not len(hidden):
                 break
-            s, f = view.look(flat[hidden])
+            s, f, face = view.look(flat[hidden], faces=True)
             ground_in_one |= s & f
             obstacle_in_one |= s & ~f
-        free[hidden] = ground_in_one & ~obstacle_in_one if self.blocked_wins else ground_in_one
+            face_in_one |= face
+        free[hidden] = ground_in_one & ~face_in_one if self.blocked_wins else ground_in_one
         known[hidden] = ground_in_one | obstacle_in_one
         if self.hidden_obstacles is not None and len(hidden):
             inside = hidden[np.asarray(self.hidden_obstacles(flat[hidden, :2]), bool)]

@@ -11,7 +11,9 @@ the gait crawls on while the body turns, so a turn also needs the tightest arc o
 turn_free_m. A replan after a stop needs sampler.resume_free_m of free arc to go on. Round 16
 (sampler.turn_keeps_side): the turn keeps the side the stop chose first; when that side cannot be
 swept the robot backs off rather than turn the other way (turns to alternate sides swung the head
-both ways beside a cylinder).
+both ways beside a cylinder). Round 19 (sampler.back_off_check_m): backing off needs the tail's
+track clear (_back_off_clear: the views and the obstacle map); when it is not, the robot turns in
+place instead (the turning side, then either side), and says why.
 
 Swing guard (round 11, sampler.swing_guard_m): following an arc, the follower bends the body only
 within curvature bounds this replan sets (_swing_bounds): the uniform-curvature body reshapes about
@@ -40,6 +42,7 @@ from .follower import Command, RecedingHorizonFollower
 from .obstacle_map import MapParams, ObstacleMap, view_on_floor
 from .route import Route
 from .sampler import Selection, TrajectorySampler
+from .unicycle import arc_poses
 
 STATION_SPACING_M = 0.04        # stations along the body model's shapes (swing guard, turn in place)
 
@@ -170,14 +173,15 @@ class NavPlanner:
                 self._turning = 1.0 if left > right or (left == right and goal_left) else -1.0
             self._stops += 1
             fp = self.follower.params
-            if fp.back_off and (fp.back_off_replans == 0 or self._stops <= fp.back_off_replans):
+            can_back_off = fp.back_off and self._back_off_clear(T_ground_camera, T_g_world, ground_image)
+            if can_back_off and (fp.back_off_replans == 0 or self._stops <= fp.back_off_replans):
                 self.follower.back_off_now()
                 return Replan(t_s, tuple(pose), sel, None, "no collision-free arc: back off along the track",
                               route_path)
             turn = None
             if self.geometry is not None:
                 turn = self._free_turn(checker, ground_image, sel, sp.turn_free_m)
-                if turn is None and fp.back_off:
+                if turn is None and can_back_off:
                     self.follower.back_off_now()
                     return Replan(t_s, tuple(pose), sel, None,
                                   "no collision-free arc and no turn the body can sweep: back off along the track",
@@ -187,8 +191,9 @@ class NavPlanner:
             if turn is None:
                 turn = self._turning * fp.kappa_turn_per_m
             self.follower.stop_and_turn(turn, abs(turn))
+            why = " (backing off: the tail's track is blocked)" if fp.back_off and not can_back_off else ""
             return Replan(t_s, tuple(pose), sel, None,
-                          f"no collision-free arc: stop and turn in place (kappa {turn:+.2f} /m)", route_path)
+                          f"no collision-free arc: stop and turn in place (kappa {turn:+.2f} /m){why}", route_path)
         self._turning = None
         self._stops = 0
         arc = sel.arc
@@ -217,11 +222,33 @@ class NavPlanner:
         checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera, self.footprint_width_m,
                                              blocked_wins=self.sampler_params.blocked_wins,
                                              hidden_obstacles=hidden,
-                                             near_field_max_m=self.sampler_params.near_field_max_m)
+                                             near_field_max_m=self.sampler_params.near_field_max_m,
+                                             blocked_wins_depth_m=self.sampler_params.blocked_wins_depth_m)
         for ground_k, T_world_camera_k in self._views:
             checker.add_view(ground_k, T_g_world @ T_world_camera_k, self.sampler_params.horizon_m,
                              obstacle_depth_m)
         return checker
+
+    def _back_off_clear(self, T_ground_camera, T_g_world, ground) -> bool:
+        """Round 19 (sampler.back_off_check_m): may the robot back off? Backing off tail first at a
+        constant kappa moves every point of the body along the body's own circle into the place of
+        the point behind it (body_model.py); only the tail enters new ground: the body's circle
+        continued back_off_check_m behind the tail, with the body's footprint (its width + the
+        lateral margins). Clear unless the current image, an earlier view (their obstacles
+        swing_obstacle_depth_m deep, as the swing guard's) or the obstacle map shows an obstacle
+        there; floor none shows counts free (the body came that way). Unchecked (True) without the
+        body's geometry or with back_off_check_m 0. Round 18: three of the 12-link robot's four new
+        contact runs were the tail backing off into a cylinder the map held."""
+        sp, g = self.sampler_params, self.geometry
+        if g is None or sp.back_off_check_m <= 0:
+            return True
+        kappa = self.follower.kappa_per_m
+        tail = arc_poses(kappa, -2.0 * g.half_length_m, STATION_SPACING_M)[-1]
+        track = arc_poses(kappa, -sp.back_off_check_m, STATION_SPACING_M, start=tail)[1:]
+        checker = self._checker(T_ground_camera, T_g_world, sp.swing_obstacle_depth_m)
+        scale = np.full(len(track), checker.width_scale(self._width_with_margins(g)))
+        free, known = checker.point_state(checker.footprint_points(track, scale).reshape(-1, 3), ground)
+        return not (known & ~free).any()
 
     def _swing_bounds(self, checker, ground, step_per_m: float = 0.25) -> Tuple[float, float]:
         """The swing guard: the body curvatures (lo, hi) around the current kappa the follower may
@@ -243,6 +270,10 @@ class NavPlanner:
         steps = np.hypot(*np.diff(now, axis=0).T)                       # tail to head
         from_head = np.concatenate([np.cumsum(steps[::-1])[::-1], [0.0]])
         front = from_head <= sp.swing_guard_m + 1e-9
+        # round 19 (swing_guard_tail_m): the tail's last metres swing as far as the head; against the
+        # obstacle map only (the views show the floor beside the tail long ago, with their shadows)
+        back = (from_head[0] - from_head <= sp.swing_guard_tail_m + 1e-9) & ~front
+        back &= sp.swing_guard_tail_m > 0 and checker.hidden_obstacles is not None
         bounds = []
         for side in (-1.0, 1.0):
             allowed, n = kappa_now, 1
@@ -257,6 +288,10 @@ class NavPlanner:
                 lead = new[moving] + reach * d[moving] / dist[moving, None]
                 free, known = checker.point_state(np.column_stack([lead, np.zeros(len(lead))]), ground)
                 if (known & ~free).any():
+                    break
+                swinging = back & (dist > 1e-3)
+                if swinging.any() and np.asarray(checker.hidden_obstacles(
+                        new[swinging] + reach * d[swinging] / dist[swinging, None]), bool).any():
                     break
                 allowed, n = k, n + 1
             bounds.append(allowed)

@@ -84,6 +84,8 @@ class SamplerParams:
                                           # changes only as far as reshaping keeps the body's first
                                           # swing_guard_m (from the head) off obstacles the views
                                           # show (planner.py _swing_bounds); 0: off
+    swing_guard_tail_m: float = 0.0       # round 19: > 0: the guard also keeps the body's last metres (from
+                                          # the tail) off what the obstacle map holds (not the views)
     swing_obstacle_depth_m: float = 0.1   # the swing guard's obstacles: non-ground up to this beyond a
                                           # view's ground edge (the obstacle's face), not obstacle_depth_m
     turn_free_m: float = 0.0              # round 12: > 0: a turn in place needs the tightest arc on its
@@ -99,6 +101,12 @@ class SamplerParams:
     goal_disc: bool = False               # round 16: the goal bias aims at the goal's disc (the caller's
                                           # goal_radius_m), not its centre: a free prefix that enters the
                                           # disc reaches the goal (goal_err 0). False: the centre (radius 0)
+    blocked_wins_depth_m: float = math.inf  # round 19: with blocked_wins, only non-ground within this of an
+                                          # earlier view's ground edge (the face) wins over ground another
+                                          # view shows; the shadow behind it (to obstacle_depth_m) does not
+    back_off_check_m: float = 0.0         # round 19: > 0: backing off needs the tail's track continued this
+                                          # far backwards clear of what the views and the obstacle map show
+                                          # (planner._back_off_clear); else a turn in place. 0: unchecked
 
     def validate(self) -> List[str]:
         p = []
@@ -109,7 +117,8 @@ class SamplerParams:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
         for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "curvature_step_per_m", "known_free_m", "resume_free_m",
                     "footprint_taper_m",
-                    "switch_cost_m", "swing_guard_m", "turn_free_m", "near_field_max_m"):
+                    "switch_cost_m", "swing_guard_m", "turn_free_m", "near_field_max_m", "back_off_check_m", "swing_guard_tail_m",
+                    "blocked_wins_depth_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
         for key in ("body_model", "blocked_wins", "turn_keeps_side", "goal_disc"):
