@@ -86,12 +86,15 @@ def test_cobra_passes_the_three_cylinders_of_world_6_without_its_front_links_tou
     """Round 10's committed planner: random world 6 seed 4, depth: reached at 449 s with 21 contact
     episodes (the head passed the right cylinder 0.18 m off, the left arc back to the goal swung
     link 1 into it). With the swing guard: reached without a contact (measured 470 s). ~30 s wall.
-    Without round 15's map and route (with them this run ends stopped in the funnel, no contact)."""
+    Without round 15's map and route (with them this run ends stopped in the funnel, no contact), and
+    with round 19's blocked_wins_depth_m and back_off_check_m at their round-18 values (with them it
+    runs to the time limit, no contact)."""
     from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
     from snake_autonomy.sim.nav_experiment import random_corridor
     world = random_corridor(6)
     cfg = tmp_path / "no_map.yaml"
-    cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{source: none, route: false}}\n")
+    cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{source: none, route: false}}\n"
+                   "sampler: {blocked_wins_depth_m: .inf, back_off_check_m: 0.0}\n")   # round 18's
     m = NavRun(NavRunSpec(world, seed=4, time_limit_s=567.0, keep_frames=False, nav_config=str(cfg))).run().metrics
     print({k: m[k] for k in ("goal_reached", "time_s", "collisions", "min_clearance_m", "outcome")})
     assert m["goal_reached"] and m["collisions"] == 0, m["outcome"]

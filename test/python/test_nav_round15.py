@@ -131,7 +131,9 @@ def test_cobra_goes_round_world_6_instead_of_into_its_funnel(tmp_path, root):
     """Random world 6 (three cylinders, gaps 0.26-0.30 m: narrower than COBRA's 0.5 m checked
     footprint), seed 7, depth. Without the map (round 14's planner) COBRA drove into the funnel,
     stopped, and touched at 103 s (round 14: 75 episodes over seeds 7-9). With config/nav.yaml's map
-    and route it went round the cluster: the goal at 286 s, no contact (~25 s wall)."""
+    and route it went round the cluster: the goal at 286 s, no contact (~25 s wall). The map's priors
+    as round 15 laid them: with map.priors_off_own_floor (on since round 19) the gaps look wider in
+    the map and this run stops in the funnel (31 stops to 400 s, no contact; README round 19)."""
     from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
     committed = NavConfig.from_yaml().map
     assert (committed.source, committed.route) == ("faces", True)
@@ -140,7 +142,9 @@ def test_cobra_goes_round_world_6_instead_of_into_its_funnel(tmp_path, root):
     before = NavRun(NavRunSpec(random_corridor(6), seed=7, time_limit_s=120.0, nav_config=str(off),
                                keep_frames=False)).run()
     assert before.metrics["collisions"] > 0, before.metrics
-    run = NavRun(NavRunSpec(random_corridor(6), seed=7, time_limit_s=400.0, keep_frames=False))
+    own = tmp_path / "round15_map.yaml"
+    own.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{priors_off_own_floor: false}}\n")
+    run = NavRun(NavRunSpec(random_corridor(6), seed=7, time_limit_s=400.0, keep_frames=False, nav_config=str(own)))
     result = run.run()
     assert result.metrics["outcome"] == "success", result.metrics
     # it went round (south of the cluster's lowest cylinder or north of its highest), not between

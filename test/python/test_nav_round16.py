@@ -44,14 +44,16 @@ def test_cobra_world_4_seed_3_backs_off_instead_of_swinging_its_head_back(tmp_pa
     right (kappa -1.5), at 122 s left (+1.5), swinging the head ~0.2 m each way beside a cylinder;
     backing off at 132 s base_link touched obstacle_1. Keeping the side, no contact to 150 s (the
     whole run: goal reached, measured in the 20x5 experiment). Both runs to 150 s: round 15's
-    planner (turn_keeps_side off) and nav.yaml's."""
+    planner (turn_keeps_side off, and round 19's keys at their round-18 values: with round 19's, this
+    run has no contact to 150 s either way) and nav.yaml's."""
     from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
     from snake_autonomy.sim.nav_experiment import random_corridor
     runs = {}
     for on in (False, True):
         cfg = tmp_path / f"keep_{on}.yaml"
         cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\n" +
-                       ("" if on else "sampler: {turn_keeps_side: false}\n"))
+                       ("" if on else "sampler: {turn_keeps_side: false, blocked_wins_depth_m: .inf, "
+                                      "back_off_check_m: 0.0}\nmap: {priors_off_own_floor: false}\n"))
         runs[on] = NavRun(NavRunSpec(random_corridor(4), seed=3, time_limit_s=150.0, nav_config=str(cfg),
                                      keep_frames=False)).run()
     turns = lambda run: [r.reason for r in run.replans if "turn in place (kappa" in r.reason]
