@@ -14,9 +14,10 @@ with add_view (the last few replans' images, each with its camera pose in the cu
 images, not a map: nothing is fused): free when one of them shows it as ground, or, with
 blocked_wins (round 10, config/nav.yaml), when some show it as ground and none as an obstacle (the
 monocular classifier misses a cylinder in one view and not in the next: the miss must not free
-it); with blocked_wins_depth_m (round 19) only an obstacle's face wins so, not the shadow behind it
-(an old view's shadow blocked the floor beside the head that every later view showed). Seen in none, it counts as free when nearer (ahead of the camera, along its heading on the
-floor) than near_field_m, the distance at which the view becomes as wide as the footprint (or the
+it); with blocked_wins_depth_m (round 19) only an obstacle's face wins so, not the shadow behind
+it (an old view's shadow blocked the floor beside the head that every later view showed). Seen in
+none, it counts as free when nearer (ahead of the camera, along its heading on the floor) than
+near_field_m, the distance at which the view becomes as wide as the footprint (or the
 bottom row's, if further): the robot is there or came from there; anywhere else it is not known to
 be free. Without the earlier views a passed obstacle beside the body is free (round 3: the head slid
 along the cylinder it had passed).

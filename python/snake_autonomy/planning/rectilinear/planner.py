@@ -261,7 +261,8 @@ class NavPlanner:
         was). Stepped step_per_m out from the current kappa to each side, up to the gait's range.
         Only the front: further back the model's swing overstates the body's (round 11: guarding
         the whole body held kappa for minutes after a cylinder was passed, 60 % of COBRA's depth
-        runs against 93 %)."""
+        runs against 93 %). Round 19 (swing_guard_tail_m > 0): the stations within it of the tail are
+        kept off what the obstacle map holds (the map only: the views saw that floor long ago)."""
         fp, g, sp = self.follower.params, self.geometry, self.sampler_params
         kappa_now = self.follower.kappa_per_m
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
