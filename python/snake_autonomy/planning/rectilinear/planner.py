@@ -173,7 +173,8 @@ class NavPlanner:
                 self._turning = 1.0 if left > right or (left == right and goal_left) else -1.0
             self._stops += 1
             fp = self.follower.params
-            can_back_off = fp.back_off and self._back_off_clear(T_ground_camera, T_g_world, ground_image)
+            can_back_off = fp.back_off and self._back_off_clear(ground_image, swing_checker, T_ground_camera,
+                                                                T_g_world)
             if can_back_off and (fp.back_off_replans == 0 or self._stops <= fp.back_off_replans):
                 self.follower.back_off_now()
                 return Replan(t_s, tuple(pose), sel, None, "no collision-free arc: back off along the track",
@@ -229,7 +230,7 @@ class NavPlanner:
                              obstacle_depth_m)
         return checker
 
-    def _back_off_clear(self, T_ground_camera, T_g_world, ground) -> bool:
+    def _back_off_clear(self, ground, swing_checker, T_ground_camera, T_g_world) -> bool:
         """Round 19 (sampler.back_off_check_m): may the robot back off? Backing off tail first at a
         constant kappa moves every point of the body along the body's own circle into the place of
         the point behind it (body_model.py); only the tail enters new ground: the body's circle
@@ -238,14 +239,16 @@ class NavPlanner:
         swing_obstacle_depth_m deep, as the swing guard's) or the obstacle map shows an obstacle
         there; floor none shows counts free (the body came that way). Unchecked (True) without the
         body's geometry or with back_off_check_m 0. Round 18: three of the 12-link robot's four new
-        contact runs were the tail backing off into a cylinder the map held."""
+        contact runs were the tail backing off into a cylinder the map held. swing_checker: the
+        replan's swing-guard checker (the same views, depth and map), None: one is built."""
         sp, g = self.sampler_params, self.geometry
         if g is None or sp.back_off_check_m <= 0:
             return True
         kappa = self.follower.kappa_per_m
         tail = arc_poses(kappa, -2.0 * g.half_length_m, STATION_SPACING_M)[-1]
         track = arc_poses(kappa, -sp.back_off_check_m, STATION_SPACING_M, start=tail)[1:]
-        checker = self._checker(T_ground_camera, T_g_world, sp.swing_obstacle_depth_m)
+        checker = swing_checker if swing_checker is not None else self._checker(
+            T_ground_camera, T_g_world, sp.swing_obstacle_depth_m)
         scale = np.full(len(track), checker.width_scale(self._width_with_margins(g)))
         free, known = checker.point_state(checker.footprint_points(track, scale).reshape(-1, 3), ground)
         return not (known & ~free).any()
