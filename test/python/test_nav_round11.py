@@ -20,7 +20,8 @@ def guarded_replan(discs, swing_guard_m=0.2, swing_obstacle_depth_m=0.1):
     """The robot drove straight along x to (0, 0, 0); 0.8 m back its camera saw `discs` (x, y, r in
     that view's ground frame); now it sees open floor. Returns (the replan, the follower)."""
     sp = dataclasses.replace(CFG.sampler, swing_guard_m=swing_guard_m,
-                             swing_obstacle_depth_m=swing_obstacle_depth_m)
+                             swing_obstacle_depth_m=swing_obstacle_depth_m,
+                             reshape_keeps_centroid=False, swing_guard_tail_m=0.0)   # round 11's body model
     follower = RecedingHorizonFollower(CFG.follower)
     p = NavPlanner(K, 0.09, sp, follower, COBRA)
     p.replan(0.0, drawn_mask(discs=discs), T_GC, (-0.8, 0.0, 0.0))
@@ -88,13 +89,16 @@ def test_cobra_passes_the_three_cylinders_of_world_6_without_its_front_links_tou
     link 1 into it). With the swing guard: reached without a contact (measured 470 s). ~30 s wall.
     Without round 15's map and route (with them this run ends stopped in the funnel, no contact), and
     with round 19's blocked_wins_depth_m and back_off_check_m at their round-18 values (with them it
-    runs to the time limit, no contact)."""
+    runs to the time limit, no contact), and round 11's body model (with round 20's option
+    reshape_keeps_centroid it reached with 6 contact episodes; without the map the tail guard does
+    nothing)."""
     from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
     from snake_autonomy.sim.nav_experiment import random_corridor
     world = random_corridor(6)
     cfg = tmp_path / "no_map.yaml"
     cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{source: none, route: false}}\n"
-                   "sampler: {blocked_wins_depth_m: .inf, back_off_check_m: 0.0}\n")   # round 18's
+                   "sampler: {blocked_wins_depth_m: .inf, back_off_check_m: 0.0, reshape_keeps_centroid: false,"
+                   " swing_guard_tail_m: 0.0}\n")   # round 18's
     m = NavRun(NavRunSpec(world, seed=4, time_limit_s=567.0, keep_frames=False, nav_config=str(cfg))).run().metrics
     print({k: m[k] for k in ("goal_reached", "time_s", "collisions", "min_clearance_m", "outcome")})
     assert m["goal_reached"] and m["collisions"] == 0, m["outcome"]

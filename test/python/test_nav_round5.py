@@ -186,7 +186,8 @@ def _walled_planner(**follower_kw):
     fp = dataclasses.replace(CFG.follower, kappa_rate_per_m_s=0.0, **follower_kw)
     # the sweep alone: the wall is nearer than a turn's crawl (round 12's turn_free_m, test_nav_round12)
     # round 5's rule: the other side when the turning side cannot be swept (round 16's turn_keeps_side off)
-    sp = dataclasses.replace(CFG.sampler, turn_free_m=0.0, turn_keeps_side=False)
+    # and round 5's reshaping about the middle (round 20's centroid moves the ends a third less: test_nav_round20)
+    sp = dataclasses.replace(CFG.sampler, turn_free_m=0.0, turn_keeps_side=False, reshape_keeps_centroid=False)
     return NavPlanner(K, 0.09, sp, RecedingHorizonFollower(fp), COBRA)
 
 

@@ -94,7 +94,9 @@ def _truth_run(tmp_path, root, stride_px):
     from snake_autonomy.sim.nav_experiment import random_corridor
     cfg = tmp_path / f"nav_{stride_px}.yaml"
     cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nclassifier: {{stride_px: {stride_px}}}\n"
-                   "sampler: {blocked_wins: false}\nmap: {source: none, route: false}\n")   # round 8's planner
+                   "sampler: {blocked_wins: false, reshape_keeps_centroid: false, swing_guard_tail_m: 0.0}\n"
+                   "map: {source: none, route: false}\n")   # round 8's planner (with round 20's reshape_keeps_centroid
+                                                           # the tiles run reaches without a contact too)
     m = NavRun(NavRunSpec(random_corridor(0), seed=1, perception="truth", time_limit_s=300.0,
                           nav_config=str(cfg), keep_frames=False)).run().metrics
     print({k: m[k] for k in ("goal_reached", "time_s", "collisions", "outcome", "stops_no_free_arc")})

@@ -1,5 +1,6 @@
 """One turn of the rectilinear gait on open floor, and how far the body strays from the head's track
-(issue 13 round 9; bench/nav_follow_the_leader prints it, test_nav_round9 checks it).
+(issue 13 round 9; bench/nav_follow_the_leader prints it, test_nav_round9 checks it). reshape_step
+(round 20): where each frame of the body goes when the curvature steps (test_nav_round20 checks it).
 
 The run: straight for start_s, kappa for turn_s, straight for 60 s; the plant with nav runs' flat
 belly (the robot's nav config plant:), the gait through the C++ driver (its gaits.forward, e.g.
@@ -82,3 +83,46 @@ def turn_sweep(steering: str, kappa_per_m: float = 1.5, turn_s: float = 90.0, ro
     c, s = math.cos(head[i0, 3]), math.sin(head[i0, 3])
     side = [-s * (head[i0 + n, 1] - head[i0, 1]) + c * (head[i0 + n, 2] - head[i0, 2]) for n in (100, 200)]
     return TurnSweep(steering, math.degrees(head[-1, 3] - head[i0, 3]), (side[0], side[1]), worst)
+
+
+@dataclass
+class ReshapeStep:
+    kappa_per_m: float
+    lateral_m: np.ndarray        # each kinematic frame's sideways move (head first; + = left, the body's
+                                 # frame before the step)
+    centroid_m: float            # the frames' centroid's sideways move
+
+
+def reshape_step(kappa_per_m: float, robot_name: str = "cobra", seed: int = 0, settle_s: float = 20.0,
+                 kappa_slew_per_m_s: float = 1.0) -> ReshapeStep:
+    """Uniform curvature through the C++ driver on open floor: straight for settle_s, then kappa_per_m
+    (slewed as nav runs); the frames' sideways moves from the step to 2.5 s after kappa is reached (the
+    crawl in that time is along the body, mostly forward)."""
+    from .. import _core
+    from ..paths import config_path
+    from ..planning.rectilinear.cli import robot_yaml
+    from ..planning.rectilinear.planner import ground_frame
+    from .config import SimConfig
+    from .gait_driver import PlantGaitDriver
+    from .scales import ScaledPlant
+    robot = _core.RobotModel.from_yaml(str(robot_yaml(robot_name)))
+    nav = NavConfig.from_yaml(nav_config_path(robot_name))
+    sim = SimConfig.from_yaml(str(config_path("sim.yaml"))).with_flat_belly(nav.plant.flat_belly_fraction)
+    plant = ScaledPlant(robot, sim.draw(seed=seed, num_joints=robot.num_joints), (0.0, 0.0, 0.0))
+    drive = PlantGaitDriver(robot, plant)
+    t, dt, kappa = 0.0, 0.01, 0.0
+    t_end = settle_s + abs(kappa_per_m) / kappa_slew_per_m_s + 2.5
+    before = None
+    while t < t_end:
+        if before is None and t >= settle_s:
+            before = plant.frame_positions()[:, :2].copy(), ground_frame(plant.frame_transform("base_link"))[2]
+        goal = kappa_per_m if t >= settle_s else 0.0
+        kappa += max(-kappa_slew_per_m_s * dt, min(kappa_slew_per_m_s * dt, goal - kappa))
+        if drive.kappa_per_m != kappa:
+            drive.command(nav.gaits.forward, kappa_per_m=kappa)
+        drive.step(t, dt)
+        t += dt
+        plant.step_to(t)
+    (a, th), b = before, plant.frame_positions()[:, :2]
+    n = np.array([-math.sin(th), math.cos(th)])
+    return ReshapeStep(kappa_per_m, (b - a) @ n, float((b.mean(axis=0) - a.mean(axis=0)) @ n))

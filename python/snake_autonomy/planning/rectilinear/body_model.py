@@ -19,6 +19,13 @@ obstacles beside a head-only arc). So the unicycle of Chang et al. is the body's
 
 The paper's robot (12 links, 51 mm head) is short enough for the head-only model; the model here
 reduces to it for a body of length 0 (half_length_m 0).
+
+Round 20 (test_nav_round20.py, measured with the gait map): on COBRA the first premise does not hold
+at small curvatures. Below about 0.35-0.4 /m the body does not turn at all (omega 0.0002 rad/s at
+0.35 /m against the line's 0.0032); it translates along its middle's tangent, kappa L/2 off the
+head's heading, so the head and the body side-step instead of following the circle (the crawl
+guard, planner._crawl_bounds, predicts that; off). And reshaping keeps the body's centroid, not its
+middle: body_poses(keep_centroid=True), sampler.reshape_keeps_centroid (an option, off).
 Poses are (x_m, y_m, theta_rad) on the floor; arc lengths s in metres along the arc.
 """
 from dataclasses import dataclass
@@ -67,13 +74,26 @@ def middle_path(middle, curvature_per_m: float, length_m: float, spacing_m: floa
 
 
 def body_poses(middle, kappa_now: float, curvature_per_m: float, half_length_m: float,
-               spacing_m: float) -> List[np.ndarray]:
+               spacing_m: float, keep_centroid: bool = False) -> List[np.ndarray]:
     """The body (tail to head, poses along it) in each shape from the current kappa to the new
-    curvature (RESHAPE_FRACTIONS), all about the middle: what reshaping sweeps."""
-    out = []
-    for f in RESHAPE_FRACTIONS:
-        k = kappa_now + f * (curvature_per_m - kappa_now)
+    curvature (RESHAPE_FRACTIONS), all about the middle: what reshaping sweeps. keep_centroid (round
+    20, sampler.reshape_keeps_centroid): each shape is moved so that the body's centroid stays where
+    the current shape's is (the middle's heading kept), as measured on COBRA: bending from straight to
+    0.5 / 1 /m moved the centroid 0.009 / 0.029 m, the frames at the middle 0.04 / 0.075 m to the
+    outside, the head 0.077 / 0.172 m and the tail 0.104 / 0.197 m to the inside (the middle-fixed
+    model: 0, and 0.143 / 0.285 m at both ends; the centroid-fixed one: 0.048 / 0.095 m and 0.095 /
+    0.19 m). A uniform arc's centroid lies (1 - sin(u) / u) / kappa towards its centre from the
+    middle, u = kappa L/2: kappa L^2/24 for small u."""
+    def shape(k):
         tail = arc_poses(k, -half_length_m, spacing_m, start=middle)[::-1]
         head = arc_poses(k, half_length_m, spacing_m, start=middle)[1:]
-        out.append(np.vstack([tail, head]))
+        return np.vstack([tail, head])
+
+    anchor = shape(kappa_now)[:, :2].mean(axis=0) if keep_centroid else None
+    out = []
+    for f in RESHAPE_FRACTIONS:
+        poses = shape(kappa_now + f * (curvature_per_m - kappa_now))
+        if keep_centroid:
+            poses[:, :2] += anchor - poses[:, :2].mean(axis=0)
+        out.append(poses)
     return out

@@ -147,6 +147,13 @@ class ObstacleMap:
             self._prepared = True
         return self._geom
 
+    def distance(self, xy: np.ndarray) -> np.ndarray:
+        """(M, 2) world points -> (M,) metres to the nearest obstacle of the map (0 inside; inf: none)."""
+        xy = np.asarray(xy, float).reshape(-1, 2)
+        if self.geometry().is_empty:
+            return np.full(len(xy), np.inf)
+        return shapely.distance(self.geometry(), shapely.points(xy))
+
     def blocked(self, xy: np.ndarray) -> np.ndarray:
         """(M, 2) world points -> (M,) bool: inside an obstacle of the map."""
         xy = np.asarray(xy, float).reshape(-1, 2)

@@ -203,9 +203,14 @@ class NavPlanner:
         reason = f"arc c {arc.curvature_per_m:+.2f}/m, free {arc.free_m:.2f} m"
         if self.body is None:
             bounds = self._swing_bounds(swing_checker, ground_image) if guarded else None
-            self.follower.set_path(path, arc.curvature_per_m, bounds)
+            crawl = bounds
+            if bounds is not None and sp.crawl_guard_m > 0:
+                crawl = self._crawl_bounds(bounds, T_world_g)
+            self.follower.set_path(path, arc.curvature_per_m, crawl)
             if bounds is not None:
                 reason += f", kappa {bounds[0]:+.2f}..{bounds[1]:+.2f} /m (swing guard)"
+            if crawl != bounds:
+                reason += f", {crawl[0]:+.2f}..{crawl[1]:+.2f} /m (crawl guard)"
         else:
             mid = middle_path(arc.middle, arc.curvature_per_m, arc.free_m, self.sampler_params.spacing_m)
             self.follower.set_path(to_world(mid, pose), arc.curvature_per_m)
@@ -265,12 +270,16 @@ class NavPlanner:
         Only the front: further back the model's swing overstates the body's (round 11: guarding
         the whole body held kappa for minutes after a cylinder was passed, 60 % of COBRA's depth
         runs against 93 %). Round 19 (swing_guard_tail_m > 0): the stations within it of the tail are
-        kept off what the obstacle map holds (the map only: the views saw that floor long ago)."""
+        kept off what the obstacle map holds (the map only: the views saw that floor long ago).
+        Round 20 (sampler.reshape_keeps_centroid): the shapes keep the body's centroid, so the middle
+        moves too (to the outside of the bend): swing_guard_tail_m 1.5 m guards all of COBRA's body
+        behind the front against the map (measured, not kept: README round 20)."""
         fp, g, sp = self.follower.params, self.geometry, self.sampler_params
         kappa_now = self.follower.kappa_per_m
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
         reach = 0.5 * g.width_m + sp.lateral_margin_m
-        now = body_poses(middle, kappa_now, kappa_now, g.half_length_m, STATION_SPACING_M)[-1][:, :2]
+        now = body_poses(middle, kappa_now, kappa_now, g.half_length_m, STATION_SPACING_M,
+                         sp.reshape_keeps_centroid)[-1][:, :2]
         steps = np.hypot(*np.diff(now, axis=0).T)                       # tail to head
         from_head = np.concatenate([np.cumsum(steps[::-1])[::-1], [0.0]])
         front = from_head <= sp.swing_guard_m + 1e-9
@@ -285,7 +294,8 @@ class NavPlanner:
                 k = max(-fp.kappa_max_per_m, min(fp.kappa_max_per_m, kappa_now + side * n * step_per_m))
                 if side * (k - allowed) <= 1e-9:
                     break                                               # at the gait's range
-                new = body_poses(middle, kappa_now, k, g.half_length_m, STATION_SPACING_M)[-1][:, :2]
+                new = body_poses(middle, kappa_now, k, g.half_length_m, STATION_SPACING_M,
+                                 sp.reshape_keeps_centroid)[-1][:, :2]
                 d = new - now
                 dist = np.hypot(d[:, 0], d[:, 1])
                 moving = front & (dist > 1e-3)
@@ -300,6 +310,62 @@ class NavPlanner:
                 allowed, n = k, n + 1
             bounds.append(allowed)
         return bounds[0], bounds[1]
+
+    def _crawl_bounds(self, bounds: Tuple[float, float], T_world_g: np.ndarray,
+                      step_per_m: float = 0.25) -> Tuple[float, float]:
+        """Round 20 (sampler.crawl_guard_m): the swing guard's bounds narrowed to the curvatures whose
+        crawl keeps the body off the obstacle map. Measured (test_nav_round20.py): COBRA's bent body
+        does not crawl along its own circle; it moves with its middle along the middle's tangent
+        (kappa L/2 off the head's heading) and turns only beyond about 0.35 /m. So each curvature
+        (the swing guard's steps, within its bounds) is predicted: the body in its new shape (about
+        the middle, body_model.body_poses) carried rigidly with the middle along crawl_guard_m of the
+        middle's path (curvature omega(kappa) / speed, omega 0 within crawl_dead_band_per_m). A
+        station (beyond the swing guard's front swing_guard_m, whose way the arcs check) may not come
+        nearer the map's obstacles than half the body's width + crawl_margin_m, or than it already is
+        when it is nearer. If the current kappa fails, the nearest that passes is forced (the bounds
+        close round it and its passing neighbours); if none passes, the swing guard's bounds stand."""
+        sp, g, fp = self.sampler_params, self.geometry, self.follower.params
+        omap = self.obstacle_map
+        if omap is None or omap.geometry().is_empty:
+            return bounds
+        lo, hi = bounds
+        kappa_now = self.follower.kappa_per_m
+        n_lo = math.ceil((lo - kappa_now) / step_per_m - 1e-9)
+        n_hi = math.floor((hi - kappa_now) / step_per_m + 1e-9)
+        ks = sorted({lo, hi, *(kappa_now + n * step_per_m for n in range(n_lo, n_hi + 1))})
+        middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
+        need = 0.5 * g.width_m + sp.crawl_margin_m
+        c0, s0 = math.cos(middle[2]), math.sin(middle[2])
+
+        def clear(k: float) -> bool:
+            body = body_poses(middle, kappa_now, k, g.half_length_m, STATION_SPACING_M,
+                              sp.reshape_keeps_centroid)[-1][:, :2]
+            steps = np.hypot(*np.diff(body, axis=0).T)                      # tail to head
+            from_head = np.concatenate([np.cumsum(steps[::-1])[::-1], [0.0]])
+            body = body[from_head > sp.swing_guard_m + 1e-9]
+            d = body - middle[:2]
+            rel = np.column_stack([c0 * d[:, 0] + s0 * d[:, 1], -s0 * d[:, 0] + c0 * d[:, 1]])
+            turning = math.copysign(max(0.0, abs(k) - sp.crawl_dead_band_per_m), k)
+            path = arc_poses(fp.omega(turning) / fp.speed_m_s, sp.crawl_guard_m, 0.05, start=middle)
+            c, s = np.cos(path[:, 2])[:, None], np.sin(path[:, 2])[:, None]
+            xs = path[:, 0:1] + c * rel[None, :, 0] - s * rel[None, :, 1]      # (steps, stations)
+            ys = path[:, 1:2] + s * rel[None, :, 0] + c * rel[None, :, 1]
+            dist = omap.distance(world_xy(T_world_g, np.column_stack([xs.ravel(), ys.ravel()])))
+            dist = dist.reshape(xs.shape)
+            return bool((dist[1:].min(axis=0) >= np.minimum(need, dist[0]) - 1e-3).all())
+
+        ok = [clear(k) for k in ks]
+        now = min(range(len(ks)), key=lambda i: abs(ks[i] - kappa_now))
+        passing = [i for i in range(len(ks)) if ok[i]]
+        if not passing:
+            return bounds
+        i = now if ok[now] else min(passing, key=lambda j: (abs(ks[j] - kappa_now), abs(ks[j])))
+        a = b = i
+        while a > 0 and ok[a - 1]:
+            a -= 1
+        while b < len(ks) - 1 and ok[b + 1]:
+            b += 1
+        return ks[a], ks[b]
 
     def _free_turn(self, checker, ground, sel: Selection, crawl_m: float,
                    both_sides: bool = False) -> Optional[float]:
@@ -326,7 +392,8 @@ class NavPlanner:
                 if tightest is None or tightest.free_m < crawl_m:
                     continue
             for k in (fp.kappa_turn_per_m, 0.5 * fp.kappa_turn_per_m):
-                shapes = np.vstack(body_poses(middle, kappa_now, side * k, g.half_length_m, STATION_SPACING_M))
+                shapes = np.vstack(body_poses(middle, kappa_now, side * k, g.half_length_m, STATION_SPACING_M,
+                                              self.sampler_params.reshape_keeps_centroid))
                 blocked, unknown = checker.pose_state(shapes, ground, np.full(len(shapes), scale))
                 if not (blocked | unknown).any():
                     return side * k

@@ -107,6 +107,20 @@ class SamplerParams:
     back_off_check_m: float = 0.0         # round 19: > 0: backing off needs the tail's track continued this
                                           # far backwards clear of what the views and the obstacle map show
                                           # (planner._back_off_clear); else a turn in place. 0: unchecked
+    crawl_guard_m: float = 0.0            # round 20: > 0: the swing guard also predicts the crawl: the body
+                                          # in its new shape moves rigidly with its middle, which goes along
+                                          # its own tangent this far turning at the measured rate (none
+                                          # within crawl_dead_band_per_m); a curvature that crawls the body
+                                          # into what the obstacle map holds is not allowed, and when the
+                                          # current one does, the nearest that does not is forced
+                                          # (planner._crawl_clear). 0: off
+    crawl_dead_band_per_m: float = 0.0    # round 20: the body turns only beyond this curvature (COBRA: not
+                                          # below about 0.35-0.4 /m, test_nav_round20.py); beyond it, at
+                                          # follower omega_per_kappa per 1/m above it
+    crawl_margin_m: float = 0.02          # round 20: the crawl guard's clearance beyond half the body's width
+    reshape_keeps_centroid: bool = False  # round 20: the body reshapes about its centroid (measured on COBRA),
+                                          # not its middle (body_model.body_poses): the swing guard, the
+                                          # crawl guard and the turn in place. False: about the middle
 
     def validate(self) -> List[str]:
         p = []
@@ -118,10 +132,10 @@ class SamplerParams:
         for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "curvature_step_per_m", "known_free_m", "resume_free_m",
                     "footprint_taper_m",
                     "switch_cost_m", "swing_guard_m", "turn_free_m", "near_field_max_m", "back_off_check_m", "swing_guard_tail_m",
-                    "blocked_wins_depth_m"):
+                    "blocked_wins_depth_m", "crawl_guard_m", "crawl_dead_band_per_m", "crawl_margin_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
-        for key in ("body_model", "blocked_wins", "turn_keeps_side", "goal_disc"):
+        for key in ("body_model", "blocked_wins", "turn_keeps_side", "goal_disc", "reshape_keeps_centroid"):
             if not isinstance(getattr(self, key), bool):
                 p.append(f"{key}: must be true or false, got {getattr(self, key)!r}")
         if not isinstance(self.earlier_views, int) or self.earlier_views < 0:
@@ -262,7 +276,8 @@ class TrajectorySampler:
         groups, along, meta = [], [], []
         for c in self.curvatures_around(kappa_now):
             poses, s = head_path(middle, float(c), geometry.half_length_m, p.horizon_m, p.spacing_m)
-            shapes = body_poses(middle, kappa_now, float(c), geometry.half_length_m, 2.0 * p.spacing_m)
+            shapes = body_poses(middle, kappa_now, float(c), geometry.half_length_m, 2.0 * p.spacing_m,
+                                p.reshape_keeps_centroid)
             groups += [poses] + shapes
             along += [s] + [np.zeros(len(b)) for b in shapes]     # the body: known free everywhere
             meta.append((float(c), poses, s, len(shapes)))
