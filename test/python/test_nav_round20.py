@@ -172,6 +172,18 @@ def test_reshape_keeps_centroid_is_validated():
         NavConfig.from_dict({"sampler": {"reshape_keeps_centroid": "yes"}})
 
 
+def test_round_20_settings_in_the_nav_configs():
+    """nav.yaml (COBRA): the tail guard on (round 19's 12-link setting), measured at 20 worlds x 5
+    seeds (README round 20); centroid reshaping and the crawl guard are options, off: each fixed some
+    runs and touched in others."""
+    from snake_autonomy.planning.rectilinear.config import nav_config_path
+    cobra, chang = NavConfig.from_yaml(), NavConfig.from_yaml(nav_config_path("chang_rectilinear"))
+    assert not cobra.sampler.reshape_keeps_centroid and not chang.sampler.reshape_keeps_centroid
+    assert cobra.sampler.swing_guard_tail_m == chang.sampler.swing_guard_tail_m == pytest.approx(0.2)
+    assert cobra.sampler.crawl_guard_m == chang.sampler.crawl_guard_m == 0.0
+    assert cobra.sampler.crawl_dead_band_per_m == pytest.approx(0.35)
+
+
 def test_with_the_centroid_kept_the_map_guard_covers_the_middle():
     """Reshaping about the centroid moves the middle (1 - sin(u)/u)/kappa ~ 0.095 m per 1/m to the
     outside of the bend; the swing guard watched the front 0.2 m (views) and, round 19, the last
