@@ -84,6 +84,12 @@ class Replan:
     route_world: Optional[np.ndarray] = None   # map.route: the route to the goal, world frame
 
 
+def _from_head(stations_xy: np.ndarray) -> np.ndarray:
+    """(N, 2) body stations, tail to head -> (N,) their distance from the head along the body."""
+    steps = np.hypot(*np.diff(stations_xy, axis=0).T)
+    return np.concatenate([np.cumsum(steps[::-1])[::-1], [0.0]])
+
+
 class NavPlanner:
     def __init__(self, intrinsics, head_width_m: float, sampler_params, follower: RecedingHorizonFollower,
                  body: Optional[BodyGeometry] = None, map_params: Optional[MapParams] = None):
@@ -280,8 +286,7 @@ class NavPlanner:
         reach = 0.5 * g.width_m + sp.lateral_margin_m
         now = body_poses(middle, kappa_now, kappa_now, g.half_length_m, STATION_SPACING_M,
                          sp.reshape_keeps_centroid)[-1][:, :2]
-        steps = np.hypot(*np.diff(now, axis=0).T)                       # tail to head
-        from_head = np.concatenate([np.cumsum(steps[::-1])[::-1], [0.0]])
+        from_head = _from_head(now)
         front = from_head <= sp.swing_guard_m + 1e-9
         # round 19 (swing_guard_tail_m): the tail's last metres swing as far as the head; against the
         # obstacle map only (the views show the floor beside the tail long ago, with their shadows)
@@ -340,9 +345,7 @@ class NavPlanner:
         def clear(k: float) -> bool:
             body = body_poses(middle, kappa_now, k, g.half_length_m, STATION_SPACING_M,
                               sp.reshape_keeps_centroid)[-1][:, :2]
-            steps = np.hypot(*np.diff(body, axis=0).T)                      # tail to head
-            from_head = np.concatenate([np.cumsum(steps[::-1])[::-1], [0.0]])
-            body = body[from_head > sp.swing_guard_m + 1e-9]
+            body = body[_from_head(body) > sp.swing_guard_m + 1e-9]
             d = body - middle[:2]
             rel = np.column_stack([c0 * d[:, 0] + s0 * d[:, 1], -s0 * d[:, 0] + c0 * d[:, 1]])
             turning = math.copysign(max(0.0, abs(k) - sp.crawl_dead_band_per_m), k)

@@ -113,7 +113,7 @@ class SamplerParams:
                                           # within crawl_dead_band_per_m); a curvature that crawls the body
                                           # into what the obstacle map holds is not allowed, and when the
                                           # current one does, the nearest that does not is forced
-                                          # (planner._crawl_clear). 0: off
+                                          # (planner._crawl_bounds). 0: off
     crawl_dead_band_per_m: float = 0.0    # round 20: the body turns only beyond this curvature (COBRA: not
                                           # below about 0.35-0.4 /m, test_nav_round20.py); beyond it, at
                                           # follower omega_per_kappa per 1/m above it
