@@ -71,21 +71,27 @@ def test_at_a_small_curvature_the_body_moves_along_its_middles_tangent(points):
     assert math.hypot(p["xi_x_m_s"], p["xi_y_m_s"]) > 0.006
 
 
-def planner_with(obstacle, kappa_per_m, guard_m=0.2, dead_band=0.35):
-    """COBRA at the origin heading +x, bent to kappa_per_m, one disc (x, y, r) in the obstacle map."""
+def planner_with(obstacle, kappa_per_m, guard_m=0.2, dead_band=0.35, keep_centroid=False, tail_m=0.0):
+    """COBRA at the origin heading +x, bent to kappa_per_m, one disc (x, y, r) in the obstacle map;
+    by default the middle kept and no tail guard, as the crawl guard's single runs were measured."""
     sp = dataclasses.replace(CFG.sampler, swing_guard_m=0.2, crawl_guard_m=guard_m,
-                             crawl_dead_band_per_m=dead_band, reshape_keeps_centroid=False,
-                             swing_guard_tail_m=0.0)          # as its single runs were measured
+                             crawl_dead_band_per_m=dead_band, reshape_keeps_centroid=keep_centroid,
+                             swing_guard_tail_m=tail_m)
     p = NavPlanner(K, 0.09, sp, RecedingHorizonFollower(CFG.follower), COBRA)
     p.obstacle_map = ObstacleMap(Point(obstacle[:2]).buffer(obstacle[2], 32))
     p.follower._kappa = kappa_per_m
     return p
 
 
+def swing_bounds(p):
+    """The swing guard's bounds of planner p in open floor at the origin."""
+    return p._swing_bounds(p._checker(T_GC, np.eye(4), p.sampler_params.swing_obstacle_depth_m), drawn_mask())
+
+
 def crawl_bounds(obstacle, kappa_per_m, **kw):
     """(the swing guard's bounds, the crawl guard's)."""
     p = planner_with(obstacle, kappa_per_m, **kw)
-    swing = p._swing_bounds(p._checker(T_GC, np.eye(4), p.sampler_params.swing_obstacle_depth_m), drawn_mask())
+    swing = swing_bounds(p)
     return swing, p._crawl_bounds(swing, np.eye(4))
 
 
@@ -194,10 +200,8 @@ def test_with_the_centroid_kept_the_map_guard_covers_the_middle():
     (the whole body behind the front; measured on 100 runs, not kept: README round 20); with 0.2 m or
     with the middle kept it is not."""
     def bounds(keep, tail_m):
-        sp = dataclasses.replace(CFG.sampler, swing_guard_tail_m=tail_m, reshape_keeps_centroid=keep)
-        p = NavPlanner(K, 0.09, sp, RecedingHorizonFollower(CFG.follower), COBRA)
-        p.obstacle_map = ObstacleMap(Point(-HALF_LENGTH_M, 0.2).buffer(0.05, 32))
-        return p._swing_bounds(p._checker(T_GC, np.eye(4), sp.swing_obstacle_depth_m), drawn_mask())
+        return swing_bounds(planner_with((-HALF_LENGTH_M, 0.2, 0.05), 0.0, guard_m=0.0, keep_centroid=keep,
+                                         tail_m=tail_m))
 
     kmax = CFG.follower.kappa_max_per_m
     assert bounds(True, 1.5) == pytest.approx((-0.25, kmax))

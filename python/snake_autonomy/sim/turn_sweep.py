@@ -27,24 +27,29 @@ class TurnSweep:
                                          # head's path so far and the straight line behind the start)
 
 
-def turn_sweep(steering: str, kappa_per_m: float = 1.5, turn_s: float = 90.0, robot_name: str = "cobra",
-               seed: int = 0, gait_source: str = "driver", start_s: float = 30.0,
-               kappa_slew_per_m_s: float = 1.0) -> TurnSweep:
+def _open_floor(robot_name: str, seed: int):
+    """(robot model, its nav config, a plant on open floor with nav runs' flat belly) at the origin."""
     from .. import _core
     from ..paths import config_path
     from ..planning.rectilinear.cli import robot_yaml
-    from ..planning.rectilinear.follow_the_leader import FollowTheLeader
-    from ..planning.rectilinear.planner import ground_frame
     from .config import SimConfig
     from .scales import ScaledPlant
+    robot = _core.RobotModel.from_yaml(str(robot_yaml(robot_name)))
+    nav = NavConfig.from_yaml(nav_config_path(robot_name))       # the robot's gaits and plant options
+    sim = SimConfig.from_yaml(str(config_path("sim.yaml"))).with_flat_belly(nav.plant.flat_belly_fraction)
+    return robot, nav, ScaledPlant(robot, sim.draw(seed=seed, num_joints=robot.num_joints), (0.0, 0.0, 0.0))
+
+
+def turn_sweep(steering: str, kappa_per_m: float = 1.5, turn_s: float = 90.0, robot_name: str = "cobra",
+               seed: int = 0, gait_source: str = "driver", start_s: float = 30.0,
+               kappa_slew_per_m_s: float = 1.0) -> TurnSweep:
+    from ..planning.rectilinear.follow_the_leader import FollowTheLeader
+    from ..planning.rectilinear.planner import ground_frame
     if steering not in STEERING:
         raise ValueError(f"steering: expected one of {', '.join(STEERING)}, got {steering!r}")
     if gait_source not in ("driver", "reference"):
         raise ValueError(f"gait_source: expected driver or reference, got {gait_source!r}")
-    robot = _core.RobotModel.from_yaml(str(robot_yaml(robot_name)))
-    nav = NavConfig.from_yaml(nav_config_path(robot_name))       # the robot's gaits and plant options
-    sim = SimConfig.from_yaml(str(config_path("sim.yaml"))).with_flat_belly(nav.plant.flat_belly_fraction)
-    plant = ScaledPlant(robot, sim.draw(seed=seed, num_joints=robot.num_joints), (0.0, 0.0, 0.0))
+    robot, nav, plant = _open_floor(robot_name, seed)
     ftl = FollowTheLeader.of_robot(robot) if steering == "follow_the_leader" else None
     drive = None
     if gait_source == "driver":
@@ -98,17 +103,9 @@ def reshape_step(kappa_per_m: float, robot_name: str = "cobra", seed: int = 0, s
     """Uniform curvature through the C++ driver on open floor: straight for settle_s, then kappa_per_m
     (slewed as nav runs); the frames' sideways moves from the step to 2.5 s after kappa is reached (the
     crawl in that time is along the body, mostly forward)."""
-    from .. import _core
-    from ..paths import config_path
-    from ..planning.rectilinear.cli import robot_yaml
     from ..planning.rectilinear.planner import ground_frame
-    from .config import SimConfig
     from .gait_driver import PlantGaitDriver
-    from .scales import ScaledPlant
-    robot = _core.RobotModel.from_yaml(str(robot_yaml(robot_name)))
-    nav = NavConfig.from_yaml(nav_config_path(robot_name))
-    sim = SimConfig.from_yaml(str(config_path("sim.yaml"))).with_flat_belly(nav.plant.flat_belly_fraction)
-    plant = ScaledPlant(robot, sim.draw(seed=seed, num_joints=robot.num_joints), (0.0, 0.0, 0.0))
+    robot, nav, plant = _open_floor(robot_name, seed)
     drive = PlantGaitDriver(robot, plant)
     t, dt, kappa = 0.0, 0.01, 0.0
     t_end = settle_s + abs(kappa_per_m) / kappa_slew_per_m_s + 2.5
