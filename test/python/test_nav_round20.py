@@ -73,10 +73,11 @@ def test_at_a_small_curvature_the_body_moves_along_its_middles_tangent(points):
 
 def planner_with(obstacle, kappa_per_m, guard_m=0.2, dead_band=0.35, keep_centroid=False, tail_m=0.0):
     """COBRA at the origin heading +x, bent to kappa_per_m, one disc (x, y, r) in the obstacle map;
-    by default the middle kept and no tail guard, as the crawl guard's single runs were measured."""
+    by default the middle kept and no tail or body guard (round 21), as the crawl guard's single runs
+    were measured."""
     sp = dataclasses.replace(CFG.sampler, swing_guard_m=0.2, crawl_guard_m=guard_m,
                              crawl_dead_band_per_m=dead_band, reshape_keeps_centroid=keep_centroid,
-                             swing_guard_tail_m=tail_m)
+                             swing_guard_tail_m=tail_m, swing_guard_body=False, crawl_blocked_backs_off=False)
     p = NavPlanner(K, 0.09, sp, RecedingHorizonFollower(CFG.follower), COBRA)
     p.obstacle_map = ObstacleMap(Point(obstacle[:2]).buffer(obstacle[2], 32))
     p.follower._kappa = kappa_per_m
@@ -207,3 +208,58 @@ def test_with_the_centroid_kept_the_map_guard_covers_the_middle():
     assert bounds(True, 1.5) == pytest.approx((-0.25, kmax))
     assert bounds(True, 0.2) == pytest.approx((-kmax, kmax))
     assert bounds(False, 1.5) == pytest.approx((-kmax, kmax))
+
+
+def body_guarded(obstacle, kappa_per_m, on=True):
+    """The swing guard's bounds with the centroid kept, the tail guard 0.2 m and round 21's body guard."""
+    p = planner_with(obstacle, kappa_per_m, guard_m=0.0, keep_centroid=True, tail_m=0.2)
+    p.sampler_params = dataclasses.replace(p.sampler_params, swing_guard_body=on)
+    return p._swing_bounds(p._checker(T_GC, np.eye(4), p.sampler_params.swing_obstacle_depth_m), drawn_mask(),
+                           np.eye(4))
+
+
+def test_round_21_body_guard_keeps_the_middle_off_the_map():
+    """Round 21 (sampler.swing_guard_body): the stations between the front and the tail guard keep
+    their distance to the map's obstacles (at least the 0.125 m reach, or what they have now). The
+    disc of the test above, 0.15 m left of the middle: bending right is bounded at -0.25 /m (the
+    middle 0.024 m to the left keeps 0.126 m; at -0.5 /m 0.103 m); the guard off, it is not."""
+    kmax = CFG.follower.kappa_max_per_m
+    assert body_guarded((-HALF_LENGTH_M, 0.2, 0.05), 0.0) == pytest.approx((-0.25, kmax))
+    assert body_guarded((-HALF_LENGTH_M, 0.2, 0.05), 0.0, on=False) == pytest.approx((-kmax, kmax))
+    # the middle already 0.1 m off (nearer than the reach): it may not come nearer, it may go away
+    assert body_guarded((-HALF_LENGTH_M, 0.15, 0.05), 0.0) == pytest.approx((0.0, kmax))
+    # mirrored, bent left already: the guard counts from the current shape
+    lo, hi = body_guarded((-HALF_LENGTH_M, -0.15, 0.05), 0.5)
+    assert lo == pytest.approx(-kmax) and hi < kmax
+
+
+def test_round_21_body_guard_needs_the_world_frame_and_is_validated():
+    p = planner_with((-HALF_LENGTH_M, 0.15, 0.05), 0.0, guard_m=0.0, keep_centroid=True, tail_m=0.2)
+    p.sampler_params = dataclasses.replace(p.sampler_params, swing_guard_body=True)
+    assert swing_bounds(p) == pytest.approx((-CFG.follower.kappa_max_per_m, CFG.follower.kappa_max_per_m))
+    with pytest.raises(NavConfigError, match=r"sampler.swing_guard_body: must be true or false, got 1"):
+        NavConfig.from_dict({"sampler": {"swing_guard_body": 1}})
+
+
+def test_round_21_when_every_allowed_curvature_crawls_into_the_map_the_robot_backs_off():
+    """Round 21 (sampler.crawl_blocked_backs_off). Mono world 4 seed 8 (round 21's trace): the swing
+    guard pinned kappa at +0.36 /m for 30 s (the head beside a cylinder on its right, the middle's
+    swing to the right when bending further left), so the crawl guard had nothing to choose and the
+    body side-stepped into the cylinder. The crawl guard now says so (None) and the replan backs off
+    (the reverse gait side-steps the other way) when the tail's track is clear."""
+    p = planner_with((-0.5, -0.11, 0.08), 0.36)
+    assert p._crawl_bounds((0.36, 0.36), np.eye(4)) is None
+    assert planner_with((-0.5, -0.8, 0.08), 0.36)._crawl_bounds((0.36, 0.36), np.eye(4)) == (0.36, 0.36)
+
+    def replan(backs_off):
+        p = planner_with((-0.5, -0.11, 0.08), 0.36)
+        p.sampler_params = dataclasses.replace(p.sampler_params, crawl_blocked_backs_off=backs_off)
+        p.follower.params = dataclasses.replace(p.follower.params, back_off=True)
+        p._swing_bounds = lambda *a, **k: (0.36, 0.36)          # pinned, as in the trace
+        return p, p.replan(0.0, drawn_mask(), T_GC, (0.0, 0.0, 0.0), None)
+
+    p, r = replan(True)
+    assert r.path_world is None and p.follower.mode == "back_off", r.reason
+    assert "all crawl into the map (crawl guard): back off" in r.reason
+    p, r = replan(False)
+    assert r.path_world is not None and p.follower._bounds == pytest.approx((0.36, 0.36))

@@ -208,10 +208,18 @@ class NavPlanner:
         path = to_world(arc.poses[keep], pose)
         reason = f"arc c {arc.curvature_per_m:+.2f}/m, free {arc.free_m:.2f} m"
         if self.body is None:
-            bounds = self._swing_bounds(swing_checker, ground_image) if guarded else None
+            bounds = self._swing_bounds(swing_checker, ground_image, T_world_g) if guarded else None
             crawl = bounds
             if bounds is not None and sp.crawl_guard_m > 0:
                 crawl = self._crawl_bounds(bounds, T_world_g)
+                if crawl is None and sp.crawl_blocked_backs_off and self.follower.params.back_off and \
+                        self._back_off_clear(ground_image, swing_checker, T_ground_camera, T_g_world):
+                    # round 21: every curvature the swing guard allows crawls the body into the map
+                    self.follower.back_off_now()
+                    return Replan(t_s, tuple(pose), sel, None,
+                                  f"{reason}, kappa {bounds[0]:+.2f}..{bounds[1]:+.2f} /m (swing guard) all crawl "
+                                  "into the map (crawl guard): back off along the track", route_path)
+                crawl = bounds if crawl is None else crawl
             self.follower.set_path(path, arc.curvature_per_m, crawl)
             if bounds is not None:
                 reason += f", kappa {bounds[0]:+.2f}..{bounds[1]:+.2f} /m (swing guard)"
@@ -264,7 +272,8 @@ class NavPlanner:
         free, known = checker.point_state(checker.footprint_points(track, scale).reshape(-1, 3), ground)
         return not (known & ~free).any()
 
-    def _swing_bounds(self, checker, ground, step_per_m: float = 0.25) -> Tuple[float, float]:
+    def _swing_bounds(self, checker, ground, T_world_g: Optional[np.ndarray] = None,
+                      step_per_m: float = 0.25) -> Tuple[float, float]:
         """The swing guard: the body curvatures (lo, hi) around the current kappa the follower may
         bend to until the next replan. Reshaping to kappa moves the body about its middle
         (body_model.body_poses: the head (L^2/8) dkappa to the inside of the turn); a kappa is
@@ -279,7 +288,11 @@ class NavPlanner:
         kept off what the obstacle map holds (the map only: the views saw that floor long ago).
         Round 20 (sampler.reshape_keeps_centroid): the shapes keep the body's centroid, so the middle
         moves too (to the outside of the bend): swing_guard_tail_m 1.5 m guards all of COBRA's body
-        behind the front against the map (measured, not kept: README round 20)."""
+        behind the front against the map (measured, not kept: README round 20). Round 21
+        (sampler.swing_guard_body, needs T_world_g, the ground frame in the world): the stations
+        between the front and the tail's guard may not come nearer the map's obstacles than the
+        lead's reach, or than they already are when they are nearer: moving away from an obstacle
+        the body already lies close to is allowed (the lead-point rule would hold kappa there)."""
         fp, g, sp = self.follower.params, self.geometry, self.sampler_params
         kappa_now = self.follower.kappa_per_m
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
@@ -292,6 +305,14 @@ class NavPlanner:
         # obstacle map only (the views show the floor beside the tail long ago, with their shadows)
         back = (from_head[0] - from_head <= sp.swing_guard_tail_m + 1e-9) & ~front
         back &= sp.swing_guard_tail_m > 0 and checker.hidden_obstacles is not None
+        # round 21 (swing_guard_body): the stations between, against the map's distances
+        omap = self.obstacle_map
+        body = ~front & ~back
+        body &= sp.swing_guard_body and T_world_g is not None and omap is not None
+        if body.any() and omap.geometry().is_empty:
+            body[:] = False
+        if body.any():
+            near_now = np.minimum(reach, omap.distance(world_xy(T_world_g, now[body])))
         bounds = []
         for side in (-1.0, 1.0):
             allowed, n = kappa_now, 1
@@ -312,12 +333,14 @@ class NavPlanner:
                 if swinging.any() and np.asarray(checker.hidden_obstacles(
                         new[swinging] + reach * d[swinging] / dist[swinging, None]), bool).any():
                     break
+                if body.any() and (omap.distance(world_xy(T_world_g, new[body])) < near_now - 1e-3).any():
+                    break
                 allowed, n = k, n + 1
             bounds.append(allowed)
         return bounds[0], bounds[1]
 
     def _crawl_bounds(self, bounds: Tuple[float, float], T_world_g: np.ndarray,
-                      step_per_m: float = 0.25) -> Tuple[float, float]:
+                      step_per_m: float = 0.25) -> Optional[Tuple[float, float]]:
         """Round 20 (sampler.crawl_guard_m): the swing guard's bounds narrowed to the curvatures whose
         crawl keeps the body off the obstacle map. Measured (test_nav_round20.py): COBRA's bent body
         does not crawl along its own circle; it moves with its middle along the middle's tangent
@@ -328,7 +351,8 @@ class NavPlanner:
         station (beyond the swing guard's front swing_guard_m, whose way the arcs check) may not come
         nearer the map's obstacles than half the body's width + crawl_margin_m, or than it already is
         when it is nearer. If the current kappa fails, the nearest that passes is forced (the bounds
-        close round it and its passing neighbours); if none passes, the swing guard's bounds stand."""
+        close round it and its passing neighbours); if none passes, None (round 21: the replan backs off
+        with sampler.crawl_blocked_backs_off, else the swing guard's bounds stand)."""
         sp, g, fp = self.sampler_params, self.geometry, self.follower.params
         omap = self.obstacle_map
         if omap is None or omap.geometry().is_empty:
@@ -361,7 +385,7 @@ class NavPlanner:
         now = min(range(len(ks)), key=lambda i: abs(ks[i] - kappa_now))
         passing = [i for i in range(len(ks)) if ok[i]]
         if not passing:
-            return bounds
+            return None
         i = now if ok[now] else min(passing, key=lambda j: (abs(ks[j] - kappa_now), abs(ks[j])))
         a = b = i
         while a > 0 and ok[a - 1]:

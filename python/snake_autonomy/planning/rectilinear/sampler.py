@@ -121,6 +121,13 @@ class SamplerParams:
     reshape_keeps_centroid: bool = False  # round 20: the body reshapes about its centroid (measured on COBRA),
                                           # not its middle (body_model.body_poses): the swing guard, the
                                           # crawl guard and the turn in place. False: about the middle
+    crawl_blocked_backs_off: bool = False  # round 21: when no curvature the swing guard allows crawls clear
+                                          # (crawl guard on), back off along the track if its tail's track is
+                                          # clear; False: follow within the swing guard's bounds
+    swing_guard_body: bool = False        # round 21: the swing guard also keeps the stations between its front
+                                          # and its tail off the obstacle map: none may come nearer the map's
+                                          # obstacles than half the body's width + lateral_margin_m, or than
+                                          # it already is when it is nearer (planner._swing_bounds)
 
     def validate(self) -> List[str]:
         p = []
@@ -135,7 +142,8 @@ class SamplerParams:
                     "blocked_wins_depth_m", "crawl_guard_m", "crawl_dead_band_per_m", "crawl_margin_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
-        for key in ("body_model", "blocked_wins", "turn_keeps_side", "goal_disc", "reshape_keeps_centroid"):
+        for key in ("body_model", "blocked_wins", "turn_keeps_side", "goal_disc", "reshape_keeps_centroid",
+                    "swing_guard_body", "crawl_blocked_backs_off"):
             if not isinstance(getattr(self, key), bool):
                 p.append(f"{key}: must be true or false, got {getattr(self, key)!r}")
         if not isinstance(self.earlier_views, int) or self.earlier_views < 0:
