@@ -220,17 +220,20 @@ def body_guarded(obstacle, kappa_per_m, on=True):
 
 def test_round_21_body_guard_keeps_the_middle_off_the_map():
     """Round 21 (sampler.swing_guard_body): the stations between the front and the tail guard keep
-    their distance to the map's obstacles (at least the 0.125 m reach, or what they have now). The
-    disc of the test above, 0.15 m left of the middle: bending right is bounded at -0.25 /m (the
-    middle 0.024 m to the left keeps 0.126 m; at -0.5 /m 0.103 m); the guard off, it is not."""
+    their distance to the map's obstacles: at least the crawl guard's clearance (half the body's
+    0.09 m + crawl_margin_m 0.02 = 0.065 m), or what they have now. Reshaping about the centroid moves
+    the middle (1 - sin(u)/u)/kappa to the outside (u = 0.755 kappa). The disc of the test above,
+    0.15 m left of the middle: bending right is bounded at -0.75 /m (the middle 0.070 m to the left
+    keeps 0.080 m; at -1 /m 0.092 m, leaving 0.058); the guard off, it is not."""
     kmax = CFG.follower.kappa_max_per_m
-    assert body_guarded((-HALF_LENGTH_M, 0.2, 0.05), 0.0) == pytest.approx((-0.25, kmax))
+    assert body_guarded((-HALF_LENGTH_M, 0.2, 0.05), 0.0) == pytest.approx((-0.75, kmax))
     assert body_guarded((-HALF_LENGTH_M, 0.2, 0.05), 0.0, on=False) == pytest.approx((-kmax, kmax))
-    # the middle already 0.1 m off (nearer than the reach): it may not come nearer, it may go away
-    assert body_guarded((-HALF_LENGTH_M, 0.15, 0.05), 0.0) == pytest.approx((0.0, kmax))
-    # mirrored, bent left already: the guard counts from the current shape
-    lo, hi = body_guarded((-HALF_LENGTH_M, -0.15, 0.05), 0.5)
-    assert lo == pytest.approx(-kmax) and hi < kmax
+    # 0.1 m off: -0.25 /m keeps 0.076 m, -0.5 /m 0.053 m
+    assert body_guarded((-HALF_LENGTH_M, 0.15, 0.05), 0.0) == pytest.approx((-0.25, kmax))
+    # 0.07 m off: -0.25 /m would leave 0.046 m; it may not come nearer, it may go away
+    assert body_guarded((-HALF_LENGTH_M, 0.12, 0.05), 0.0) == pytest.approx((0.0, kmax))
+    # mirrored: a disc on the right bounds bending left
+    assert body_guarded((-HALF_LENGTH_M, -0.15, 0.05), 0.0) == pytest.approx((-kmax, 0.25))
 
 
 def test_round_21_body_guard_needs_the_world_frame_and_is_validated():

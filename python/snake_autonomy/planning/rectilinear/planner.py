@@ -291,8 +291,10 @@ class NavPlanner:
         behind the front against the map (measured, not kept: README round 20). Round 21
         (sampler.swing_guard_body, needs T_world_g, the ground frame in the world): the stations
         between the front and the tail's guard may not come nearer the map's obstacles than the
-        lead's reach, or than they already are when they are nearer: moving away from an obstacle
-        the body already lies close to is allowed (the lead-point rule would hold kappa there)."""
+        crawl guard's clearance (half the body's width + crawl_margin_m), or than they already are
+        when they are nearer: moving away from an obstacle the body lies close to is allowed.
+        (The lead's reach, half the width + lateral_margin_m, pinned kappa: depth w16 s1 held -2 /m
+        for 260 s beside the goal.)"""
         fp, g, sp = self.follower.params, self.geometry, self.sampler_params
         kappa_now = self.follower.kappa_per_m
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
@@ -312,7 +314,8 @@ class NavPlanner:
         if body.any() and omap.geometry().is_empty:
             body[:] = False
         if body.any():
-            near_now = np.minimum(reach, omap.distance(world_xy(T_world_g, now[body])))
+            clearance = 0.5 * g.width_m + sp.crawl_margin_m                 # as the crawl guard's
+            near_now = np.minimum(clearance, omap.distance(world_xy(T_world_g, now[body])))
         bounds = []
         for side in (-1.0, 1.0):
             allowed, n = kappa_now, 1

@@ -126,7 +126,7 @@ class SamplerParams:
                                           # clear; False: follow within the swing guard's bounds
     swing_guard_body: bool = False        # round 21: the swing guard also keeps the stations between its front
                                           # and its tail off the obstacle map: none may come nearer the map's
-                                          # obstacles than half the body's width + lateral_margin_m, or than
+                                          # obstacles than half the body's width + crawl_margin_m, or than
                                           # it already is when it is nearer (planner._swing_bounds)
 
     def validate(self) -> List[str]:
