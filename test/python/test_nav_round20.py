@@ -266,3 +266,23 @@ def test_round_21_when_every_allowed_curvature_crawls_into_the_map_the_robot_bac
     assert "all crawl into the map (crawl guard): back off" in r.reason
     p, r = replan(False)
     assert r.path_world is not None and p.follower._bounds == pytest.approx((0.36, 0.36))
+
+
+def test_round_21_the_crawl_guard_may_back_off_instead_of_forcing_a_curvature():
+    """Round 21 (sampler.crawl_guard_forces false): when the current kappa crawls into the map the
+    crawl guard forces nothing (None, as when no kappa passes), so the replan backs off. Forcing the
+    nearest passing kappa fought the planner's arcs: depth w1 s0 was forced from -0.8 to -2 /m in
+    steps, 0.3 m from the goal, while every chosen arc turned left, and circled away to the time limit
+    (reached at 183 s without forcing)."""
+    kmax = CFG.follower.kappa_max_per_m
+    p = planner_with((-0.5, -0.11, 0.08), 0.36)
+    assert p._crawl_bounds((-kmax, kmax), np.eye(4)) == pytest.approx((0.61, kmax))   # forced
+    p.sampler_params = dataclasses.replace(p.sampler_params, crawl_guard_forces=False)
+    assert p._crawl_bounds((-kmax, kmax), np.eye(4)) is None
+    # the current kappa passing, the bounds narrow as before
+    far = planner_with((-0.5, -0.25, 0.08), 0.36)
+    far.sampler_params = dataclasses.replace(far.sampler_params, crawl_guard_forces=False)
+    lo, hi = far._crawl_bounds((-kmax, kmax), np.eye(4))
+    assert -kmax < lo < 0.0 and hi == pytest.approx(kmax)
+    with pytest.raises(NavConfigError, match=r"sampler.crawl_guard_forces: must be true or false, got 0"):
+        NavConfig.from_dict({"sampler": {"crawl_guard_forces": 0}})

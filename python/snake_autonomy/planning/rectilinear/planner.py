@@ -387,7 +387,7 @@ class NavPlanner:
         ok = [clear(k) for k in ks]
         now = min(range(len(ks)), key=lambda i: abs(ks[i] - kappa_now))
         passing = [i for i in range(len(ks)) if ok[i]]
-        if not passing:
+        if not passing or (not ok[now] and not sp.crawl_guard_forces):
             return None
         i = now if ok[now] else min(passing, key=lambda j: (abs(ks[j] - kappa_now), abs(ks[j])))
         a = b = i

@@ -124,6 +124,8 @@ class SamplerParams:
     crawl_blocked_backs_off: bool = False  # round 21: when no curvature the swing guard allows crawls clear
                                           # (crawl guard on), back off along the track if its tail's track is
                                           # clear; False: follow within the swing guard's bounds
+    crawl_guard_forces: bool = True       # round 21: the crawl guard forces the nearest passing kappa when the
+                                          # current one fails; False: the current one failing is as none passing
     swing_guard_body: bool = False        # round 21: the swing guard also keeps the stations between its front
                                           # and its tail off the obstacle map: none may come nearer the map's
                                           # obstacles than half the body's width + crawl_margin_m, or than
@@ -143,7 +145,7 @@ class SamplerParams:
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
         for key in ("body_model", "blocked_wins", "turn_keeps_side", "goal_disc", "reshape_keeps_centroid",
-                    "swing_guard_body", "crawl_blocked_backs_off"):
+                    "swing_guard_body", "crawl_blocked_backs_off", "crawl_guard_forces"):
             if not isinstance(getattr(self, key), bool):
                 p.append(f"{key}: must be true or false, got {getattr(self, key)!r}")
         if not isinstance(self.earlier_views, int) or self.earlier_views < 0:
