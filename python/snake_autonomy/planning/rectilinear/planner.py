@@ -18,7 +18,12 @@ place instead (the turning side, then either side), and says why.
 Swing guard (round 11, sampler.swing_guard_m): following an arc, the follower bends the body only
 within curvature bounds this replan sets (_swing_bounds): the uniform-curvature body reshapes about
 its middle, and turning towards an obstacle the head has just passed swung link 1 into it (five of
-round 10's thirteen runs with a contact).
+round 10's thirteen runs with a contact). Round 20-21 (COBRA's config/nav.yaml): the body reshapes
+about its centroid (sampler.reshape_keeps_centroid), so the guard also keeps the stations between its
+front and its tail off the obstacle map (sampler.swing_guard_body), and the crawl guard
+(_crawl_bounds, sampler.crawl_guard_m) predicts the side-step of the measured crawl; when the crawl
+of the current or every allowed curvature runs into the map the robot backs off
+(sampler.crawl_blocked_backs_off, crawl_guard_forces false).
 
 Obstacle map and route (round 15, config/nav.yaml map:): each replan adds its view to a world-frame
 map (obstacle_map.py: the floor it shows clears the map, its faces are grown into prior discs); the
