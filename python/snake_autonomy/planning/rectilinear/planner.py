@@ -316,9 +316,7 @@ class NavPlanner:
         omap = self.obstacle_map
         body = ~front & ~back
         body &= sp.swing_guard_body and T_world_g is not None and omap is not None
-        if body.any() and omap.geometry().is_empty:
-            body[:] = False
-        if body.any():
+        if body.any():                                  # (an empty map's distances are inf: never nearer)
             clearance = 0.5 * g.width_m + sp.crawl_margin_m                 # as the crawl guard's
             near_now = np.minimum(clearance, omap.distance(world_xy(T_world_g, now[body])))
         bounds = []
