@@ -71,23 +71,25 @@ def test_at_a_small_curvature_the_body_moves_along_its_middles_tangent(points):
     assert math.hypot(p["xi_x_m_s"], p["xi_y_m_s"]) > 0.006
 
 
-def planner_with(obstacle, kappa_per_m, guard_m=0.2, dead_band=0.35, keep_centroid=False, tail_m=0.0):
+def planner_with(obstacle, kappa_per_m, guard_m=0.2, dead_band=0.35, keep_centroid=False, tail_m=0.0, **keys):
     """COBRA at the origin heading +x, bent to kappa_per_m, one disc (x, y, r) in the obstacle map;
     by default the middle kept, no tail or body guard and the crawl guard forcing (round 21's keys
-    off), as the crawl guard's single runs were measured."""
+    off), as the crawl guard's single runs were measured. keys: further sampler keys."""
+    round21_off = dict(swing_guard_body=False, crawl_blocked_backs_off=False, crawl_guard_forces=True)
     sp = dataclasses.replace(CFG.sampler, swing_guard_m=0.2, crawl_guard_m=guard_m,
                              crawl_dead_band_per_m=dead_band, reshape_keeps_centroid=keep_centroid,
-                             swing_guard_tail_m=tail_m, swing_guard_body=False, crawl_blocked_backs_off=False,
-                             crawl_guard_forces=True)
+                             swing_guard_tail_m=tail_m, **{**round21_off, **keys})
     p = NavPlanner(K, 0.09, sp, RecedingHorizonFollower(CFG.follower), COBRA)
     p.obstacle_map = ObstacleMap(Point(obstacle[:2]).buffer(obstacle[2], 32))
     p.follower._kappa = kappa_per_m
     return p
 
 
-def swing_bounds(p):
-    """The swing guard's bounds of planner p in open floor at the origin."""
-    return p._swing_bounds(p._checker(T_GC, np.eye(4), p.sampler_params.swing_obstacle_depth_m), drawn_mask())
+def swing_bounds(p, T_world_g=None):
+    """The swing guard's bounds of planner p in open floor at the origin (T_world_g: the ground frame
+    in the world, which round 21's body guard needs)."""
+    return p._swing_bounds(p._checker(T_GC, np.eye(4), p.sampler_params.swing_obstacle_depth_m), drawn_mask(),
+                           T_world_g)
 
 
 def crawl_bounds(obstacle, kappa_per_m, **kw):
@@ -220,10 +222,8 @@ def test_with_the_centroid_kept_the_map_guard_covers_the_middle():
 
 def body_guarded(obstacle, kappa_per_m, on=True):
     """The swing guard's bounds with the centroid kept, the tail guard 0.2 m and round 21's body guard."""
-    p = planner_with(obstacle, kappa_per_m, guard_m=0.0, keep_centroid=True, tail_m=0.2)
-    p.sampler_params = dataclasses.replace(p.sampler_params, swing_guard_body=on)
-    return p._swing_bounds(p._checker(T_GC, np.eye(4), p.sampler_params.swing_obstacle_depth_m), drawn_mask(),
-                           np.eye(4))
+    p = planner_with(obstacle, kappa_per_m, guard_m=0.0, keep_centroid=True, tail_m=0.2, swing_guard_body=on)
+    return swing_bounds(p, np.eye(4))
 
 
 def test_round_21_body_guard_keeps_the_middle_off_the_map():
@@ -245,8 +245,8 @@ def test_round_21_body_guard_keeps_the_middle_off_the_map():
 
 
 def test_round_21_body_guard_needs_the_world_frame_and_is_validated():
-    p = planner_with((-HALF_LENGTH_M, 0.15, 0.05), 0.0, guard_m=0.0, keep_centroid=True, tail_m=0.2)
-    p.sampler_params = dataclasses.replace(p.sampler_params, swing_guard_body=True)
+    p = planner_with((-HALF_LENGTH_M, 0.15, 0.05), 0.0, guard_m=0.0, keep_centroid=True, tail_m=0.2,
+                     swing_guard_body=True)
     assert swing_bounds(p) == pytest.approx((-CFG.follower.kappa_max_per_m, CFG.follower.kappa_max_per_m))
     with pytest.raises(NavConfigError, match=r"sampler.swing_guard_body: must be true or false, got 1"):
         NavConfig.from_dict({"sampler": {"swing_guard_body": 1}})
@@ -263,8 +263,7 @@ def test_round_21_when_every_allowed_curvature_crawls_into_the_map_the_robot_bac
     assert planner_with((-0.5, -0.8, 0.08), 0.36)._crawl_bounds((0.36, 0.36), np.eye(4)) == (0.36, 0.36)
 
     def replan(backs_off):
-        p = planner_with((-0.5, -0.11, 0.08), 0.36)
-        p.sampler_params = dataclasses.replace(p.sampler_params, crawl_blocked_backs_off=backs_off)
+        p = planner_with((-0.5, -0.11, 0.08), 0.36, crawl_blocked_backs_off=backs_off)
         p.follower.params = dataclasses.replace(p.follower.params, back_off=True)
         p._swing_bounds = lambda *a, **k: (0.36, 0.36)          # pinned, as in the trace
         return p, p.replan(0.0, drawn_mask(), T_GC, (0.0, 0.0, 0.0), None)
@@ -283,13 +282,12 @@ def test_round_21_the_crawl_guard_may_back_off_instead_of_forcing_a_curvature():
     steps, 0.3 m from the goal, while every chosen arc turned left, and circled away to the time limit
     (reached at 183 s without forcing)."""
     kmax = CFG.follower.kappa_max_per_m
-    p = planner_with((-0.5, -0.11, 0.08), 0.36)
-    assert p._crawl_bounds((-kmax, kmax), np.eye(4)) == pytest.approx((0.61, kmax))   # forced
-    p.sampler_params = dataclasses.replace(p.sampler_params, crawl_guard_forces=False)
+    forcing = planner_with((-0.5, -0.11, 0.08), 0.36)
+    assert forcing._crawl_bounds((-kmax, kmax), np.eye(4)) == pytest.approx((0.61, kmax))
+    p = planner_with((-0.5, -0.11, 0.08), 0.36, crawl_guard_forces=False)
     assert p._crawl_bounds((-kmax, kmax), np.eye(4)) is None
     # the current kappa passing, the bounds narrow as before
-    far = planner_with((-0.5, -0.25, 0.08), 0.36)
-    far.sampler_params = dataclasses.replace(far.sampler_params, crawl_guard_forces=False)
+    far = planner_with((-0.5, -0.25, 0.08), 0.36, crawl_guard_forces=False)
     lo, hi = far._crawl_bounds((-kmax, kmax), np.eye(4))
     assert -kmax < lo < 0.0 and hi == pytest.approx(kmax)
     with pytest.raises(NavConfigError, match=r"sampler.crawl_guard_forces: must be true or false, got 0"):
