@@ -32,8 +32,10 @@ class _View:
     """One traversability image and the projection of ground points into it."""
 
     def __init__(self, K, ground: np.ndarray, T_ground_camera: np.ndarray, max_depth_m: float = math.inf,
-                 obstacle_depth_m: float = math.inf, face_depth_m: float = math.inf):
+                 obstacle_depth_m: float = math.inf, face_depth_m: float = math.inf,
+                 obstacle_range_m: float = math.inf):
         self.max_depth_m = max_depth_m
+        self.obstacle_range_m = obstacle_range_m
         T_cam_ground = np.linalg.inv(np.asarray(T_ground_camera, float))
         self.R, self.t = T_cam_ground[:3, :3], T_cam_ground[:3, 3]
         self.K, self.ground = K, ground
@@ -65,6 +67,7 @@ class _View:
         if self.edge_depth is not None:
             idx = np.flatnonzero(shown & ~free)
             shown[idx[z[idx] > self.edge_depth[u[idx]]]] = False
+        shown &= free | (z <= self.obstacle_range_m)
         if not faces:
             return shown, free
         face = shown & ~free
@@ -78,7 +81,7 @@ class PerceptionCollisionChecker:
     def __init__(self, intrinsics, T_ground_camera: np.ndarray, head_width_m: float,
                  footprint_points: int = 5, point_spacing_m: float = 0.04, blocked_wins: bool = False,
                  hidden_obstacles=None, near_field_max_m: float = math.inf,
-                 blocked_wins_depth_m: float = math.inf):
+                 blocked_wins_depth_m: float = math.inf, view_obstacle_range_m: float = math.inf):
         """head_width_m: the checked footprint's width (the head's, or the body's swept width).
         blocked_wins: a hidden point one earlier view shows as an obstacle is blocked whatever the
         others show (False: ground in any of them frees it). hidden_obstacles: None, or a callable
@@ -87,9 +90,16 @@ class PerceptionCollisionChecker:
         the near field (sampler.near_field_max_m). blocked_wins_depth_m (round 19): with
         blocked_wins, only non-ground within this of a view's ground edge (the obstacle's face) wins
         over ground other views show; further (the shadow behind the face, up to the view's
-        obstacle_depth_m) is freed by a view showing ground there (inf: every obstacle wins)."""
+        obstacle_depth_m) is freed by a view showing ground there (inf: every obstacle wins).
+        view_obstacle_range_m (round 22): an earlier view's non-ground further than this from its
+        camera (depth along its optical axis) is not shown (not known to be an obstacle): far away it
+        is mostly an obstacle's upper part hiding the floor behind it, as the map knows (it takes
+        faces within 0.8 m only, config/nav.yaml map max_range_m). COBRA depth w19 s5 and w9 s5: the
+        floor beside the head, 0.9-1.0 m from the view that marked it, passing beside a cylinder,
+        blocked every arc in open floor for the rest of the run."""
         self.blocked_wins = bool(blocked_wins)
         self.blocked_wins_depth_m = float(blocked_wins_depth_m)
+        self.view_obstacle_range_m = float(view_obstacle_range_m)
         self.hidden_obstacles = hidden_obstacles
         import cv2
         self.k = intrinsics
@@ -123,7 +133,7 @@ class PerceptionCollisionChecker:
         than obstacle_depth_m beyond the ground region's edge in its column is not shown there
         (hidden behind the obstacle at the edge, not known to be one)."""
         self._earlier.append(_View(self.K, ground, T_ground_camera, max_depth_m, obstacle_depth_m,
-                                   self.blocked_wins_depth_m))
+                                   self.blocked_wins_depth_m, self.view_obstacle_range_m))
 
     def footprint_points(self, poses: np.ndarray, scale: Optional[np.ndarray] = None) -> np.ndarray:
         """(N, 3) poses -> (N, P, 3) ground points of the footprint at each; scale (N,): each

@@ -216,7 +216,8 @@ class NavPlanner:
             bounds = self._swing_bounds(swing_checker, ground_image, T_world_g) if guarded else None
             crawl = bounds
             if bounds is not None and sp.crawl_guard_m > 0:
-                crawl = self._crawl_bounds(bounds, T_world_g)
+                toward = self.follower.params.kappa(self.follower.params.speed_m_s * arc.curvature_per_m)
+                crawl = self._crawl_bounds(bounds, T_world_g, toward)
                 if crawl is None and sp.crawl_blocked_backs_off and self.follower.params.back_off and \
                         self._back_off_clear(ground_image, swing_checker, T_ground_camera, T_g_world):
                     # round 21: every curvature the swing guard allows crawls the body into the map
@@ -248,7 +249,8 @@ class NavPlanner:
                                              blocked_wins=self.sampler_params.blocked_wins,
                                              hidden_obstacles=hidden,
                                              near_field_max_m=self.sampler_params.near_field_max_m,
-                                             blocked_wins_depth_m=self.sampler_params.blocked_wins_depth_m)
+                                             blocked_wins_depth_m=self.sampler_params.blocked_wins_depth_m,
+                                             view_obstacle_range_m=self.sampler_params.view_obstacle_range_m)
         for ground_k, T_world_camera_k in self._views:
             checker.add_view(ground_k, T_g_world @ T_world_camera_k, self.sampler_params.horizon_m,
                              obstacle_depth_m)
@@ -345,7 +347,7 @@ class NavPlanner:
             bounds.append(allowed)
         return bounds[0], bounds[1]
 
-    def _crawl_bounds(self, bounds: Tuple[float, float], T_world_g: np.ndarray,
+    def _crawl_bounds(self, bounds: Tuple[float, float], T_world_g: np.ndarray, toward: Optional[float] = None,
                       step_per_m: float = 0.25) -> Optional[Tuple[float, float]]:
         """Round 20 (sampler.crawl_guard_m): the swing guard's bounds narrowed to the curvatures whose
         crawl keeps the body off the obstacle map. Measured (test_nav_round20.py): COBRA's bent body
@@ -358,7 +360,13 @@ class NavPlanner:
         nearer the map's obstacles than half the body's width + crawl_margin_m, or than it already is
         when it is nearer. If the current kappa fails, the nearest that passes is forced (the bounds
         close round it and its passing neighbours); if none passes, None (round 21: the replan backs off
-        with sampler.crawl_blocked_backs_off, else the swing guard's bounds stand)."""
+        with sampler.crawl_blocked_backs_off, else the swing guard's bounds stand). With
+        crawl_guard_forces false the current kappa failing is as none passing, except (round 22,
+        sampler.crawl_forces_toward_arc; toward: the chosen arc's feed-forward kappa) when a kappa on
+        `toward`'s side of the current one passes: the nearest of those is forced (the follower bends
+        that way anyway; forcing against the arc circled COBRA off the goal, round 21 w1 s0). COBRA depth w9 s5, w16 s5: a station 0.16 m off the map would have come
+        to 0.064 m (0.065 needed) at the current kappa; the arc turned right, and the kappas to the right
+        passed; the robot backed off 40 times instead, to the time limit."""
         sp, g, fp = self.sampler_params, self.geometry, self.follower.params
         omap = self.obstacle_map
         if omap is None or omap.geometry().is_empty:
@@ -390,7 +398,10 @@ class NavPlanner:
         ok = [clear(k) for k in ks]
         now = min(range(len(ks)), key=lambda i: abs(ks[i] - kappa_now))
         passing = [i for i in range(len(ks)) if ok[i]]
-        if not passing or (not ok[now] and not sp.crawl_guard_forces):
+        if not ok[now] and not sp.crawl_guard_forces:
+            way = 0.0 if toward is None or not sp.crawl_forces_toward_arc else toward - kappa_now
+            passing = [j for j in passing if (ks[j] - kappa_now) * way > 0]
+        if not passing:
             return None
         i = now if ok[now] else min(passing, key=lambda j: (abs(ks[j] - kappa_now), abs(ks[j])))
         a = b = i
