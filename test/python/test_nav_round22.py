@@ -12,7 +12,8 @@
    1.03 m from the first view's camera, where a cylinder's upper part hid the floor behind it; three
    later views showed that floor as ground). sampler.view_obstacle_range_m: an earlier view's
    non-ground further than this is not known to be an obstacle (the map takes faces within 0.8 m
-   only, map.max_range_m, for the same reason)."""
+   only, map.max_range_m, for the same reason). Measured at 0.8 m and not set: mono seeds 0-4 gained
+   a contact run (README round 22)."""
 import dataclasses
 
 import numpy as np
@@ -113,3 +114,16 @@ def test_round_22_keys_are_validated():
     with pytest.raises(NavConfigError, match=r"sampler.view_obstacle_range_m: must be >= 0, got -0.8"):
         NavConfig.from_dict({"sampler": {"view_obstacle_range_m": -0.8}})
 
+
+
+def test_round_22_settings_in_the_nav_configs():
+    """COBRA (config/nav.yaml, README round 22): the crawl guard forces towards the arc; the view range
+    was measured and is not set (a contact run on mono seeds 0-4). The other robots' configs do not
+    use the crawl guard."""
+    from snake_autonomy.planning.rectilinear.config import nav_config_path
+    cobra = NavConfig.from_yaml()
+    assert cobra.sampler.crawl_forces_toward_arc and not cobra.sampler.crawl_guard_forces
+    assert cobra.sampler.view_obstacle_range_m == float("inf")
+    for robot in ("chang_rectilinear", "follow_the_leader"):
+        s = NavConfig.from_yaml(nav_config_path(robot)).sampler
+        assert s.view_obstacle_range_m == float("inf") and s.crawl_guard_m == 0.0
