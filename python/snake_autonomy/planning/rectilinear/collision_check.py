@@ -95,8 +95,9 @@ class PerceptionCollisionChecker:
         camera (depth along its optical axis) is not shown (not known to be an obstacle): far away it
         is mostly an obstacle's upper part hiding the floor behind it, as the map knows (it takes
         faces within 0.8 m only, config/nav.yaml map max_range_m). COBRA depth w19 s5 and w9 s5: the
-        floor beside the head, 0.9-1.0 m from the view that marked it, passing beside a cylinder,
-        blocked every arc in open floor for the rest of the run."""
+        floor beside the head, 0.8-1.0 m from the view that marked it, passing beside a cylinder,
+        blocked every arc in open floor for the rest of the run (an option, measured at 0.8 m and not
+        set: README round 22)."""
         self.blocked_wins = bool(blocked_wins)
         self.blocked_wins_depth_m = float(blocked_wins_depth_m)
         self.view_obstacle_range_m = float(view_obstacle_range_m)

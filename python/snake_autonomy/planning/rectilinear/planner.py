@@ -364,9 +364,10 @@ class NavPlanner:
         crawl_guard_forces false the current kappa failing is as none passing, except (round 22,
         sampler.crawl_forces_toward_arc; toward: the chosen arc's feed-forward kappa) when a kappa on
         `toward`'s side of the current one passes: the nearest of those is forced (the follower bends
-        that way anyway; forcing against the arc circled COBRA off the goal, round 21 w1 s0). COBRA depth w9 s5, w16 s5: a station 0.16 m off the map would have come
-        to 0.064 m (0.065 needed) at the current kappa; the arc turned right, and the kappas to the right
-        passed; the robot backed off 40 times instead, to the time limit."""
+        that way anyway; forcing against the arc circled COBRA off the goal, round 21 w1 s0). COBRA
+        depth w9 s5 at 162 s: a station 0.156 m off the map would have come to 0.064 m (0.065 needed)
+        at the current kappa while the arc turned right and -0.20 and -0.45 /m passed; it backed off,
+        and backed off again beside the same obstacle (w16 s5 likewise: 44 stops to the time limit)."""
         sp, g, fp = self.sampler_params, self.geometry, self.follower.params
         omap = self.obstacle_map
         if omap is None or omap.geometry().is_empty:
