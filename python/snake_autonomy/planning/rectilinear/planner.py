@@ -400,8 +400,9 @@ class NavPlanner:
         now = min(range(len(ks)), key=lambda i: abs(ks[i] - kappa_now))
         passing = [i for i in range(len(ks)) if ok[i]]
         if not ok[now] and not sp.crawl_guard_forces:
-            way = 0.0 if toward is None or not sp.crawl_forces_toward_arc else toward - kappa_now
-            passing = [j for j in passing if (ks[j] - kappa_now) * way > 0]
+            if toward is None or not sp.crawl_forces_toward_arc:
+                return None
+            passing = [j for j in passing if (ks[j] - kappa_now) * (toward - kappa_now) > 0]
         if not passing:
             return None
         i = now if ok[now] else min(passing, key=lambda j: (abs(ks[j] - kappa_now), abs(ks[j])))
