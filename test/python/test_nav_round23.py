@@ -108,8 +108,8 @@ def test_the_window_is_validated():
 
 
 def test_round_23_settings_in_the_nav_configs():
-    """Measured on COBRA and not set (README round 23: depth 5-9 89 -> 91 %, but a contact run on mono
-    seeds 0-4); every robot's config lays the discs along the ray, as before."""
+    """Measured on COBRA and not set (README round 23: depth 5-9 89 -> 91 % but 0-4 93 -> 88 %, and a
+    contact run on mono seeds 0-4); every robot's config lays the discs along the ray, as before."""
     from snake_autonomy.planning.rectilinear.config import nav_config_path
     assert NavConfig.from_yaml().map.prior_normal_window_m == 0.0
     for robot in ("chang_rectilinear", "follow_the_leader"):

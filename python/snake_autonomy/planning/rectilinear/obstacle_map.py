@@ -55,6 +55,7 @@ class MapParams:
     prior_normal_window_m: float = 0.0   # round 23: > 0: each disc lies behind its face along the
                                   # surface's normal, fitted to the view's faces within this distance
                                   # (face_normals), not along the view's ray; 0: along the ray
+                                  # (measured, not set: README round 23)
 
     def validate(self) -> List[str]:
         p = []
@@ -111,7 +112,9 @@ def face_normals(faces_xy: np.ndarray, dirs: np.ndarray, window_m: float,
     tell the obstacle's side); a face with fewer than 3 faces within window_m keeps its ray.
     Along the ray, the disc behind a face at the end of a cylinder's row of faces (its side at the
     image's edge, or its silhouette) lies 0.1 m beyond the cylinder's side: COBRA depth world 6 seed 7
-    stopped with every arc blocked at its start by such a disc, 9 cm off the real surface."""
+    stopped with every arc blocked at its start by such a disc, 9 cm off the real surface. Measured
+    on COBRA and not set (README round 23: depth seeds 0-4 lost as many runs as 5-9 gained; mono's
+    staircase of faces fits poorer normals)."""
     faces = np.asarray(faces_xy, float).reshape(-1, 2)
     rays = np.asarray(dirs, float).reshape(-1, 2)
     out = rays.copy()
@@ -124,8 +127,8 @@ def face_normals(faces_xy: np.ndarray, dirs: np.ndarray, window_m: float,
         if len(pts) < 3:
             continue
         d = pts - pts.mean(axis=0)
-        w, v = np.linalg.eigh(d.T @ d)
-        n = np.array([-v[1, 1], v[0, 1]])                 # normal to the principal axis (largest w)
+        _, v = np.linalg.eigh(d.T @ d)                    # eigenvalues ascending
+        n = np.array([-v[1, 1], v[0, 1]])                 # normal to the principal axis (the last)
         ray = rays[i]
         c = float(n @ ray)
         if c < 0:

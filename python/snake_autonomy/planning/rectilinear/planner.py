@@ -154,11 +154,11 @@ class NavPlanner:
             self._views.appendleft((ground_image, T_world_camera))
         if self.map_params.source == "faces":
             mp = self.map_params
-            faces, rays, floor = view_on_floor(ground_image, self.intrinsics.K(), T_world_camera, mp.max_range_m,
+            faces, dirs, floor = view_on_floor(ground_image, self.intrinsics.K(), T_world_camera, mp.max_range_m,
                                                mp.column_step_px, mp.edge_px)
             if mp.prior_normal_window_m > 0:            # round 23: the discs along the surface's normal
-                rays = face_normals(faces, rays, mp.prior_normal_window_m)
-            self.obstacle_map.add_view(faces, rays, floor, mp.prior_radius_m, mp.priors_off_own_floor)
+                dirs = face_normals(faces, dirs, mp.prior_normal_window_m)
+            self.obstacle_map.add_view(faces, dirs, floor, mp.prior_radius_m, mp.priors_off_own_floor)
         sampler = TrajectorySampler(checker, self.sampler_params, self._width_with_margins(None))
         goal_g = None
         cost_to_go = route_path = None
