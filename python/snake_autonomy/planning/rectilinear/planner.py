@@ -155,7 +155,7 @@ class NavPlanner:
         if self.map_params.source == "faces":
             mp = self.map_params
             faces, dirs, floor = view_on_floor(ground_image, self.intrinsics.K(), T_world_camera, mp.max_range_m,
-                                               mp.column_step_px, mp.edge_px)
+                                               mp.column_step_px, mp.edge_px, mp.min_face_run, mp.face_run_jump_m)
             if mp.prior_normal_window_m > 0:            # round 23: the discs along the surface's normal
                 dirs = face_normals(faces, dirs, mp.prior_normal_window_m)
             self.obstacle_map.add_view(faces, dirs, floor, mp.prior_radius_m, mp.priors_off_own_floor)
