@@ -13,10 +13,10 @@ Sources (config/nav.yaml map.source):
   to the sides); the floor a later view shows clears the map there first (view_on_floor,
   add_view), so a far edge the depth test once marked unsure does not stay an obstacle. Round 23
   (prior_normal_window_m > 0): the disc lies behind the face along the surface's normal fitted to
-  the view's neighbouring faces (face_normals), not along the ray. Round 24 (min_face_run > 1): a
-  face is taken only in a run of at least that many faces in neighbouring columns (face_runs): a
-  lone face or pair is where a ground edge just crosses max_range_m or grazes an obstacle's side,
-  and its disc lay 10-13 cm beside the obstacle;
+  the view's neighbouring faces (face_normals), not along the ray. Round 24 (prior_shape shadow):
+  the prior is the floor behind each run of faces, between the run's outermost rays (face_shadows),
+  not a disc per face: a disc behind a face where the ray grazes the obstacle's side reached its
+  radius beside the obstacle, onto floor where COBRA's body later passed;
 - truth: the simulated world's obstacles as they are (a diagnostic upper bound: what a perfect map
   gives the planner; simulation only).
 Geometry is shapely's (a prepared polygon, contains_xy).
@@ -32,6 +32,8 @@ from shapely.geometry import Point, Polygon
 from .collision_check import floor_rays
 
 MAP_SOURCES = ("none", "faces", "truth")
+PRIOR_SHAPES = ("disc", "shadow")
+RUN_JUMP_M = 0.05       # neighbouring faces further apart in range than this belong to different runs (obstacles)
 
 
 @dataclass(frozen=True)
@@ -59,9 +61,11 @@ class MapParams:
                                   # surface's normal, fitted to the view's faces within this distance
                                   # (face_normals), not along the view's ray; 0: along the ray
                                   # (measured, not set: README round 23)
-    min_face_run: int = 1         # round 24: > 1: a face is taken only in a run of at least this many
-                                  # faces in neighbouring sampled columns (face_runs); 1: every face
-    face_run_jump_m: float = 0.05   # neighbouring faces whose ranges differ more than this end a run
+    prior_shape: str = "disc"     # round 24: disc (each face's disc of prior_radius_m, as before) | shadow
+                                  # (the floor behind each run of faces, between its outermost rays, 2
+                                  # prior_radius_m deep: face_shadows)
+    prior_pad_m: float = 0.01     # shadow: grown by this (the silhouette lies up to a column step beyond
+                                  # the run's outermost face)
 
     def validate(self) -> List[str]:
         p = []
@@ -78,10 +82,10 @@ class MapParams:
             p.append(f"edge_px: must be an integer >= 0, got {self.edge_px!r}")
         if not isinstance(self.column_step_px, int) or self.column_step_px < 1:
             p.append(f"column_step_px: must be an integer >= 1, got {self.column_step_px!r}")
-        if not isinstance(self.min_face_run, int) or isinstance(self.min_face_run, bool) or self.min_face_run < 1:
-            p.append(f"min_face_run: must be an integer >= 1, got {self.min_face_run!r}")
-        if not self.face_run_jump_m > 0:
-            p.append(f"face_run_jump_m: must be > 0, got {self.face_run_jump_m}")
+        if self.prior_shape not in PRIOR_SHAPES:
+            p.append(f"prior_shape: expected one of {', '.join(PRIOR_SHAPES)}, got {self.prior_shape!r}")
+        if not self.prior_pad_m >= 0:
+            p.append(f"prior_pad_m: must be >= 0, got {self.prior_pad_m}")
         if not isinstance(self.priors_off_own_floor, bool):
             p.append(f"priors_off_own_floor: must be true or false, got {self.priors_off_own_floor!r}")
         if not isinstance(self.route, bool):
@@ -92,12 +96,14 @@ class MapParams:
 
 
 def view_on_floor(ground: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray, max_range_m: float,
-                  column_step_px: int = 1, edge_px: int = 0, min_face_run: int = 1, run_jump_m: float = 0.05):
+                  column_step_px: int = 1, edge_px: int = 0, with_runs: bool = False):
     """What a traversability image shows on the floor (z = 0 of the world frame), per column (every
     column_step_px): its ground region from the bottom row up to edge_px rows below the region's top
     edge, at most max_range_m from the camera. -> (faces (M, 2), their rays' unit directions on the
     floor (M, 2), the floor seen (a shapely polygon)). A face is that edge where a non-ground pixel
-    lies above it, nearer than max_range_m, in a run of at least min_face_run faces (face_runs)."""
+    lies above it, nearer than max_range_m. with_runs: a fourth item, (run id per face (M,): faces in
+    neighbouring sampled columns whose ranges differ by at most RUN_JUMP_M share one, in column order;
+    whether the face is in the image's first or last sampled column (M,)): face_shadows' input."""
     ground = np.asarray(ground, bool)
     h, w = ground.shape
     cols = np.arange(0, w, column_step_px)
@@ -109,31 +115,45 @@ def view_on_floor(ground: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray,
     edge, rng, dirs, down = _on_floor(cols, edge_row, K, T, max_range_m)
     near, _, _, _ = _on_floor(cols, np.full(len(cols), h - 0.5), K, T, max_range_m)
     is_face = has & (top > 0) & down & (rng < max_range_m)
-    if min_face_run > 1:
-        is_face &= face_runs(is_face, rng, run_jump_m) >= min_face_run
     floor = Polygon(np.vstack([near, edge[::-1]])).buffer(0)
-    return edge[is_face], dirs[is_face], floor
+    if not with_runs:
+        return edge[is_face], dirs[is_face], floor
+    # a run starts at each face whose left neighbour is no face or lies more than RUN_JUMP_M nearer or further
+    face_rng = np.where(is_face, rng, 0.0)         # (a ray above the horizon has no finite range)
+    joined = is_face[:-1] & is_face[1:] & (np.abs(np.diff(face_rng)) <= RUN_JUMP_M)
+    starts = is_face & ~np.concatenate([[False], joined])
+    side = np.zeros(len(cols), bool)
+    side[[0, -1]] = True
+    return edge[is_face], dirs[is_face], floor, ((np.cumsum(starts) - 1)[is_face], side[is_face])
 
 
-def face_runs(is_face: np.ndarray, range_m: np.ndarray, jump_m: float) -> np.ndarray:
-    """Round 24 (map.min_face_run): per sampled column, the length of the run of faces it belongs to:
-    neighbouring columns that are both faces, their ranges on the floor within jump_m (0 where the
-    column is no face). Depth world 16 seed 6: the first views saw the small cylinder 0.8-0.9 m away,
-    beyond max_range_m but for two columns whose edge came in at 0.80 m; their discs along the
-    grazing rays held the floor 12 cm south of it, where the body later passed, and the swing guard
-    kept kappa at 0.06 /m for 30 s (README round 24)."""
-    is_face = np.asarray(is_face, bool)
-    rng = np.asarray(range_m, float)
-    out = np.zeros(len(is_face), int)
-    start = 0
-    for i in range(1, len(is_face) + 1):
-        joined = (i < len(is_face) and is_face[i] and is_face[i - 1]
-                  and abs(rng[i] - rng[i - 1]) <= jump_m)
-        if not joined:
-            if is_face[start]:
-                out[start:i] = i - start
-            start = i
-    return out
+def face_shadows(faces_xy: np.ndarray, dirs: np.ndarray, runs: np.ndarray, at_side: np.ndarray,
+                 depth_m: float, pad_m: float, side_disc_m: float):
+    """Round 24 (map.prior_shape shadow): the prior on an obstacle's unseen extent as the floor behind a
+    run of faces, between the run's outermost rays, depth_m deep along each ray, grown by pad_m. A convex
+    obstacle lies between the rays that graze its silhouette, so the shadow covers it (to depth_m) and
+    reaches no further beside it than pad_m; a disc behind the outermost face reached its radius beyond
+    the silhouette, onto floor where COBRA's body later passed (README round 24). A face in the image's
+    first or last column (at_side) may belong to an obstacle that goes on beyond the image: it also gets
+    the disc of radius side_disc_m behind it (the disc prior). -> a shapely geometry (empty without
+    faces)."""
+    faces_xy = np.asarray(faces_xy, float).reshape(-1, 2)
+    dirs = np.asarray(dirs, float).reshape(-1, 2)
+    runs = np.asarray(runs)
+    parts = []
+    for r in np.unique(runs):
+        i = np.nonzero(runs == r)[0]
+        near, far = faces_xy[i], faces_xy[i] + depth_m * dirs[i]
+        if len(i) == 1:
+            parts.append(shapely.linestrings(np.vstack([near, far])))
+        else:
+            quads = np.stack([near[:-1], near[1:], far[1:], far[:-1], near[:-1]], axis=1)
+            parts.extend(shapely.polygons(quads))
+    for j in np.nonzero(np.asarray(at_side, bool))[0]:
+        parts.append(Point(faces_xy[j] + side_disc_m * dirs[j]).buffer(side_disc_m, 4))
+    if not parts:
+        return Polygon()
+    return shapely.union_all(shapely.buffer(np.asarray(parts, dtype=object), max(pad_m, 1e-4), quad_segs=2))
 
 
 def face_normals(faces_xy: np.ndarray, dirs: np.ndarray, window_m: float,
@@ -190,22 +210,25 @@ class ObstacleMap:
         self._prepared = False
 
     def add_view(self, faces_xy: np.ndarray, dirs: np.ndarray, floor, prior_radius_m: float,
-                 priors_off_own_floor: bool = False) -> None:
+                 priors_off_own_floor: bool = False, prior=None) -> None:
         """One view (view_on_floor): the floor it shows clears what the map held there (an older view's
         face behind which this one sees floor: a cylinder's prior where its side is not, a far edge
         the depth test marked unsure), then each face point is grown into the disc of
         prior_radius_m behind it along its ray. priors_off_own_floor (round 18, MapParams): the discs
         are not laid on floor this same view shows: a disc behind a cylinder's outermost face
-        reaches prior_radius_m beyond the cylinder's side, onto floor the view shows beside it."""
+        reaches prior_radius_m beyond the cylinder's side, onto floor the view shows beside it.
+        prior (round 24, map.prior_shape shadow): the view's prior as a geometry (face_shadows) instead
+        of the discs."""
         seen = floor is not None and not floor.is_empty
         geom = self._geom.difference(floor) if seen else self._geom
         faces_xy = np.asarray(faces_xy, float).reshape(-1, 2)
-        if len(faces_xy):
+        if prior is None and len(faces_xy):
             centres = faces_xy + prior_radius_m * np.asarray(dirs, float).reshape(-1, 2)
-            discs = shapely.union_all(shapely.buffer(shapely.points(centres), prior_radius_m, quad_segs=4))
+            prior = shapely.union_all(shapely.buffer(shapely.points(centres), prior_radius_m, quad_segs=4))
+        if prior is not None and not prior.is_empty:
             if priors_off_own_floor and seen:
-                discs = discs.difference(floor)
-            geom = shapely.union_all([geom, discs])
+                prior = prior.difference(floor)
+            geom = shapely.union_all([geom, prior])
         self._geom = geom.simplify(0.002)
         self._prepared = False
 

@@ -44,7 +44,7 @@ import numpy as np
 from .body_model import BodyGeometry, body_poses, middle_path, middle_pose
 from .collision_check import PerceptionCollisionChecker
 from .follower import Command, RecedingHorizonFollower
-from .obstacle_map import MapParams, ObstacleMap, face_normals, view_on_floor
+from .obstacle_map import MapParams, ObstacleMap, face_normals, face_shadows, view_on_floor
 from .route import Route
 from .sampler import Selection, TrajectorySampler
 from .unicycle import arc_poses
@@ -154,11 +154,16 @@ class NavPlanner:
             self._views.appendleft((ground_image, T_world_camera))
         if self.map_params.source == "faces":
             mp = self.map_params
-            faces, dirs, floor = view_on_floor(ground_image, self.intrinsics.K(), T_world_camera, mp.max_range_m,
-                                               mp.column_step_px, mp.edge_px, mp.min_face_run, mp.face_run_jump_m)
+            faces, dirs, floor, (runs, at_side) = view_on_floor(
+                ground_image, self.intrinsics.K(), T_world_camera, mp.max_range_m, mp.column_step_px, mp.edge_px,
+                with_runs=True)
+            prior = None
+            if mp.prior_shape == "shadow":                # round 24: the floor behind each run of faces
+                prior = face_shadows(faces, dirs, runs, at_side, 2.0 * mp.prior_radius_m, mp.prior_pad_m,
+                                     mp.prior_radius_m)
             if mp.prior_normal_window_m > 0:            # round 23: the discs along the surface's normal
                 dirs = face_normals(faces, dirs, mp.prior_normal_window_m)
-            self.obstacle_map.add_view(faces, dirs, floor, mp.prior_radius_m, mp.priors_off_own_floor)
+            self.obstacle_map.add_view(faces, dirs, floor, mp.prior_radius_m, mp.priors_off_own_floor, prior)
         sampler = TrajectorySampler(checker, self.sampler_params, self._width_with_margins(None))
         goal_g = None
         cost_to_go = route_path = None
