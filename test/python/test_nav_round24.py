@@ -24,8 +24,9 @@ from test_nav_round11 import COBRA
 
 
 def test_runs_join_neighbouring_faces_and_split_at_gaps_and_range_jumps():
-    # a near box (0.45 m) and a far one (0.6 m) side by side in the image, then a gap and a third
-    near_box, far_box, apart = (0.45, 0.5, -0.05, 0.0), (0.6, 0.7, 0.0, 0.06), (0.5, 0.55, 0.15, 0.2)
+    # a near box (0.45 m) and a far one (0.6 m) overlapping in the image (no column between their faces),
+    # then a gap and a third
+    near_box, far_box, apart = (0.45, 0.5, -0.05, 0.01), (0.6, 0.7, 0.0, 0.06), (0.5, 0.55, 0.15, 0.2)
     faces, rays, _, (runs, side) = view_on_floor(drawn_mask(boxes=[near_box, far_box, apart]), K.K(), T_GC, 0.8,
                                                  4, edge_px=6, with_runs=True)
     assert len(np.unique(runs)) == 3 and not side.any()
