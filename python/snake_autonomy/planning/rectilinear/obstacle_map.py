@@ -149,11 +149,19 @@ def face_shadows(faces_xy: np.ndarray, dirs: np.ndarray, runs: np.ndarray, at_si
         else:
             quads = np.stack([near[:-1], near[1:], far[1:], far[:-1], near[:-1]], axis=1)
             parts.extend(shapely.polygons(quads))
-    for j in np.nonzero(np.asarray(at_side, bool))[0]:
-        parts.append(Point(faces_xy[j] + side_disc_m * dirs[j]).buffer(side_disc_m, 4))
+    side = np.asarray(at_side, bool)
+    if side.any():
+        parts.append(face_discs(faces_xy[side], dirs[side], side_disc_m))
     if not parts:
         return Polygon()
     return shapely.union_all(shapely.buffer(np.asarray(parts, dtype=object), max(pad_m, 1e-4), quad_segs=2))
+
+
+def face_discs(faces_xy: np.ndarray, dirs: np.ndarray, radius_m: float):
+    """The disc prior (round 15): each face grown into the disc of radius_m behind it along its direction
+    (the ray, or round 23's normal); their union."""
+    centres = np.asarray(faces_xy, float).reshape(-1, 2) + radius_m * np.asarray(dirs, float).reshape(-1, 2)
+    return shapely.union_all(shapely.buffer(shapely.points(centres), radius_m, quad_segs=4))
 
 
 def face_normals(faces_xy: np.ndarray, dirs: np.ndarray, window_m: float,
@@ -223,8 +231,7 @@ class ObstacleMap:
         geom = self._geom.difference(floor) if seen else self._geom
         faces_xy = np.asarray(faces_xy, float).reshape(-1, 2)
         if prior is None and len(faces_xy):
-            centres = faces_xy + prior_radius_m * np.asarray(dirs, float).reshape(-1, 2)
-            prior = shapely.union_all(shapely.buffer(shapely.points(centres), prior_radius_m, quad_segs=4))
+            prior = face_discs(faces_xy, dirs, prior_radius_m)
         if prior is not None and not prior.is_empty:
             if priors_off_own_floor and seen:
                 prior = prior.difference(floor)
