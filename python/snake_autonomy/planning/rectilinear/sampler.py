@@ -40,7 +40,6 @@ import numpy as np
 
 from .body_model import body_poses, head_path
 from .collision_check import PerceptionCollisionChecker, prefix_length
-from .dubins import length_to_disc
 from .unicycle import arc_poses
 
 
@@ -139,11 +138,6 @@ class SamplerParams:
                                           # camera (depth along its axis) is not known to be an obstacle (far
                                           # off it is mostly a cylinder's upper part hiding the floor behind
                                           # it; collision_check.py). inf: all of it is
-    goal_turn_radius_m: float = 0.0       # round 25: > 0: the goal bias knows the robot turns no tighter than
-                                          # this: arcs count as turning at most 1 / this, and a point's cost is
-                                          # the larger of the route's and the shortest forward path of that
-                                          # radius into the goal's disc (dubins.py; Hybrid A*'s two bounds).
-                                          # 0: off (the route's cost alone)
 
     def validate(self) -> List[str]:
         p = []
@@ -156,7 +150,7 @@ class SamplerParams:
                     "footprint_taper_m",
                     "switch_cost_m", "swing_guard_m", "turn_free_m", "near_field_max_m", "back_off_check_m", "swing_guard_tail_m",
                     "blocked_wins_depth_m", "crawl_guard_m", "crawl_dead_band_per_m", "crawl_margin_m",
-                    "view_obstacle_range_m", "goal_turn_radius_m"):
+                    "view_obstacle_range_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
         for key in ("body_model", "blocked_wins", "turn_keeps_side", "goal_disc", "reshape_keeps_centroid",
@@ -266,22 +260,9 @@ class TrajectorySampler:
             goal_err = depth_err = end_err = 0.0
             if goal_in_ground is not None and p.goal_tie_m > 0:
                 n = np.searchsorted(a.s_m, a.free_m, side="right")
-                poses = a.poses[:max(1, n)]
-                turn_radius = p.goal_turn_radius_m
-                if turn_radius > 0 and abs(a.curvature_per_m) > 1.0 / turn_radius:
-                    # round 25: the arc as far as the robot turns (the free prefix's length, the
-                    # curvature clipped): an arc into the disc on paper that the body cannot bend to
-                    # circled the goal
-                    poses = arc_poses(math.copysign(1.0 / turn_radius, a.curvature_per_m), a.s_m[len(poses) - 1],
-                                      p.spacing_m)
-                prefix = poses[:, :2]
+                prefix = a.poses[:max(1, n), :2]
                 dist = np.hypot(prefix[:, 0] - goal_in_ground[0], prefix[:, 1] - goal_in_ground[1])
                 d = dist if cost_to_go is None else np.asarray(cost_to_go(prefix), float)
-                if turn_radius > 0:
-                    # Hybrid A*'s two bounds: the route's (obstacles, no heading) and the shortest
-                    # forward path of the turning radius into the disc (heading, no obstacles)
-                    disc = max(goal_radius_m, 0.5 * p.spacing_m)
-                    d = np.maximum(d, disc + length_to_disc(poses, goal_in_ground, disc, turn_radius))
                 if goal_radius_m > 0 and np.min(dist) <= goal_radius_m:
                     # in the goal's disc: there. Among the arcs that enter it, the one passing nearest
                     # the centre: the robot turns less tightly than the tightest arcs, and an arc
