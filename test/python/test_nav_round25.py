@@ -47,3 +47,17 @@ def test_refining_the_plane_drops_an_obstacles_foot_that_tilted_it():
     t_ref = tilt_deg(fit_ground_plane(noisy, DepthTraversabilityParams(refine_iterations=3),
                                       np.random.default_rng(1))[0])
     assert t_ref <= t_once + 0.05, (t_once, t_ref)
+
+
+def test_depth_traversability_keys_are_validated():
+    """Every problem named with its value (the section had no checks before round 25)."""
+    from snake_autonomy.planning.rectilinear.config import NavConfig, NavConfigError
+    with pytest.raises(NavConfigError) as e:
+        NavConfig.from_dict({"depth_traversability": {"refine_iterations": -1, "depth_tolerance": 0.0,
+                                                      "refine_floor_m": -0.001}})
+    text = str(e.value)
+    for want in ("depth_traversability.refine_iterations: must be an integer >= 0, got -1",
+                 "depth_traversability.depth_tolerance: must be > 0, got 0.0",
+                 "depth_traversability.refine_floor_m: must be > 0, got -0.001"):
+        assert want in text, text
+    assert NavConfig.from_yaml().depth.validate() == []

@@ -15,7 +15,7 @@
    bottom of the image (perception/ground_region.py).
 """
 from dataclasses import dataclass
-from typing import Optional, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 
@@ -37,6 +37,15 @@ class DepthTraversabilityParams:
                                        # a band of 3 robust sigmas of its residuals (at least refine_floor_m,
                                        # at most inlier_m); 0: one least-squares fit to RANSAC's inliers
     refine_floor_m: float = 0.0005     # the narrowest band (below it: the sensor's noise, not the plane)
+
+    def validate(self) -> List[str]:
+        p = [f"{key}: must be > 0, got {getattr(self, key)}"
+             for key in ("depth_tolerance", "max_range_m", "inlier_m", "min_fraction", "max_plane_tilt_deg",
+                         "max_height_error_m", "refine_floor_m") if not getattr(self, key) > 0]
+        p += [f"{key}: must be an integer >= {low}, got {getattr(self, key)!r}"
+              for key, low in (("stride_px", 1), ("ransac_iterations", 1), ("block_px", 1), ("refine_iterations", 0))
+              if not isinstance(getattr(self, key), int) or getattr(self, key) < low]
+        return p
 
 
 def plane_from_mount(T_ground_camera: np.ndarray) -> Tuple[np.ndarray, float]:

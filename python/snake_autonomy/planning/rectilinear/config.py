@@ -153,8 +153,8 @@ class NavConfig:
         for key in ("amplitude_m", "wavelength_m", "frequency_hz"):
             if not getattr(gait, key) > 0:
                 problems.append(f"gait.{key}: must be > 0, got {getattr(gait, key)}")
-        for name, obj in (("sampler", sampler), ("follower", follower), ("plant", plant),
-                          ("classifier", classifier), ("map", omap)):
+        for name, obj in (("depth_traversability", depth), ("sampler", sampler), ("follower", follower),
+                          ("plant", plant), ("classifier", classifier), ("map", omap)):
             if obj is not None:
                 problems += [f"{name}.{p}" for p in obj.validate()]
         if problems:
