@@ -61,3 +61,11 @@ def test_depth_traversability_keys_are_validated():
                  "depth_traversability.refine_floor_m: must be > 0, got -0.001"):
         assert want in text, text
     assert NavConfig.from_yaml().depth.validate() == []
+
+
+def test_round_25_settings_the_plane_is_refined_for_every_robot():
+    """config/nav.yaml (README round 25): three refits; the other robots' configs inherit them."""
+    from snake_autonomy.planning.rectilinear.config import NavConfig, nav_config_path
+    for robot in ("cobra", "chang_rectilinear"):
+        d = NavConfig.from_yaml(nav_config_path(robot)).depth
+        assert d.refine_iterations == 3 and d.refine_floor_m == pytest.approx(0.0005), robot
