@@ -54,11 +54,12 @@ def test_depth_traversability_keys_are_validated():
     from snake_autonomy.planning.rectilinear.config import NavConfig, NavConfigError
     with pytest.raises(NavConfigError) as e:
         NavConfig.from_dict({"depth_traversability": {"refine_iterations": -1, "depth_tolerance": 0.0,
-                                                      "refine_floor_m": -0.001}})
+                                                      "refine_floor_m": -0.001, "min_fraction": 1.5}})
     text = str(e.value)
     for want in ("depth_traversability.refine_iterations: must be an integer >= 0, got -1",
                  "depth_traversability.depth_tolerance: must be > 0, got 0.0",
-                 "depth_traversability.refine_floor_m: must be > 0, got -0.001"):
+                 "depth_traversability.refine_floor_m: must be > 0, got -0.001",
+                 "depth_traversability.min_fraction: must be in (0, 1], got 1.5"):
         assert want in text, text
     assert NavConfig.from_yaml().depth.validate() == []
 

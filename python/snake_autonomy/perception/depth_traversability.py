@@ -42,6 +42,8 @@ class DepthTraversabilityParams:
         p = [f"{key}: must be > 0, got {getattr(self, key)}"
              for key in ("depth_tolerance", "max_range_m", "inlier_m", "min_fraction", "max_plane_tilt_deg",
                          "max_height_error_m", "refine_floor_m") if not getattr(self, key) > 0]
+        if not self.min_fraction <= 1:
+            p.append(f"min_fraction: must be in (0, 1], got {self.min_fraction}")
         p += [f"{key}: must be an integer >= {low}, got {getattr(self, key)!r}"
               for key, low in (("stride_px", 1), ("ransac_iterations", 1), ("block_px", 1), ("refine_iterations", 0))
               if not isinstance(getattr(self, key), int) or getattr(self, key) < low]
@@ -81,13 +83,16 @@ def fit_ground_plane(points: np.ndarray, params: DepthTraversabilityParams,
     for _ in range(params.refine_iterations):
         # round 25: the points of an obstacle's foot lie within inlier_m of the floor too; the floor
         # the camera sees in its lower part spans 0.1-0.2 m, so a few hundred of them (1-4 mm up a
-        # cylinder COBRA faces) tilted the plane 0.2-0.6 deg, and the floor 0.5-0.9 m away met it
+        # cylinder COBRA faces) tilted the plane 0.2-0.7 deg, and the floor 0.5-0.9 m away met it
         # 3-6 % off (depth_tolerance 5 %): not ground, and the map took its edge for an obstacle's
         # face (depth world 6 seed 7). Refit to the band of the residuals' own spread.
-        res = points @ n + d
-        sigma = 1.4826 * float(np.median(np.abs(res[np.abs(res) < params.inlier_m])))
+        res = np.abs(points @ n + d)
+        near = res[res < params.inlier_m]
+        if len(near) < 3:
+            break
+        sigma = 1.4826 * float(np.median(near))
         band = min(params.inlier_m, max(params.refine_floor_m, 3.0 * sigma))
-        keep = points[np.abs(res) < band]
+        keep = points[res < band]
         if len(keep) < 3:
             break
         inl = keep
