@@ -1,6 +1,6 @@
 """Issue 13 round 25: the depth traversability's ground plane refined without an obstacle's foot
 (depth_traversability.refine_iterations). COBRA depth world 6 seed 7 at 352 s, facing a cylinder
-0.17 m away: the plane tilted 0.2-0.6 deg, the floor 0.5-0.9 m away failed the 5 % depth test, and
+0.17 m away: the plane tilted 0.2-0.7 deg, the floor 0.5-0.9 m away failed the 5 % depth test, and
 the map took the edge of the ground region there for an obstacle's face (a phantom)."""
 import math
 
