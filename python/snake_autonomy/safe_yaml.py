@@ -11,8 +11,13 @@ once per nesting level (RecursionError) and reads any file, binary or UTF-16 (Un
 - anchors/aliases (``&a`` ... ``*a``) are refused: configuration files have no use for them;
 - a key given twice in one mapping is refused with the key and both lines;
 - nesting deeper than ``MAX_DEPTH`` levels is refused.
+
+:func:`load_yaml_text` applies the same rules to a YAML text held in memory (a RunMission goal's
+``mission_yaml``): no module parses YAML any other way. :func:`short_repr` is how a problem message
+quotes a value: at most ``QUOTE_CHARS`` characters, control characters escaped.
 """
 import os
+import reprlib
 from pathlib import Path
 from typing import Any
 
@@ -24,10 +29,29 @@ from yaml.nodes import MappingNode
 
 MAX_FILE_BYTES = 1 << 20
 MAX_DEPTH = 32
+QUOTE_CHARS = 60
 
 
 class YamlFileError(ValueError):
     """A YAML file that cannot be used; the message is one line that names the file."""
+
+
+_REPR = reprlib.Repr()
+_REPR.maxstring = _REPR.maxother = QUOTE_CHARS
+_REPR.maxlevel, _REPR.maxlist, _REPR.maxtuple, _REPR.maxdict, _REPR.maxset = 3, 8, 8, 4, 8
+
+
+def short_repr(value, limit: int = QUOTE_CHARS) -> str:
+    """How a message quotes a value: its repr (control characters escaped, as repr does) cut to about
+    `limit` characters; a cut string says its length. Built from pieces (reprlib), so that quoting a
+    huge value costs no more than quoting a small one."""
+    if isinstance(value, str):
+        text = repr(value[:limit])
+        if len(value) <= limit and len(text) <= limit + 2:
+            return text
+        return f"{text[:limit]}... ({len(value)} characters)"
+    text = _REPR.repr(value)
+    return text if len(text) <= limit else text[:limit] + "..."
 
 
 def _line(mark) -> str:

@@ -1,6 +1,9 @@
 """The RunMission action's message side (nodes/mission_action.py), without ROS: which mission a goal
 asks for, and the per-waypoint result built from the decisions of a run."""
 import math
+import subprocess
+import sys
+import textwrap
 from types import SimpleNamespace
 
 import pytest
@@ -33,7 +36,7 @@ def test_a_goal_names_a_provided_mission_a_yaml_text_or_inline_waypoints():
 @pytest.mark.parametrize("g, text", [
     (goal(), "got none"),
     (goal(mission="star", waypoints=[pose2d(1, 0, 0)]), "got mission, waypoints"),
-    (goal(mission_yaml="waypoints: [[1, 2"), "not YAML"),
+    (goal(mission_yaml="waypoints: [[1, 2"), "not valid YAML"),
     (goal(mission_yaml="waypoints: []"), "the list is empty"),
     (goal(waypoints=[pose2d(NAN, 0, 0)]), "waypoints[0]"),
     (goal(mission="no_such_mission"), "file not found"),
@@ -42,6 +45,69 @@ def test_a_bad_goal_is_refused_naming_the_field(g, text):
     with pytest.raises(MissionError) as err:
         mission_from_goal(g, None, None)
     assert text in str(err.value)
+
+
+# 500 bytes that expand to 9^9 (387 million) strings: 57 s and 2.8 GB before it was refused
+ALIAS_BOMB = ("a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n"
+              + "".join(f"{c}: &{c} [*{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}]\n"
+                        for p, c in zip("abcdefgh", "bcdefghi"))
+              + "waypoints: *i\n")
+
+
+def test_a_mission_yaml_alias_bomb_is_refused_at_once():
+    """Run in a process capped at 2 GB of address space, so that an unbounded parse fails there."""
+    script = textwrap.dedent("""
+        import resource, sys, time
+        from types import SimpleNamespace
+        resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+        from snake_autonomy.missions import MissionError
+        from snake_autonomy.nodes.mission_action import mission_from_goal
+        goal = SimpleNamespace(mission="", mission_yaml=sys.stdin.read(), waypoints=[], name="")
+        t0 = time.perf_counter()
+        try:
+            mission_from_goal(goal, None, None)
+        except MissionError as exc:
+            print(f"{time.perf_counter() - t0:.3f}")
+            print(exc)
+    """)
+    try:
+        proc = subprocess.run([sys.executable, "-c", script], input=ALIAS_BOMB, capture_output=True, text=True,
+                              timeout=90)
+    except subprocess.TimeoutExpired:
+        pytest.fail("the alias bomb was not refused within 90 s")
+    assert proc.returncode == 0 and proc.stdout, proc.stderr[-1500:]
+    seconds, message = proc.stdout.split("\n", 1)
+    assert float(seconds) < 1.0
+    assert "RunMission goal mission_yaml" in message and "anchor &a refused" in message
+
+
+@pytest.mark.parametrize("name", ["../../../../etc/passwd", "/etc/passwd", "star/../../../../../etc/passwd",
+                                  "..", "star\x1b[2J"])
+def test_a_goal_names_a_mission_only_inside_the_missions_folder(name):
+    with pytest.raises(MissionError) as err:
+        mission_from_goal(goal(mission=name), None, None)
+    text = str(err.value)
+    assert "root:" not in text and "\x1b" not in text
+    assert "config/missions" in text
+
+
+def test_a_refusal_never_quotes_a_files_contents(tmp_path):
+    secret = tmp_path / "secret.yaml"
+    secret.write_text("top-secret-line-of-a-file\n")
+    with pytest.raises(MissionError) as err:
+        mission_from_goal(goal(mission=str(secret)), None, None)
+    assert "top-secret" not in str(err.value) and "expected a mapping" in str(err.value)
+
+
+def test_problems_quote_a_short_escaped_piece_of_a_value():
+    text = 'name: "\\e[2J' + "A" * 500 + '"\nwaypoints: [["' + "B" * 500 + '", 0, 0]]\nextra: "' + "C" * 500 + '"\n'
+    with pytest.raises(MissionError) as err:
+        mission_from_goal(goal(mission_yaml=text), None, None)
+    message = str(err.value)
+    assert "waypoints[0][0]" in message and "extra: unknown key" in message
+    assert "\x1b" not in message
+    for letter in "BC":
+        assert letter * 61 not in message
 
 
 def status(index, reached, distance, yaw=0.1, stale=False, n=2, gait="sidewind"):

@@ -1,4 +1,7 @@
 """The package's YAML loader (safe_yaml.py): every refusal is one line naming the file (and line)."""
+import re
+from pathlib import Path
+
 import pytest
 
 from snake_autonomy.safe_yaml import MAX_FILE_BYTES, YamlFileError, load_yaml_file, load_yaml_text
@@ -62,3 +65,27 @@ def test_missing_file_and_folder(tmp_path):
         load_yaml_file(tmp_path / "nope.yaml")
     with pytest.raises(YamlFileError, match="is a folder"):
         load_yaml_file(tmp_path)
+
+
+def test_every_yaml_the_package_reads_goes_through_this_loader():
+    """PyYAML's own loaders expand aliases and keep the last of two equal keys: no module calls them,
+    for files or for in-memory texts (a RunMission goal's mission_yaml) alike."""
+    package = Path(__file__).resolve().parents[2] / "python" / "snake_autonomy"
+    direct = re.compile(r"\byaml\.(safe_load|load|full_load|unsafe_load|load_all|safe_load_all|compose)\s*\(")
+    offenders = [f"{path.relative_to(package)}:{number}: {line.strip()}"
+                 for path in sorted(package.rglob("*.py")) if path.name != "safe_yaml.py"
+                 for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+                 if direct.search(line)]
+    assert offenders == []
+
+
+def test_a_text_is_capped_like_a_file():
+    with pytest.raises(YamlFileError, match=f"^goal: larger than {MAX_FILE_BYTES} bytes"):
+        load_yaml_text("#" * (MAX_FILE_BYTES + 1), "goal")
+
+
+def test_a_quoted_value_is_short_and_escaped():
+    from snake_autonomy.safe_yaml import short_repr
+    text = short_repr("\x1b[2J" + "A" * 500)
+    assert "\x1b" not in text and "\\x1b" in text and "A" * 61 not in text and "(504 characters)" in text
+    assert short_repr([1, 2]) == "[1, 2]" and len(short_repr(list(range(1000)))) < 90

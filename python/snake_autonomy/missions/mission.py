@@ -20,12 +20,13 @@ each problem names the key and the value.
 import copy
 import math
 import os
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from ..control.waypoint_tracker import TRACKER_GAITS, TrackerParams
-from ..safe_yaml import YamlFileError, load_yaml_file
+from ..safe_yaml import YamlFileError, load_yaml_file, load_yaml_text, short_repr
 from ..paths import config_path
 from .scout import ScoutSpec, parse_scout
 
@@ -109,10 +110,9 @@ class Mission:
         return "\n".join(lines)
 
 
-def _short(v, limit: int = 80) -> str:
-    """repr(v), cut to `limit` characters: a problem message stays one readable line."""
-    text = repr(v)
-    return text if len(text) <= limit else text[:limit] + f"... ({len(text)} characters)"
+def _short(v) -> str:
+    """A value as a problem message quotes it: a short, escaped piece (safe_yaml.short_repr)."""
+    return short_repr(v)
 
 
 def _scout_text(spec) -> str:
@@ -287,8 +287,8 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
     defaults = defaults if defaults is not None else load_defaults()
     library = tuple(gait_library) if gait_library is not None else gait_library_names()
     problems: List[str] = []
-    if not isinstance(data, dict):
-        raise MissionError(source, [f"expected a mapping with a 'waypoints' list, got {_short(data)}"])
+    if not isinstance(data, dict):   # the type only: a file that is no mission is not quoted
+        raise MissionError(source, [f"expected a mapping with a 'waypoints' list, got {_type_name(data)}"])
 
     for key in data:
         if key not in MISSION_KEYS:
@@ -382,22 +382,51 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
                    source=source, raw=copy.deepcopy(data))
 
 
+def _type_name(value) -> str:
+    return "nothing (an empty document)" if value is None else f"a {type(value).__name__}"
+
+
+# A provided mission's name: config/missions/NAME.yaml, no path separator, no leading dot.
+MISSION_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}")
+
+
+def _path_text(path) -> str:
+    """A path as a message shows it: as is when short and printable, else quoted (short_repr)."""
+    text = str(path)
+    return text if text.isprintable() and len(text) <= 200 else short_repr(text)
+
+
 def resolve_mission_path(name_or_path: str) -> Path:
-    """A path, or the name of a provided mission (config/missions/NAME.yaml)."""
-    p = Path(os.path.expanduser(name_or_path))
-    if p.is_file():
+    """A mission file (a path ending in .yaml or .yml) or a provided mission's name, which resolves
+    only to config/missions/NAME.yaml; anything else is refused (MissionError) before a byte is read:
+    a name like ../../etc/passwd never reaches a file outside the folder."""
+    text = str(name_or_path)
+    p = Path(os.path.expanduser(text))
+    if p.suffix in (".yaml", ".yml"):
         return p
-    candidate = MISSIONS_DIR / f"{name_or_path}.yaml"
-    if candidate.is_file():
-        return candidate
-    return p
+    if MISSION_NAME.fullmatch(text):
+        return MISSIONS_DIR / f"{text}.yaml"
+    raise MissionError(short_repr(text), [
+        "neither a provided mission's name (config/missions/NAME.yaml: NAME of letters, digits, _ . -) "
+        "nor a mission file (a path ending in .yaml or .yml)"])
 
 
 def load_mission(path, defaults=None, gait_library=None) -> Mission:
-    """Reads and validates a mission file (a path or a provided mission's name)."""
+    """Reads and validates a mission file (a path ending in .yaml/.yml, or a provided mission's name)."""
     p = resolve_mission_path(str(path))
+    source = _path_text(p)
     try:
         data = load_yaml(p)
     except FileNotFoundError:
-        raise MissionError(str(p), [f"file not found: {p}"]) from None
-    return validate_mission(data, str(p), defaults, gait_library)
+        raise MissionError(source, [f"file not found: {source}"]) from None
+    return validate_mission(data, source, defaults, gait_library)
+
+
+def mission_from_text(text: str, source: str, defaults=None, gait_library=None) -> Mission:
+    """A mission held in memory as YAML text (a RunMission goal's mission_yaml), read by the same
+    bounded loader as the files (safe_yaml.load_yaml_text: size cap, no aliases, no duplicate keys)."""
+    try:
+        data = load_yaml_text(text, source)
+    except YamlFileError as exc:
+        raise MissionError(source, [str(exc).removeprefix(f"{source}: ")]) from None
+    return validate_mission(data, source, defaults, gait_library)

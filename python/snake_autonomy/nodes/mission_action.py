@@ -1,20 +1,19 @@
 """The RunMission action of mission_node (actionlib server ``mission/run``), the message side only:
 goal -> Mission, tracker decision -> feedback, run metrics -> result. The node does the wiring.
 
-Goal: exactly one of ``mission`` (a file or a provided mission's name), ``mission_yaml`` (a whole
-mission as YAML text) or ``waypoints`` (geometry_msgs/Pose2D, theta in rad; the defaults for the
-rest). Result: the run's outcome and per-waypoint metrics, computed from the decisions of this run
+Goal: exactly one of ``mission`` (a .yaml/.yml file, or a provided mission's name: only
+config/missions/NAME.yaml), ``mission_yaml`` (a whole mission as YAML text, read by the same bounded
+loader as the files: safe_yaml.load_yaml_text) or ``waypoints`` (geometry_msgs/Pose2D, theta in rad;
+the defaults for the rest). Result: the run's outcome and per-waypoint metrics, computed from the decisions of this run
 (experiments.results.compute_metrics, the same figures as metrics.json). Cancel: aborts the mission
 (hold sent); the goal ends preempted with the metrics so far.
 """
 import math
 from typing import Any, Dict, List, Sequence
 
-import yaml
-
 from snake_autonomy.experiments.results import compute_metrics
 from snake_autonomy.missions import MissionError, load_mission
-from snake_autonomy.missions.mission import validate_mission
+from snake_autonomy.missions.mission import mission_from_text, validate_mission
 
 NAN = float("nan")
 DECISION_KEYS = ("t", "waypoint_index", "target_index", "reached", "distance", "yaw_error_abs", "yaw_error_rel",
@@ -31,11 +30,7 @@ def mission_from_goal(goal, defaults, gait_library):
     if goal.mission:
         return load_mission(goal.mission, defaults=defaults, gait_library=gait_library)
     if goal.mission_yaml:
-        try:
-            data = yaml.safe_load(goal.mission_yaml)
-        except yaml.YAMLError as exc:
-            raise MissionError("RunMission goal mission_yaml", [f"not YAML: {exc}"]) from None
-        return validate_mission(data, "RunMission goal mission_yaml", defaults, gait_library)
+        return mission_from_text(goal.mission_yaml, "RunMission goal mission_yaml", defaults, gait_library)
     data = {"name": goal.name or "inline",
             "waypoints": [[p.x, p.y, math.degrees(p.theta)] for p in goal.waypoints]}
     return validate_mission(data, "RunMission goal waypoints", defaults, gait_library)

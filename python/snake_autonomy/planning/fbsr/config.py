@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict
 
-import yaml
+from ...safe_yaml import load_yaml_file
 
 
 class ConfigError(ValueError):
@@ -56,8 +56,9 @@ class ScoutConfig:
 
     @classmethod
     def from_yaml(cls, path) -> "ScoutConfig":
-        with open(path) as f:
-            raw = yaml.safe_load(f) or {}
+        raw = load_yaml_file(path) or {}
+        if not isinstance(raw, dict):
+            raise ConfigError(f"{path}: expected a mapping of planner and robots, got a {type(raw).__name__}")
         return cls.from_dict(raw, str(path))
 
     @classmethod
