@@ -1,6 +1,8 @@
 """sensor_msgs/Image and CameraInfo <-> numpy, without cv_bridge (the encodings the simulated head
 camera and the planner use: rgb8, bgr8, mono8, 32FC1 depth in m, 16UC1 depth in mm as a RealSense
-publishes it)."""
+publishes it). A message that cannot be read raises ValueError naming the field and its value."""
+import math
+
 import numpy as np
 from sensor_msgs.msg import CameraInfo, Image
 
@@ -8,6 +10,7 @@ from snake_autonomy.sim.camera import CameraIntrinsics
 
 _CHANNELS = {"rgb8": (3, np.uint8), "bgr8": (3, np.uint8), "mono8": (1, np.uint8),
              "32FC1": (1, np.float32), "16UC1": (1, np.uint16)}
+MAX_SIDE_PX = 8192        # a camera image's width or height beyond this is a corrupt header
 
 
 def to_image(array: np.ndarray, encoding: str, stamp, frame_id: str) -> Image:
@@ -26,9 +29,18 @@ def to_image(array: np.ndarray, encoding: str, stamp, frame_id: str) -> Image:
 def from_image(msg: Image) -> np.ndarray:
     """(H, W) or (H, W, 3) array; rgb for colour (bgr8 is swapped), metres (float32) for depth."""
     if msg.encoding not in _CHANNELS:
-        raise ValueError(f"image encoding {msg.encoding!r}: expected one of {', '.join(_CHANNELS)}")
+        raise ValueError(f"image encoding {msg.encoding[:40]!r}: expected one of {', '.join(_CHANNELS)}")
     ch, dtype = _CHANNELS[msg.encoding]
     dt = np.dtype(dtype).newbyteorder(">" if msg.is_bigendian else "<")
+    for key in ("width", "height"):
+        if not 1 <= getattr(msg, key) <= MAX_SIDE_PX:
+            raise ValueError(f"image {key} {getattr(msg, key)}: expected 1..{MAX_SIDE_PX}")
+    if msg.step < msg.width * ch * dt.itemsize:
+        raise ValueError(f"image step {msg.step}: a {msg.encoding} row of width {msg.width} needs "
+                         f"{msg.width * ch * dt.itemsize} bytes")
+    if len(msg.data) != msg.step * msg.height:
+        raise ValueError(f"image data {len(msg.data)} bytes: height {msg.height} x step {msg.step} "
+                         f"needs {msg.step * msg.height}")
     row = np.frombuffer(msg.data, dtype=np.uint8).reshape(msg.height, msg.step)
     a = row[:, :msg.width * ch * dt.itemsize].copy().view(dt).reshape(msg.height, msg.width, ch)
     a = a[..., 0] if ch == 1 else a
@@ -50,5 +62,17 @@ def to_camera_info(k: CameraIntrinsics, stamp, frame_id: str) -> CameraInfo:
 
 
 def from_camera_info(msg: CameraInfo) -> CameraIntrinsics:
-    return CameraIntrinsics(int(msg.width), int(msg.height), float(msg.K[0]), float(msg.K[4]),
-                            float(msg.K[2]), float(msg.K[5]))
+    """The pinhole intrinsics of a camera_info; ValueError naming the field of an unusable one."""
+    for key in ("width", "height"):
+        if not 1 <= getattr(msg, key) <= MAX_SIDE_PX:
+            raise ValueError(f"camera_info {key} {getattr(msg, key)}: expected 1..{MAX_SIDE_PX}")
+    if len(msg.K) != 9:
+        raise ValueError(f"camera_info K: {len(msg.K)} values, expected 9")
+    fx, fy, cx, cy = (float(msg.K[i]) for i in (0, 4, 2, 5))
+    for key, v in (("K[0] (fx)", fx), ("K[4] (fy)", fy)):
+        if not (math.isfinite(v) and v > 0):
+            raise ValueError(f"camera_info {key} {v!r}: must be finite and > 0")
+    for key, v in (("K[2] (cx)", cx), ("K[5] (cy)", cy)):
+        if not math.isfinite(v):
+            raise ValueError(f"camera_info {key} {v!r}: must be finite")
+    return CameraIntrinsics(int(msg.width), int(msg.height), fx, fy, cx, cy)

@@ -22,7 +22,14 @@ Params      ~world (a world file: goal and goal radius) or ~goal ("x,y") + ~goal
             command rate), ~gait, ~reverse_gait (default: ~nav_config's gaits:),
             ~on_no_free_arc (hold|turn|back_off; default back_off when the nav config's
             follower.back_off, else hold), ~world_frame (frame of
-            the path and markers; default base_pose's frame_id), ~pose_timeout_s (1.0).
+            the path and markers; default base_pose's frame_id), ~pose_timeout_s (1.0),
+            ~frame_timeout_s (5.0: the oldest camera frame the robot moves on; give it at least
+            two camera periods).
+Inputs      every message is checked before it is used: camera_info (size, fx, fy > 0, finite),
+            images (encoding, size equal to camera_info's, bytes), poses (finite, unit quaternion,
+            stamps in order). A bad one is dropped, counted and named on /diagnostics (a throttled
+            warning too); a pose or frame older than its timeout holds the robot. Nothing that
+            arrives, and no bug in a tick, can end the command loop: a tick that fails sends hold.
 """
 import math
 
@@ -40,6 +47,9 @@ from snake_autonomy.msg import GaitCommand
 from snake_autonomy.nodes.image_msgs import from_camera_info, from_image, to_image
 from snake_autonomy.paths import config_path
 from snake_autonomy.transforms import pose_to_matrix
+
+QUATERNION_TOLERANCE = 0.01     # | |q| - 1 | beyond this is not an orientation (as the driver's rule)
+WARN_PERIOD_S = 5.0             # refusals and errors are logged at most this often (all are counted)
 
 GREEN, YELLOW, RED = ColorRGBA(0.1, 0.9, 0.1, 1.0), ColorRGBA(0.95, 0.85, 0.1, 1.0), ColorRGBA(0.9, 0.1, 0.1, 1.0)
 
@@ -68,11 +78,22 @@ class PlannerNode:
         self.on_no_free_arc = rospy.get_param("~on_no_free_arc", "back_off" if self.cfg.follower.back_off else "hold")
         self.rate_hz = float(rospy.get_param("~rate_hz", 2.0))
         self.pose_timeout_s = float(rospy.get_param("~pose_timeout_s", 1.0))
+        self.frame_timeout_s = float(rospy.get_param("~frame_timeout_s", 5.0))
+        for key, v in (("~rate_hz", self.rate_hz), ("~pose_timeout_s", self.pose_timeout_s),
+                       ("~frame_timeout_s", self.frame_timeout_s)):
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{key}: must be a finite number > 0, got {v!r}")
         self.world_frame = rospy.get_param("~world_frame", "")
         self._replace = dataclasses.replace
         self.loop = None
         self.rgb = None
         self.last_tick = None
+        self.intrinsics = None            # of the camera_info the loop was built with
+        self.refused_before_loop = {}     # inputs refused before the first good camera_info
+        self.last_refusal = ""
+        self.warned = {}                  # input kind -> time of its last warning
+        self.node_errors = 0              # exceptions in this node's own code (publishing, overlay)
+        self.last_node_error = ""
         self.pub_cmd = rospy.Publisher("gait_command", GaitCommand, queue_size=10)
         self.pub_path = rospy.Publisher("nav/path", Path, queue_size=1, latch=True)
         self.pub_route = rospy.Publisher("nav/route", Path, queue_size=1, latch=True)
@@ -81,11 +102,14 @@ class PlannerNode:
         self.updater = diagnostic_updater.Updater()
         self.updater.setHardwareID("rectilinear_planner")
         self.updater.add("navigation", self.diagnose)
-        rospy.Subscriber("camera/color/camera_info", CameraInfo, self.on_info, queue_size=1)
-        rospy.Subscriber("base_pose", PoseWithCovarianceStamped, self.on_pose, queue_size=5)
-        rospy.Subscriber("camera/color/image_raw", Image, self.on_colour, queue_size=1, buff_size=2 ** 24)
+        g = self.guarded
+        rospy.Subscriber("camera/color/camera_info", CameraInfo, g(self.on_info, "camera_info"), queue_size=1)
+        rospy.Subscriber("base_pose", PoseWithCovarianceStamped, g(self.on_pose, "base_pose"), queue_size=5)
+        rospy.Subscriber("camera/color/image_raw", Image, g(self.on_colour, "colour image"), queue_size=1,
+                         buff_size=2 ** 24)
         if self.perception == "depth":
-            rospy.Subscriber("camera/depth/image_rect_raw", Image, self.on_depth, queue_size=1, buff_size=2 ** 24)
+            rospy.Subscriber("camera/depth/image_rect_raw", Image, g(self.on_depth, "depth image"), queue_size=1,
+                             buff_size=2 ** 24)
         self.timer = rospy.Timer(rospy.Duration(1.0 / self.rate_hz), self.on_timer)
         rospy.loginfo(f"planner: {self.perception} perception, goal {self.goal} (radius {self.goal_radius_m} m), "
                       f"gait {self.gait}, replan every {self.cfg.replan_period_s:g} s, commands at {self.rate_hz:g} Hz")
@@ -105,14 +129,53 @@ class PlannerNode:
             raise ValueError(f"~goal: expected x,y, got {goal!r}") from None
         return (x, y), float(rospy.get_param("~goal_radius_m", 0.1))
 
-    # -- inputs --------------------------------------------------------------------------------------
-    def on_info(self, msg):
+    # -- inputs ---------------------------------------------------------------------------------------
+    def refuse(self, kind: str, reason: str) -> None:
+        """Counts and reports an input that was dropped (the loop keeps what it had)."""
         if self.loop is not None:
+            self.loop.refuse(kind, reason)
+            self.last_refusal = self.loop.last_refusal
+        else:
+            self.refused_before_loop[kind] = self.refused_before_loop.get(kind, 0) + 1
+            self.last_refusal = f"{kind}: {reason}"
+        self.warn_throttled(kind, f"planner: {kind} dropped: {reason}")
+
+    def warn_throttled(self, kind: str, text: str) -> None:
+        """At most one warning per kind of input every WARN_PERIOD_S (rospy throttles per call site)."""
+        now = rospy.get_time()
+        if now - self.warned.get(kind, -math.inf) >= WARN_PERIOD_S or now < self.warned.get(kind, 0.0):
+            self.warned[kind] = now
+            rospy.logwarn(text)
+
+    def guarded(self, callback, what: str):
+        """callback(msg), never raising into rospy: a bug costs that message only (counted)."""
+        def wrapper(msg):
+            try:
+                callback(msg)
+            except Exception as exc:      # noqa: BLE001 - one bad message must not cost the node
+                self.node_error(what, exc)
+        return wrapper
+
+    def node_error(self, what: str, exc: Exception) -> None:
+        self.node_errors += 1
+        self.last_node_error = f"{what}: {type(exc).__name__}: {exc}"[:300]
+        rospy.logerr_throttle(WARN_PERIOD_S, f"planner: {self.last_node_error}")
+
+    def on_info(self, msg):
+        try:
+            intr = from_camera_info(msg)
+        except ValueError as exc:
+            self.refuse("camera_info", str(exc))
+            return
+        if self.loop is not None:
+            if intr != self.intrinsics:
+                self.refuse("camera_info", f"{intr.width}x{intr.height} fx {intr.fx:g} differs from the one in use "
+                                           f"({self.intrinsics.width}x{self.intrinsics.height} fx "
+                                           f"{self.intrinsics.fx:g}): restart the planner to change cameras")
             return
         from snake_autonomy import _core
         from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
         from snake_autonomy.planning.rectilinear.nav_loop import NavLoop
-        intr = from_camera_info(msg)
         cfg = self._replace(self.cfg, intrinsics=intr)
         if self.perception == "depth":
             from snake_autonomy.perception.depth_traversability import DepthTraversability
@@ -123,37 +186,87 @@ class PlannerNode:
             from snake_autonomy.perception.block_classifier import BlockClassifier
             clf, margin = BlockClassifier.load(self.classifier), cfg.classifier.ground_margin
             perceive = lambda rgb: clf.traversable(rgb, margin)
-        self.loop = NavLoop(cfg, self.head_width_m, perceive, self.goal, self.goal_radius_m,
-                            self.on_no_free_arc, self.pose_timeout_s,
-                            BodyGeometry.of_robot(_core.RobotModel.from_yaml(self.robot_yaml)))
+        loop = NavLoop(cfg, self.head_width_m, perceive, self.goal, self.goal_radius_m,
+                       self.on_no_free_arc, self.pose_timeout_s,
+                       BodyGeometry.of_robot(_core.RobotModel.from_yaml(self.robot_yaml)),
+                       frame_timeout_s=self.frame_timeout_s)
+        loop.refused.update(self.refused_before_loop)
+        self.intrinsics, self.loop = intr, loop
         rospy.loginfo(f"planner: camera {intr.width}x{intr.height}, fx {intr.fx:g} (camera_info)")
 
     def on_pose(self, msg):
         if not self.world_frame:
             self.world_frame = msg.header.frame_id
+        p, q = msg.pose.pose.position, msg.pose.pose.orientation
+        xyz, xyzw = (p.x, p.y, p.z), (q.x, q.y, q.z, q.w)
+        if not all(math.isfinite(v) for v in xyz + xyzw):
+            self.refuse("pose", f"not finite: position {xyz}, orientation {xyzw}")
+            return
+        norm = math.sqrt(sum(v * v for v in xyzw))
+        if abs(norm - 1.0) > QUATERNION_TOLERANCE:
+            self.refuse("pose", f"quaternion norm {norm:.6g} (tolerance {QUATERNION_TOLERANCE:g})")
+            return
         if self.loop is not None:
-            p, q = msg.pose.pose.position, msg.pose.pose.orientation
-            self.loop.on_pose(msg.header.stamp.to_sec(), pose_to_matrix((p.x, p.y, p.z), (q.x, q.y, q.z, q.w)))
+            why = self.loop.on_pose(msg.header.stamp.to_sec(), pose_to_matrix(xyz, [v / norm for v in xyzw]))
+            if why is not None:
+                self.refuse_logged("pose", why)
+
+    def refuse_logged(self, kind: str, reason: str) -> None:
+        """A refusal the loop has counted already: report it."""
+        self.last_refusal = self.loop.last_refusal
+        self.warn_throttled(kind, f"planner: {kind} dropped: {reason}")
+
+    def on_image(self, msg, kind: str):
+        try:
+            image = from_image(msg)
+        except ValueError as exc:
+            self.refuse(kind, str(exc))
+            return None
+        if self.loop is not None and (kind == "depth") == (self.perception == "depth"):
+            why = self.loop.on_frame(msg.header.stamp.to_sec(), image)
+            if why is not None:
+                self.refuse_logged(kind, why)
+        return image
 
     def on_colour(self, msg):
-        self.rgb = from_image(msg)
-        if self.loop is not None and self.perception == "mono":
-            self.loop.on_frame(msg.header.stamp.to_sec(), self.rgb)
+        rgb = self.on_image(msg, "colour")
+        if rgb is not None:
+            self.rgb = rgb
 
     def on_depth(self, msg):
-        if self.loop is not None:
-            self.loop.on_frame(msg.header.stamp.to_sec(), from_image(msg))
+        self.on_image(msg, "depth")
 
     # -- the tick ------------------------------------------------------------------------------------
     def on_timer(self, _event):
+        """The command loop (rospy ends a Timer whose callback raises: nothing may escape here)."""
+        try:
+            self.tick()
+        except Exception as exc:          # noqa: BLE001 - the loop outlives any bug: hold and say why
+            self.node_error("tick", exc)
+            try:
+                self.publish_command(True, 0.0)
+            except Exception as exc2:     # noqa: BLE001 - publishing during shutdown
+                self.node_error("hold", exc2)
+        try:
+            self.updater.update()
+        except Exception as exc:          # noqa: BLE001
+            self.node_error("diagnostics", exc)
+
+    def tick(self):
         if self.loop is None:
             self.publish_command(True, 0.0)
             return
         now = rospy.Time.now()
-        tick = self.loop.tick(now.to_sec())
+        tick = self.loop.tick(now.to_sec())      # never raises: a failed tick holds (state error)
         previous, self.last_tick = self.last_tick, tick
+        if tick.state != (previous.state if previous else None) and tick.state in ("stale", "error"):
+            rospy.logwarn(f"planner: {tick.message}")
+        self.publish_command(tick.hold, tick.kappa_per_m, tick.backwards)
         if tick.replan is not None:
-            self.publish_replan(now, tick)
+            try:
+                self.publish_replan(now, tick)
+            except Exception as exc:      # noqa: BLE001 - a display problem never stops the robot
+                self.node_error("publishing the replan", exc)
             if tick.replan.path_world is None:
                 rospy.logwarn(f"planner: {tick.message}")
             else:
@@ -161,8 +274,6 @@ class PlannerNode:
                 rospy.loginfo(f"planner: replan {self.loop.replans}: {tick.message}; goal {d:.2f} m away")
         if tick.state == "goal_reached" and (previous is None or previous.state != "goal_reached"):
             rospy.loginfo(f"planner: {tick.message}")
-        self.publish_command(tick.hold, tick.kappa_per_m, tick.backwards)
-        self.updater.update()
 
     def publish_command(self, hold: bool, kappa_per_m: float, backwards: bool = False):
         c = GaitCommand()
@@ -228,10 +339,19 @@ class PlannerNode:
 
     def diagnose(self, stat):
         t, loop = self.last_tick, self.loop
+        refused = dict(loop.refused) if loop is not None else dict(self.refused_before_loop)
+        for kind in ("camera_info", "pose", "depth", "colour", "frame"):
+            stat.add(f"refused_{kind}", str(refused.get(kind, 0)))
+        stat.add("last_refusal", self.last_refusal or "none")
+        stat.add("tick_errors", str(loop.errors if loop is not None else 0))
+        stat.add("node_errors", str(self.node_errors))
+        stat.add("last_error", (loop.last_error if loop is not None and loop.last_error else "")
+                 or self.last_node_error or "none")
         if t is None or loop is None:
             stat.summary(DiagnosticStatus.WARN, "waiting for camera_info" if loop is None else "starting")
             return stat
-        level = DiagnosticStatus.WARN if t.state in ("no_free_arc", "waiting") else DiagnosticStatus.OK
+        level = {"error": DiagnosticStatus.ERROR, "stale": DiagnosticStatus.WARN, "no_free_arc": DiagnosticStatus.WARN,
+                 "waiting": DiagnosticStatus.WARN}.get(t.state, DiagnosticStatus.OK)
         stat.summary(level, f"{t.state}: {t.message}")
         d = loop.distance_to_goal_m()
         stat.add("state", t.state)

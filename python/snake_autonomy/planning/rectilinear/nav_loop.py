@@ -13,6 +13,14 @@ follower turns the pose into kappa. The camera's pose in the replan's ground fra
 pose (the one the driver uses, base_pose) times the mount of config/nav.yaml camera: (the head
 bobs with the gait: the mount is the camera's mean pose, the error the batch path does not have).
 
+Inputs are checked where they enter (on_pose, on_frame return the reason of a refusal, counted in
+`refused`): a pose must be finite, a rotation, inside POSE_WORKSPACE_M and not older than the last one;
+a frame must be the camera's size (cfg.intrinsics) with a finite stamp not older than the last one.
+A pose older than pose_timeout_s or a frame older than frame_timeout_s (or either stamped more than
+FUTURE_TOLERANCE_S ahead of the clock) holds the robot (state STALE) until fresh ones arrive; the
+first fresh frame after that is replanned at once. tick() never raises: an exception inside it
+(perception, planner) is counted in `errors`, kept in `last_error`, and the tick holds (state ERROR).
+
 No free arc: `on_no_free_arc` "hold" (default) stops (gait hold) until a replan finds a free arc;
 "turn" turns in place with the follower's kappa_turn_per_m; "back_off" backs off tail first along the
 track (the reverse gait, NavTick.backwards; what the batch run does with follower.back_off).
@@ -21,7 +29,7 @@ Goal reached (base_link within the goal radius): hold for good.
 import bisect
 import dataclasses
 import math
-from collections import deque
+from collections import Counter, deque
 from dataclasses import dataclass
 from typing import Callable, Optional, Tuple
 
@@ -31,13 +39,18 @@ from .follower import BACK_OFF, RecedingHorizonFollower
 from .planner import NavPlanner, Replan, T_world_ground, ground_frame
 
 FOLLOWING, WAITING, NO_FREE_ARC, GOAL_REACHED = "following", "waiting", "no_free_arc", "goal_reached"
+STALE, ERROR = "stale", "error"    # holding: an input too old / an exception inside the tick
 NO_FREE_ARC_ACTIONS = ("hold", "turn", "back_off")
 POSE_HISTORY = 500                 # base poses kept to match a frame's stamp (5 s of 100 Hz)
+POSE_WORKSPACE_M = 1000.0          # |x|, |y|, |z| of a pose beyond this is an estimator's blunder
+ROTATION_TOLERANCE = 1e-3          # max |R^T R - I| of a pose's rotation
+FUTURE_TOLERANCE_S = 0.5           # a stamp this far ahead of the loop's clock is a clock error, not latency
 
 
 @dataclass
 class NavTick:
     state: str                         # FOLLOWING | WAITING (no frame or pose yet) | NO_FREE_ARC | GOAL_REACHED
+                                       # | STALE (an input too old: holding) | ERROR (the tick failed: holding)
     hold: bool                         # command the hold gait (else rectilinear with kappa_per_m)
     kappa_per_m: float = 0.0
     backwards: bool = False            # run the gait backwards (backing off with no free arc)
@@ -51,18 +64,25 @@ class NavTick:
 class NavLoop:
     def __init__(self, cfg, head_width_m: float, perception: Callable[[np.ndarray], np.ndarray],
                  goal_xy: Optional[Tuple[float, float]] = None, goal_radius_m: float = 0.1,
-                 on_no_free_arc: str = "hold", pose_timeout_s: float = 1.0, body=None):
-        """body: the robot's BodyGeometry (body_model.py), needed when cfg.sampler.body_model."""
+                 on_no_free_arc: str = "hold", pose_timeout_s: float = 1.0, body=None,
+                 frame_timeout_s: float = 5.0):
+        """body: the robot's BodyGeometry (body_model.py), needed when cfg.sampler.body_model.
+        pose_timeout_s, frame_timeout_s: the oldest pose / camera frame the loop still moves on."""
         if on_no_free_arc not in NO_FREE_ARC_ACTIONS:
             raise ValueError(f"on_no_free_arc: expected hold, turn or back_off, got {on_no_free_arc!r}")
-        if not goal_radius_m > 0:
-            raise ValueError(f"goal_radius_m: must be > 0, got {goal_radius_m}")
+        for key, v in (("goal_radius_m", goal_radius_m), ("pose_timeout_s", pose_timeout_s),
+                       ("frame_timeout_s", frame_timeout_s)):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+                raise ValueError(f"{key}: must be a finite number > 0, got {v!r}")
+        if goal_xy is not None and not all(math.isfinite(float(v)) for v in goal_xy):
+            raise ValueError(f"goal_xy: must be finite, got {tuple(goal_xy)!r}")
         self.cfg = cfg
         self.perception = perception
         self.goal_xy = None if goal_xy is None else (float(goal_xy[0]), float(goal_xy[1]))
         self.goal_radius_m = float(goal_radius_m)
         self.on_no_free_arc = on_no_free_arc
         self.pose_timeout_s = float(pose_timeout_s)
+        self.frame_timeout_s = float(frame_timeout_s)
         self.T_base_optical = cfg.mount.T_base_optical()
         follower = dataclasses.replace(cfg.follower, back_off=on_no_free_arc == "back_off")
         if cfg.map.source == "truth":
@@ -79,12 +99,37 @@ class NavLoop:
         self.state = WAITING
         self.replans = 0
         self.stops_no_free_arc = 0
+        self.refused = Counter()           # input kind ("pose", "frame") -> refusals
+        self.last_refusal = ""
+        self.errors = 0                    # ticks that raised (and held)
+        self.last_error = ""
+        self._was_stale = False
 
     # ---- inputs ------------------------------------------------------------------------------------
-    def on_pose(self, t_s: float, T_world_base: np.ndarray) -> None:
-        self._T_wb = np.asarray(T_world_base, float)
+    def refuse(self, kind: str, reason: str) -> str:
+        """Counts a refused input (also for the node's own checks: encodings, camera_info); the reason."""
+        self.refused[kind] += 1
+        self.last_refusal = f"{kind}: {reason}"
+        return reason
+
+    def on_pose(self, t_s: float, T_world_base: np.ndarray) -> Optional[str]:
+        """base_link's pose at t_s. None when taken, else why it was refused (nothing changes then)."""
+        T = np.asarray(T_world_base, float)
+        if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+            return self.refuse("pose", "not finite" if T.shape == (4, 4) else f"shape {T.shape}, expected (4, 4)")
+        if not math.isfinite(t_s):
+            return self.refuse("pose", f"stamp {t_s!r} not finite")
+        if np.max(np.abs(T[:3, 3])) > POSE_WORKSPACE_M:
+            return self.refuse("pose", f"position {tuple(np.round(T[:3, 3], 3))} beyond {POSE_WORKSPACE_M:g} m")
+        R = T[:3, :3]
+        if np.max(np.abs(R.T @ R - np.eye(3))) > ROTATION_TOLERANCE or np.linalg.det(R) < 0:
+            return self.refuse("pose", "orientation is not a rotation")
+        if self._pose_t is not None and t_s < self._pose_t:
+            return self.refuse("pose", f"stamp {t_s:.3f} s older than the last pose's {self._pose_t:.3f} s")
+        self._T_wb = T
         self._pose_t = float(t_s)
         self._history.append((self._pose_t, self._T_wb))
+        return None
 
     def pose_at(self, t_s: float) -> np.ndarray:
         """base_link's pose nearest t_s among the recent ones (the latest when the history is empty)."""
@@ -95,9 +140,20 @@ class NavLoop:
         near = [j for j in (i - 1, i) if 0 <= j < len(times)]
         return self._history[min(near, key=lambda j: abs(times[j] - t_s))][1]
 
-    def on_frame(self, t_s: float, image: np.ndarray) -> None:
-        """The latest camera frame (what the perception reads: depth in m or colour)."""
+    def on_frame(self, t_s: float, image: np.ndarray) -> Optional[str]:
+        """The latest camera frame (what the perception reads: depth in m or colour, the size of
+        cfg.intrinsics). None when taken, else why it was refused (the last good frame stays)."""
+        k = self.cfg.intrinsics
+        shape = getattr(image, "shape", None)
+        if shape is None or len(shape) not in (2, 3) or tuple(shape[:2]) != (k.height, k.width):
+            return self.refuse("frame", f"size {'x'.join(str(v) for v in reversed(shape[:2])) if shape else None}"
+                                        f" differs from the camera's {k.width}x{k.height} (camera_info)")
+        if not math.isfinite(t_s):
+            return self.refuse("frame", f"stamp {t_s!r} not finite")
+        if self._frame is not None and t_s < self._frame[0]:
+            return self.refuse("frame", f"stamp {t_s:.3f} s older than the last frame's {self._frame[0]:.3f} s")
         self._frame = (float(t_s), image)
+        return None
 
     @property
     def pose(self):
@@ -111,6 +167,27 @@ class NavLoop:
 
     # ---- the tick ----------------------------------------------------------------------------------
     def tick(self, t_s: float) -> NavTick:
+        """The command for t_s; never raises (an exception holds: state ERROR, counted in errors)."""
+        try:
+            return self._tick(t_s)
+        except Exception as exc:      # noqa: BLE001 - the loop must outlive any bug or bad frame
+            self.errors += 1
+            self.last_error = f"{type(exc).__name__}: {exc}"[:300]
+            self._next_replan = None          # replan on the next tick that works
+            return NavTick(ERROR, True, message=f"tick failed ({self.last_error}): holding")
+
+    def stale(self, t_s: float) -> Optional[str]:
+        """Why the pose or the frame is too old (or ahead of the clock) to move on, else None."""
+        for what, t_in, limit, key in (("base pose", self._pose_t, self.pose_timeout_s, "pose_timeout_s"),
+                                       ("camera frame", self._frame[0], self.frame_timeout_s, "frame_timeout_s")):
+            age = t_s - t_in
+            if age > limit:
+                return f"{what} {age:.1f} s old ({key} {limit:g})"
+            if age < -FUTURE_TOLERANCE_S:
+                return f"{what} stamped {-age:.1f} s ahead of the clock"
+        return None
+
+    def _tick(self, t_s: float) -> NavTick:
         if self.state == GOAL_REACHED:
             return NavTick(GOAL_REACHED, True, message="goal reached: holding")
         d = self.distance_to_goal_m()
@@ -120,13 +197,18 @@ class NavLoop:
         if self._T_wb is None or self._frame is None:
             return NavTick(WAITING, True, message="waiting for " + ("a base pose" if self._T_wb is None else
                                                                       "a camera frame"))
-        fresh = t_s - self._pose_t <= self.pose_timeout_s
+        why = self.stale(t_s)
+        if why is not None:
+            self._was_stale = True
+            return NavTick(STALE, True, message=f"{why}: holding")
+        if self._was_stale:                   # moving again: on what the camera shows now
+            self._was_stale, self._next_replan = False, None
         pose = self.pose
         out = NavTick(self.state, False)
         if self._next_replan is None or t_s >= self._next_replan:
             self._next_replan = t_s + self.replan_period_s
             out = self._replan(t_s, pose)
-        cmd = self.planner.command(t_s, pose if fresh else None)
+        cmd = self.planner.command(t_s, pose)
         if self.state == NO_FREE_ARC and self.on_no_free_arc == "hold":
             out.hold, out.kappa_per_m = True, 0.0
         else:
