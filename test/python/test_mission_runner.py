@@ -110,3 +110,22 @@ def test_abort():
     assert (d.hold, d.gait, d.outcome) == (True, "hold", "aborted: operator")
     with pytest.raises(RuntimeError, match="is aborted"):
         r.start(2.0)
+
+
+def test_a_pause_holds_through_fresh_poses_until_resume():
+    r = runner()
+    r.start(0.0)
+    feed(r, 0.0, 1.0, -1.0, 0.0, 0.0)
+    assert not r.step(1.0).hold
+    assert r.pause("driver fault: bus closed") and not r.pause("again")
+    feed(r, 1.0, 3.0, -1.0, 0.0, 0.0)      # the driver recovered: poses flow, the mission still holds
+    d = r.step(3.0)
+    assert d.hold and d.gait == "hold" and not d.finished and r.running
+    assert d.status["note"] == "paused: driver fault: bus closed (resume to go on)"
+    assert r.resume() and not r.resume()
+    assert r.step(3.0).hold                 # tracking restarts on poses after the resume
+    feed(r, 3.0, 4.0, -1.0, 0.0, 0.0)
+    d = r.step(4.0)
+    assert not d.hold and d.gait == "sidewind" and d.status["waypoint_index"] == 0
+    r.abort("operator")
+    assert not r.pause("late") and not r.resume()

@@ -6,6 +6,7 @@ import threading
 import time
 
 import rospy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 
 from snake_autonomy.msg import GaitCommand
@@ -20,10 +21,21 @@ class FakeDriver:
         self.gait, self.publishing = "hold", True
         self.commands = []
         self.pub = rospy.Publisher("com_pose", PoseStamped, queue_size=10)
+        self.pub_diag = rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=10)
         rospy.Subscriber("gait_command", GaitCommand, self.on_cmd)
         self.stopped = False            # set by rospy's first shutdown hooks, before it closes the topics
         rospy.on_shutdown(self.stop)
         threading.Thread(target=self.loop, daemon=True).start()
+
+    def publish_locomotion(self, level, message, repeats=3):
+        """The driver's "snake_driver: locomotion" status (level 2 = ERROR: a fault), as its updater does."""
+        for _ in range(repeats):
+            msg = DiagnosticArray()
+            msg.header.stamp = rospy.Time.now()
+            msg.status.append(DiagnosticStatus(level=level, name="snake_driver: locomotion", message=message,
+                                               hardware_id="snake driver"))
+            self.pub_diag.publish(msg)
+            time.sleep(0.2)
 
     def stop(self):
         self.stopped = True

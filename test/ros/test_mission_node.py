@@ -3,7 +3,8 @@
 
 The fake driver integrates a kinematic CoM at 50 Hz: sidewind moves 0.5 m/s along the yaw, turns
 rotate at 30 deg/s, hold stops. Checks: a bad mission is refused with every problem listed; a good
-one runs to the end, holds and writes its results; a stale pose holds and resumes; abort holds.
+one runs to the end, holds and writes its results; a stale pose holds and resumes; abort holds; a
+driver fault aborts the mission (and the driver's recovery does not restart it).
 These start missions through the services (mission/load, mission/start, mission/abort); the action
 (mission/run) has its own test, test_mission_action.py.
 """
@@ -117,6 +118,31 @@ class MissionNodeTest(unittest.TestCase):
         while time.monotonic() < time_limit:   # no more decisions after the abort
             time.sleep(0.05)
         self.assertEqual(len(self.statuses), n3)
+
+    def test_4_a_driver_fault_aborts_and_the_recovery_does_not_move(self):
+        with self.driver.lock:
+            self.driver.x, self.driver.y, self.driver.yaw = -3.0, 0.0, 0.0
+        self.assertTrue(self.load(rospy.get_param("~mission_file")).success)
+        n0 = len(self.statuses)
+        self.assertTrue(self.start().success)
+        wait_for(lambda: any(s.gait == "sidewind" for s in self.statuses[n0:]), 10, "sidewinding")
+        self.driver.publish_locomotion(2, "fault: bus: the port closed (I/O error)")
+        wait_for(lambda: self.driver.gait == "hold", 3, "hold after the driver's fault")
+        mission = wait_for(lambda: self.diagnostics.get("mission: mission") if "driver fault" in getattr(
+            self.diagnostics.get("mission: mission"), "message", "") else None, 5, "the mission's diagnostics")
+        self.assertEqual(mission.level, 2)
+        self.assertIn("aborted: driver fault: bus: the port closed", mission.message)
+        r = self.start()
+        self.assertFalse(r.success)
+        self.assertIn("the driver reports a fault", r.message)
+        with self.driver.lock:
+            n1 = len(self.driver.commands)
+        self.driver.publish_locomotion(0, "holding")      # torque re-enabled: the driver holds, recovered
+        time.sleep(2.0)                                    # no tick may send the robot off again
+        with self.driver.lock:
+            after = [c.gait for c in self.driver.commands[n1:]]
+        self.assertTrue(all(g == "hold" for g in after), after)
+        self.assertEqual(self.driver.gait, "hold")
 
 
 if __name__ == "__main__":

@@ -76,6 +76,7 @@ class MissionRunner:
         self.scout: Optional[ScoutStop] = None
         self.scout_log: List[ScoutRecord] = []
         self._pool: Optional[ThreadPoolExecutor] = None
+        self.paused: Optional[str] = None      # why the mission holds until resume() (a driver fault)
 
     @property
     def hold_gait(self) -> str:
@@ -95,6 +96,24 @@ class MissionRunner:
         if self.state == RUNNING:
             self.state = ABORTED
             self.outcome = f"aborted: {reason}"
+
+    def pause(self, reason: str) -> bool:
+        """Hold until resume(), whatever the inputs do (a driver fault: the driver's recovery must not
+        set the robot moving by itself). The waypoint is kept; the time limit runs on. False when not
+        running or already paused."""
+        if self.state != RUNNING or self.paused is not None:
+            return False
+        self.paused = reason
+        return True
+
+    def resume(self) -> bool:
+        """Go on after pause(): tracking restarts on fresh poses. False when not paused."""
+        if self.paused is None or self.state != RUNNING:
+            return False
+        self.paused = None
+        self._invalidate()
+        self._stale_reason = "waiting for a pose after the pause"
+        return True
 
     # -- inputs ------------------------------------------------------------------------------------
     def on_pose(self, t_s: float, x: float, y: float, yaw_rad: float) -> bool:
@@ -156,6 +175,8 @@ class MissionRunner:
         if limit is not None and t_s - self.t_start > limit:
             self.state, self.outcome = TIMEOUT, f"timeout: time limit {limit:g} s reached"
             return self._hold(t_s, self.outcome, stale=False, finished=True)
+        if self.paused is not None:
+            return self._hold(t_s, f"paused: {self.paused} (resume to go on)", stale=False)
         problem = self.pose_problem(t_s)
         if problem:
             if not self._was_stale:

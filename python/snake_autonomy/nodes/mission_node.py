@@ -17,8 +17,8 @@ Action      mission/run (snake_autonomy/RunMission): goal = a mission (name or f
             waypoints), feedback = every tracker decision, result = outcome and per-waypoint metrics,
             cancel = abort (hold). A new goal while an action's mission runs preempts it; a goal while
             a service- or auto-started mission runs is rejected.
-Services    mission/load (snake_autonomy/LoadMission), mission/start, mission/abort (std_srvs/Trigger),
-            kept beside the action: ~auto_start and `rosservice call` (the one-line stop of any run,
+Services    mission/load (snake_autonomy/LoadMission), mission/start, mission/abort, mission/resume
+            (std_srvs/Trigger; resume goes on after a pause for a driver fault), kept beside the action: ~auto_start and `rosservice call` (the one-line stop of any run,
             whoever started it) need no action client.
 Diagnostics /diagnostics (diagnostic_updater): "mission" (state, mission, waypoint, distance, last
             scout stop; WARN while holding for a stale pose, ERROR when a run aborted) and
@@ -30,7 +30,11 @@ Params      ~mission (file or provided name: loaded at start-up), ~auto_start (f
             ~gaits_config (config/gaits.yaml), ~rate_hz, ~pose_timeout_s, ~yaw_filter_window,
             ~heading_offset_deg (defaults from tracker_config + overrides), ~results_dir, ~record
             (true), ~world_frame (odom), ~pose_status_name, ~robot (cobra) and ~scout_config (empty:
-            config/scout.yaml) for the scout stops of a mission.
+            config/scout.yaml) for the scout stops of a mission, ~driver_status_name (the driver's
+            locomotion status on /diagnostics, default "snake_driver: locomotion"), ~on_driver_fault:
+            abort (default: the mission ends, hold sent, results written, the action aborted with the
+            fault) or pause (hold until mission/resume; the driver's own recovery never restarts it).
+            A mission does not start while the driver reports a fault.
 """
 import math
 import os
@@ -113,6 +117,11 @@ class MissionNode:
         self._scout_parts = None
         self.pose_status_name = rospy.get_param("~pose_status_name",
                                                 rospy.resolve_name("pose_remapper")[1:] + ": base pose")
+        self.driver_status_name = rospy.get_param("~driver_status_name", "snake_driver: locomotion")
+        self.on_driver_fault = rospy.get_param("~on_driver_fault", "abort")
+        if self.on_driver_fault not in ("abort", "pause"):
+            raise ValueError(f"~on_driver_fault: expected abort or pause, got {str(self.on_driver_fault)[:40]!r}")
+        self.driver_fault = ""           # the driver's fault while it reports one
         if not (self.rate_hz > 0 and self.pose_timeout_s > 0 and self.yaw_window > 0):
             raise ValueError(f"~rate_hz ({self.rate_hz}), ~pose_timeout_s ({self.pose_timeout_s}) and "
                              f"~yaw_filter_window ({self.yaw_window}) must be positive")
@@ -152,6 +161,7 @@ class MissionNode:
         rospy.Service("mission/load", LoadMission, self.srv_load)
         rospy.Service("mission/start", Trigger, self.srv_start)
         rospy.Service("mission/abort", Trigger, self.srv_abort)
+        rospy.Service("mission/resume", Trigger, self.srv_resume)
         self.action = actionlib.SimpleActionServer("mission/run", RunMissionAction, execute_cb=self.execute,
                                                    auto_start=False)
         self.action.start()
@@ -210,6 +220,8 @@ class MissionNode:
         level = DiagnosticStatus.OK
         if text.startswith("aborted"):
             level = DiagnosticStatus.ERROR
+        elif text.startswith("paused"):
+            level = DiagnosticStatus.WARN
         elif s is not None and s.get("pose_stale") and text.startswith("running"):
             level = DiagnosticStatus.WARN
         stat.summary(level, text if level == DiagnosticStatus.OK or s is None else f"{text}: {s.get('note', '')}")
@@ -261,6 +273,30 @@ class MissionNode:
         for status in msg.status:
             if status.name == self.pose_status_name:
                 self.on_source_status(status)
+            elif status.name == self.driver_status_name:
+                self.on_driver_status(status)
+
+    def on_driver_status(self, msg):
+        """The driver's locomotion status: a fault (ERROR) aborts or pauses the running mission."""
+        fault = msg.message.removeprefix("fault: ") if msg.level == DiagnosticStatus.ERROR else ""
+        with self.lock:
+            new_fault = fault and not self.driver_fault
+            self.driver_fault = fault
+            if not new_fault:
+                return
+            rospy.logerr(f"driver fault: {fault}")
+            if self.runner is None or not self.runner.running:
+                return
+            why = f"driver fault: {fault}"
+            if self.on_driver_fault == "pause":
+                self.runner.pause(why)
+                self.send_hold(why)
+                self.set_state(f"paused: {self.mission.name}: {why} (mission/resume to go on)")
+                rospy.logerr(f"mission {self.mission.name!r} paused: {why}; call mission/resume after the "
+                             "driver's recovery (driver/enable_torque)")
+            else:
+                self.runner.abort(why)
+                self.finish(self.runner.final_decision(rospy.get_time()))
 
     def on_source_status(self, msg):
         ok = msg.level == DiagnosticStatus.OK
@@ -304,6 +340,8 @@ class MissionNode:
         with self.lock:
             if self.mission is None:
                 return False, "no mission loaded (mission/load or ~mission)"
+            if self.driver_fault:
+                return False, f"the driver reports a fault ({self.driver_fault}): recover it first (driver/enable_torque)"
             if self.runner.state != "idle":
                 # a finished mission reruns from its first waypoint
                 self.runner = self.make_runner(self.mission)
@@ -336,6 +374,17 @@ class MissionNode:
             self.runner.abort("operator request")
             self.finish(self.runner.final_decision(rospy.get_time()))
             return TriggerResponse(success=True, message=self.runner.outcome)
+
+    def srv_resume(self, _req):
+        with self.lock:
+            if self.runner is None or self.runner.paused is None:
+                return TriggerResponse(success=False, message="no paused mission")
+            if self.driver_fault:
+                return TriggerResponse(success=False, message=f"the driver still reports a fault ({self.driver_fault})")
+            self.runner.resume()
+            self.set_state(f"running: {self.mission.name}")
+            rospy.loginfo(f"mission {self.mission.name!r} resumed")
+            return TriggerResponse(success=True, message=f"mission {self.mission.name!r} resumed")
 
     # -- the action ---------------------------------------------------------------------------------
     def execute(self, goal):
