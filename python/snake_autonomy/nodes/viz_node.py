@@ -73,6 +73,15 @@ class VizNode:
             del self.path.poses[: len(self.path.poses) - self.max_poses]
 
     def on_timer(self, _event):
+        if rospy.is_shutdown():
+            return
+        try:
+            self.draw()
+        except rospy.ROSException as exc:     # shutting down between the check and a publish
+            if not rospy.is_shutdown():
+                rospy.logerr_throttle(5.0, f"viz: {exc}")
+
+    def draw(self):
         stamp = rospy.Time.now()
         markers = waypoint_markers(self.frame, stamp, self.waypoints, self.active, self.d_th)
         if self.bound is not None:
