@@ -145,3 +145,21 @@ def test_outputs_into_a_folder_that_cannot_be_created(tmp_path):
     assert_refused(run_cli("gait", "--duration", "0.1", "--out", blocker / "out"), "--out", str(blocker / "out"))
     assert_refused(run_cli("sim", "run", "--mission", "single_waypoint", "--time-limit", "inf", "--out",
                            tmp_path / "o"), "--time-limit: must be a number of seconds in (0, 86400], got inf")
+
+
+@pytest.mark.parametrize("value", ["-5", "0", "nan", "inf"])
+def test_nav_run_time_limit_must_be_positive_and_finite(tmp_path, value):
+    proc = run_cli("nav", "run", "--world", ROOT / "config" / "worlds" / "corridor.yaml", "--time-limit", value,
+                   "--out", tmp_path / "out")
+    assert_refused(proc, "--time-limit: must be a finite number of seconds > 0, got")
+    assert "UnboundLocalError" not in proc.stderr
+
+
+def test_nav_run_refuses_a_world_wider_than_the_route_grid(tmp_path):
+    """Both ends within the world bounds (+-100 m), but 180 m apart: the route grid would take
+    gigabytes; refused before the simulator starts."""
+    world = write(tmp_path, "wide.yaml", b"start: [-90.0, -90.0, 45.0]\ngoal: [90.0, 90.0]\ngoal_radius_m: 0.3\n"
+                                         b"obstacles:\n  - {type: cylinder, x: -89.4, y: -89.4, radius_m: 0.1, "
+                                         b"height_m: 0.3}\n")
+    proc = run_cli("nav", "run", "--world", world, "--time-limit", "5", "--out", tmp_path / "out")
+    assert_refused(proc, "route grid", "182.0 m x 182.0 m", "map.route_max_cells")

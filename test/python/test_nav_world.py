@@ -32,9 +32,10 @@ def test_bad_world_lists_every_problem():
     with pytest.raises(WorldError) as e:
         World.from_dict(bad, "bad.yaml")
     text = "\n".join(e.value.problems)
-    for needle in ("start:", "goal:", "goal_radius_m: must be a number > 0, got -1", "colour: unknown key",
+    for needle in ("start:", "goal[1]: must be a finite number (m), got 'x'",
+                   "goal_radius_m: must be a number in (0, 10] m, got -1", "colour: unknown key",
                    "floor_texture: unknown texture 'lava'", "obstacles[0].type: must be cylinder or box, got 'cone'",
-                   "obstacles[1].y:", "obstacles[1].radius_m: must be a number > 0, got 0",
+                   "obstacles[1].y:", "obstacles[1].radius_m: must be a number in (0, 10] m, got 0",
                    "obstacles[1].yaw_deg: unknown key", "obstacles[2].size_m:"):
         assert needle in text, (needle, text)
     assert len(e.value.problems) == 10
@@ -93,3 +94,73 @@ def test_scene_obstacles_are_named_and_collisions_counted_per_episode(cobra_yaml
 def _config(name):
     from pathlib import Path
     return Path(__file__).resolve().parents[2] / "config" / name
+
+
+def test_world_coordinates_and_sizes_are_bounded_naming_key_and_value():
+    bad = dict(GOOD, start=[0.0, -500.0, 1e9], goal=[1e15, 0.5], goal_radius_m=1e300,
+               obstacles=[{"type": "cylinder", "x": 1e300, "y": 0.2, "radius_m": 0.1, "height_m": 0.3},
+                          {"type": "cylinder", "x": 1.0, "y": 0.2, "radius_m": 50.0, "height_m": 1e6},
+                          {"type": "box", "x": 2.0, "y": -300.0, "size_m": [0.2, 1e3, 0.3], "yaw_deg": 1e20}])
+    with pytest.raises(WorldError) as e:
+        World.from_dict(bad, "big.yaml")
+    text = "\n".join(e.value.problems)
+    for needle in ("start[1]: must be within +-100 m, got -500", "start[2]: must be within +-360 deg, got 1e+09",
+                   "goal[0]: must be within +-100 m, got 1e+15",
+                   "goal_radius_m: must be a number in (0, 10] m, got 1e+300",
+                   "obstacles[0].x: must be within +-100 m, got 1e+300",
+                   "obstacles[1].radius_m: must be a number in (0, 10] m, got 50",
+                   "obstacles[1].height_m: must be a number in (0, 10] m, got 1e+06",
+                   "obstacles[2].y: must be within +-100 m, got -300",
+                   "obstacles[2].size_m[1]: must be a number in (0, 10] m, got 1000",
+                   "obstacles[2].yaw_deg: must be within +-360 deg, got 1e+20"):
+        assert needle in text, (needle, text)
+
+
+def test_world_problems_quote_a_short_piece_of_a_value():
+    with pytest.raises(WorldError) as e:
+        World.from_dict(dict(GOOD, colour="x" * 500, floor_texture="\x1b[2J" + "y" * 500), "long.yaml")
+    text = str(e.value)
+    assert "colour: unknown key" in text and "floor_texture: unknown texture" in text
+    assert "x" * 61 not in text and "y" * 61 not in text and "\x1b" not in text
+
+
+def test_check_world_refuses_a_far_goal_naming_it(tmp_path, capsys):
+    import yaml
+    from snake_autonomy.cli import main as cli_main
+    far = tmp_path / "far.yaml"
+    far.write_text(yaml.safe_dump(dict(GOOD, goal=[1e15, 0.5], goal_radius_m=1e300)))
+    assert cli_main(["nav", "check-world", str(far)]) == 1
+    err = capsys.readouterr().err
+    assert str(far) in err and "goal[0]: must be within +-100 m, got 1e+15" in err
+
+
+def test_the_route_grid_is_bounded_and_refused_before_allocating():
+    """A goal 150 m away took 3.85 GB in the route's grid; now refused naming the extent. Run in a
+    process capped at 1 GB of address space, so that an unbounded grid fails there."""
+    import subprocess
+    import sys
+    import textwrap
+    script = textwrap.dedent("""
+        import resource, time
+        resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))
+        import shapely
+        from snake_autonomy.planning.rectilinear.route import Route
+        route = Route(cell_m=0.04, max_cells=1_000_000)
+        wall = shapely.box(5.0, -1.0, 5.2, 1.0)
+        route.update(wall, (0.0, 0.0), (3.0, 0.5))          # a few metres: fine
+        assert route.path is not None
+        t0 = time.perf_counter()
+        try:
+            route.update(wall, (0.0, 0.0), (150.0, 150.0))
+        except ValueError as exc:
+            print(f"{time.perf_counter() - t0:.3f}")
+            print(exc)
+    """)
+    try:
+        proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    except subprocess.TimeoutExpired:
+        pytest.fail("the 150 m route grid was not refused within 120 s")
+    assert proc.returncode == 0 and proc.stdout, proc.stderr[-1500:]
+    seconds, message = proc.stdout.split("\n", 1)
+    assert float(seconds) < 0.5
+    assert "route grid" in message and "152.0 m x 152.0 m" in message and "map.route_max_cells" in message

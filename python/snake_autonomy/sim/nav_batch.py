@@ -197,9 +197,16 @@ class NavRun:
         from ..planning.rectilinear.config import NavConfig, head_width_m, nav_config_path
         from ..planning.rectilinear.follower import RecedingHorizonFollower
         from ..planning.rectilinear.planner import NavPlanner
+        from ..planning.rectilinear.route import grid_shape
         self.spec = spec
+        if not (isinstance(spec.time_limit_s, (int, float)) and math.isfinite(spec.time_limit_s)
+                and spec.time_limit_s > 0):
+            raise ValueError(f"time_limit_s: must be a finite number of seconds > 0, got {spec.time_limit_s!r}")
         self.nav_config = spec.nav_config or str(nav_config_path(spec.robot))
         self.cfg = NavConfig.from_yaml(self.nav_config)
+        mp = self.cfg.map
+        if mp.route:   # the route's grid over the start-goal box is bounded: refused before the plant is built
+            grid_shape(spec.world.start[:2], spec.world.goal, mp.cell_m, mp.pad_m, mp.route_max_cells)
         self.gait_name = spec.gait_name or self.cfg.gaits.forward
         self.reverse_gait_name = spec.reverse_gait_name or self.cfg.gaits.reverse
         ry = robot_yaml(spec.robot)

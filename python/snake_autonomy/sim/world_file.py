@@ -11,20 +11,27 @@ A world is a YAML file::
     floor_texture: carpet               # optional: one of FLOOR_TEXTURES (sim/scene.py)
 
 Optional keys ``name`` and ``description``. A bad world is refused whole with every problem listed
-(WorldError), each naming the key and the value, as mission files are.
+(WorldError), each naming the key and the value (a short, escaped piece of it), as mission files are.
+Every number is finite and bounded: coordinates within +-MAX_COORDINATE_M, sizes, heights and the
+goal radius in (0, MAX_SIZE_M], angles within +-MAX_ANGLE_DEG, at most MAX_OBSTACLES obstacles; a
+world beyond them is refused here, before a scene is built from it.
 """
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, List, Optional, Sequence, Tuple
 
-from ..safe_yaml import YamlFileError, load_yaml_file
+from ..safe_yaml import YamlFileError, load_yaml_file, short_repr
 
 #: Floor appearances a world may ask for (the textures themselves: sim/scene.py).
 FLOOR_TEXTURES = ("plain", "checker", "carpet", "tiles", "concrete")
 WORLD_KEYS = ("name", "description", "start", "goal", "goal_radius_m", "obstacles", "floor_texture")
 CYLINDER_KEYS = ("type", "x", "y", "radius_m", "height_m")
 BOX_KEYS = ("type", "x", "y", "size_m", "yaw_deg")
+MAX_COORDINATE_M = 100.0     # |x|, |y| of the start, the goal and every obstacle
+MAX_SIZE_M = 10.0            # goal radius, a cylinder's radius and height, a box's edges
+MAX_ANGLE_DEG = 360.0        # |start heading|, |box yaw|
+MAX_OBSTACLES = 1000
 
 
 class WorldError(ValueError):
@@ -102,23 +109,22 @@ class World:
         problems: List[str] = []
         if not isinstance(data, dict):
             raise WorldError(source, [f"expected a mapping with start, goal, goal_radius_m, "
-                                      f"obstacles; got {data!r}"])
+                                      f"obstacles; got a {type(data).__name__}"])
         for key in data:
             if key not in WORLD_KEYS:
-                problems.append(f"{key}: unknown key (value {data[key]!r}); known: {', '.join(WORLD_KEYS)}")
-        start = _numbers(data, "start", 3, problems)
-        goal = _numbers(data, "goal", 2, problems)
-        radius = data.get("goal_radius_m")
-        if "goal_radius_m" not in data:
-            problems.append("goal_radius_m: missing (a distance > 0 in metres)")
-        elif not _finite(radius) or radius <= 0:
-            problems.append(f"goal_radius_m: must be a number > 0, got {radius!r}")
+                problems.append(f"{key}: unknown key (value {short_repr(data[key])}); known: {', '.join(WORLD_KEYS)}")
+        start = _numbers(data, "start", (MAX_COORDINATE_M, MAX_COORDINATE_M, MAX_ANGLE_DEG), problems)
+        goal = _numbers(data, "goal", (MAX_COORDINATE_M, MAX_COORDINATE_M), problems)
+        radius = _size(data, "goal_radius_m", "goal_radius_m", problems)
         raw_obstacles = data.get("obstacles", [])
         obstacles: List[Obstacle] = []
         if raw_obstacles is None:
             raw_obstacles = []
         if not isinstance(raw_obstacles, list):
-            problems.append(f"obstacles: expected a list, got {raw_obstacles!r}")
+            problems.append(f"obstacles: expected a list, got {short_repr(raw_obstacles)}")
+            raw_obstacles = []
+        elif len(raw_obstacles) > MAX_OBSTACLES:
+            problems.append(f"obstacles: at most {MAX_OBSTACLES}, got {len(raw_obstacles)}")
             raw_obstacles = []
         for i, item in enumerate(raw_obstacles):
             ob = _obstacle(item, f"obstacles[{i}]", problems)
@@ -126,7 +132,7 @@ class World:
                 obstacles.append(ob)
         floor = data.get("floor_texture", "plain")
         if floor not in FLOOR_TEXTURES:
-            problems.append(f"floor_texture: unknown texture {floor!r}; known: {', '.join(FLOOR_TEXTURES)}")
+            problems.append(f"floor_texture: unknown texture {short_repr(floor)}; known: {', '.join(FLOOR_TEXTURES)}")
         if start and goal and not problems:
             for i, ob in enumerate(obstacles):
                 if ob.distance_m(start[0], start[1]) <= 0.0:
@@ -170,23 +176,39 @@ def _finite(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
-def _numbers(data: dict, key: str, n: int, problems: List[str]) -> Optional[List[float]]:
+def _within(v, bound: float, unit: str, where: str, problems: List[str]) -> bool:
+    """v a finite number within +-bound; else a problem naming where and the value."""
+    if not _finite(v):
+        problems.append(f"{where}: must be a finite number ({unit}), got {short_repr(v)}")
+    elif abs(v) > bound:
+        problems.append(f"{where}: must be within +-{bound:g} {unit}, got {v:g}")
+    else:
+        return True
+    return False
+
+
+def _numbers(data: dict, key: str, bounds: Sequence[float], problems: List[str]) -> Optional[List[float]]:
+    """A list of len(bounds) numbers: metres within +-MAX_COORDINATE_M, the third (a heading) degrees."""
     v = data.get(key)
     if key not in data:
-        problems.append(f"{key}: missing (a list of {n} numbers)")
+        problems.append(f"{key}: missing (a list of {len(bounds)} numbers)")
         return None
-    if not isinstance(v, list) or len(v) != n or not all(_finite(x) for x in v):
-        problems.append(f"{key}: expected a list of {n} finite numbers, got {v!r}")
+    if not isinstance(v, list) or len(v) != len(bounds):
+        problems.append(f"{key}: expected a list of {len(bounds)} finite numbers, got {short_repr(v)}")
         return None
-    return [float(x) for x in v]
+    ok = [_within(x, bound, "deg" if i == 2 else "m", f"{key}[{i}]", problems)
+          for i, (x, bound) in enumerate(zip(v, bounds))]
+    return [float(x) for x in v] if all(ok) else None
 
 
-def _positive(item: dict, key: str, where: str, problems: List[str]) -> float:
+def _size(item: dict, key: str, where: str, problems: List[str]) -> float:
+    """item[key]: a size in (0, MAX_SIZE_M] metres; 0.0 (with a problem naming where) otherwise."""
     v = item.get(key)
     if key not in item:
-        problems.append(f"{where}.{key}: missing (a number > 0)")
-    elif not _finite(v) or v <= 0:
-        problems.append(f"{where}.{key}: must be a number > 0, got {v!r}")
+        problems.append(f"{where}: missing (a number in (0, {MAX_SIZE_M:g}] m)")
+    elif not _finite(v) or not 0 < v <= MAX_SIZE_M:
+        shown = f"{v:g}" if _finite(v) else short_repr(v)
+        problems.append(f"{where}: must be a number in (0, {MAX_SIZE_M:g}] m, got {shown}")
     else:
         return float(v)
     return 0.0
@@ -194,36 +216,35 @@ def _positive(item: dict, key: str, where: str, problems: List[str]) -> float:
 
 def _obstacle(item: Any, where: str, problems: List[str]) -> Optional[Obstacle]:
     if not isinstance(item, dict):
-        problems.append(f"{where}: expected a mapping with type cylinder or box, got {item!r}")
+        problems.append(f"{where}: expected a mapping with type cylinder or box, got {short_repr(item)}")
         return None
     kind = item.get("type")
     if kind not in ("cylinder", "box"):
-        problems.append(f"{where}.type: must be cylinder or box, got {kind!r}")
+        problems.append(f"{where}.type: must be cylinder or box, got {short_repr(kind)}")
         return None
     keys = CYLINDER_KEYS if kind == "cylinder" else BOX_KEYS
     before = len(problems)
     for key in item:
         if key not in keys:
-            problems.append(f"{where}.{key}: unknown key for a {kind} (value {item[key]!r}); "
+            problems.append(f"{where}.{key}: unknown key for a {kind} (value {short_repr(item[key])}); "
                             f"known: {', '.join(keys)}")
-    xy = []
-    for key in ("x", "y"):
-        if not _finite(item.get(key)):
-            problems.append(f"{where}.{key}: must be a finite number (m), got {item.get(key)!r}")
-        else:
-            xy.append(float(item[key]))
+    x_ok = _within(item.get("x"), MAX_COORDINATE_M, "m", f"{where}.x", problems)
+    y_ok = _within(item.get("y"), MAX_COORDINATE_M, "m", f"{where}.y", problems)
     if kind == "cylinder":
-        radius = _positive(item, "radius_m", where, problems)
-        height = _positive(item, "height_m", where, problems)
-        if len(problems) > before:
+        radius = _size(item, "radius_m", f"{where}.radius_m", problems)
+        height = _size(item, "height_m", f"{where}.height_m", problems)
+        if len(problems) > before or not (x_ok and y_ok):
             return None
-        return Obstacle("cylinder", xy[0], xy[1], radius_m=radius, height_m=height)
+        return Obstacle("cylinder", float(item["x"]), float(item["y"]), radius_m=radius, height_m=height)
     size = item.get("size_m")
-    if not isinstance(size, list) or len(size) != 3 or not all(_finite(s) and s > 0 for s in size):
-        problems.append(f"{where}.size_m: expected [sx, sy, sz], three numbers > 0 (m), got {size!r}")
+    if not isinstance(size, list) or len(size) != 3:
+        problems.append(f"{where}.size_m: expected [sx, sy, sz], three numbers in (0, {MAX_SIZE_M:g}] m, "
+                        f"got {short_repr(size)}")
+        size = None
+    else:
+        size = [_size({"s": s}, "s", f"{where}.size_m[{i}]", problems) for i, s in enumerate(size)]
     yaw = item.get("yaw_deg", 0.0)
-    if not _finite(yaw):
-        problems.append(f"{where}.yaw_deg: must be a finite number (deg), got {yaw!r}")
-    if len(problems) > before:
+    _within(yaw, MAX_ANGLE_DEG, "deg", f"{where}.yaw_deg", problems)
+    if len(problems) > before or not (x_ok and y_ok):
         return None
-    return Obstacle("box", xy[0], xy[1], size_m=tuple(float(s) for s in size), yaw_deg=float(yaw))
+    return Obstacle("box", float(item["x"]), float(item["y"]), size_m=tuple(size), yaw_deg=float(yaw))

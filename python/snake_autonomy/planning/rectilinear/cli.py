@@ -19,6 +19,7 @@
                                                     on Dask: DIR/runs.csv, summary.json, table.md
 """
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -46,7 +47,7 @@ def add_arguments(parser):
     run.add_argument("--perception", choices=("depth", "mono", "truth"), default="depth",
                      help="truth: the segmentation render through the classifier's cells (a perfect classifier)")
     run.add_argument("--seed", type=int, default=0)
-    run.add_argument("--time-limit", type=float, default=1200.0, metavar="S")
+    run.add_argument("--time-limit", type=float, default=1200.0, metavar="S", help="simulated seconds (> 0)")
     run.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono)")
     run.add_argument("--out", required=True, metavar="DIR")
     run.add_argument("--flat-belly", type=float, default=None, metavar="F",
@@ -180,6 +181,10 @@ def main(args) -> int:
     if args.nav_command == "run":
         from ...sim.nav_batch import NavRun, NavRunSpec
         from ...sim.world_file import WorldError, load_world
+        if not (math.isfinite(args.time_limit) and args.time_limit > 0):
+            print(f"nav run: --time-limit: must be a finite number of seconds > 0, got {args.time_limit}",
+                  file=sys.stderr)
+            return 1
         try:
             world = load_world(args.world)
         except WorldError as e:
@@ -275,14 +280,14 @@ def _time_limits(args, worlds):
             limit = float(args.time_limit)
         except ValueError:
             raise ValueError(f"--time-limit: expected seconds or auto, got {args.time_limit!r}") from None
-        if not limit > 0:
-            raise ValueError(f"--time-limit: must be > 0 s, got {limit}")
+        if not (math.isfinite(limit) and limit > 0):
+            raise ValueError(f"--time-limit: must be a finite number of seconds > 0, got {limit}")
         if args.time_factor is not None:
             raise ValueError(f"--time-factor {args.time_factor}: only with --time-limit auto")
         return [limit] * len(worlds), None
     factor = TIME_FACTOR if args.time_factor is None else args.time_factor
-    if not factor > 0:
-        raise ValueError(f"--time-factor: must be > 0, got {factor}")
+    if not (math.isfinite(factor) and factor > 0):
+        raise ValueError(f"--time-factor: must be a finite number > 0, got {factor}")
     speed = NavConfig.from_yaml(args.config or nav_config_path(args.robot)).follower.speed_m_s
     return [time_limit_s(w, speed, factor) for w in worlds], factor
 

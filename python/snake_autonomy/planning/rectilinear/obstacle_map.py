@@ -55,6 +55,9 @@ class MapParams:
     inflated_cost: float = 20.0   # route: a metre within half the checked footprint (the arcs' reach,
                                   # sampler.body_clearance_m) of an obstacle costs this many
     pad_m: float = 1.0            # route grid: the start-goal box grown by this
+    route_max_cells: int = 1_000_000   # route grid: at most this many cells (about 250 bytes and 0.8 us
+                                  # a cell per replan: 1e6 = 40 m x 40 m at 4 cm, 250 MB); a larger
+                                  # start-goal box is refused naming its extent (route.grid_shape)
     priors_off_own_floor: bool = False   # round 18: a view's prior discs are not laid on the floor
                                   # the same view shows (ObstacleMap.add_view)
     prior_normal_window_m: float = 0.0   # round 23: > 0: each disc lies behind its face along the
@@ -76,6 +79,9 @@ class MapParams:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
         if not self.prior_normal_window_m >= 0:
             p.append(f"prior_normal_window_m: must be >= 0, got {self.prior_normal_window_m}")
+        if (not isinstance(self.route_max_cells, int) or isinstance(self.route_max_cells, bool)
+                or not 1 <= self.route_max_cells <= 10_000_000):
+            p.append(f"route_max_cells: must be an integer in 1..10000000, got {self.route_max_cells!r}")
         if not self.inflated_cost >= 1:
             p.append(f"inflated_cost: must be >= 1, got {self.inflated_cost}")
         if not isinstance(self.edge_px, int) or self.edge_px < 0:

@@ -119,7 +119,7 @@ class NavPlanner:
         # bias steers by its cost to go
         self.obstacle_map = ObstacleMap() if mp.source == "faces" else None
         self.route = Route(mp.cell_m, 0.5 * self.footprint_width_m, pad_m=mp.pad_m,
-                           inflated_cost=mp.inflated_cost) if mp.route else None
+                           inflated_cost=mp.inflated_cost, max_cells=mp.route_max_cells) if mp.route else None
 
     @property
     def footprint_width_m(self) -> float:

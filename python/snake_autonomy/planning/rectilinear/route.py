@@ -11,6 +11,10 @@ free prefix reaches the least cost to go (sampler.py). Cells within inflation_m 
 planner passes half its checked footprint) cost inflated_cost per metre (passable, so that a route
 always exists, even from inside the inflation), cells inside one blocked_cost; unknown floor is free
 (optimistic, as the arcs' known_free_m beyond their first metres).
+
+The grid covers the start-goal box grown by pad_m; its cells are bounded (map.route_max_cells):
+a goal 150 m away once took 3.85 GB here. grid_shape refuses a larger grid, naming its extent,
+before anything is allocated; the simulator asks it before a run starts.
 """
 import math
 
@@ -20,10 +24,39 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 
+MAX_CELLS = 1_000_000   # map.route_max_cells' default (MapParams)
+
+
+class RouteGridError(ValueError):
+    """The route's grid would exceed its bound of cells."""
+
+
+def grid_shape(start_xy, goal_xy, cell_m: float, pad_m: float, max_cells: int = MAX_CELLS):
+    """(lo, (nx, ny)): the corner and the cells of the grid over the start-goal box grown by pad_m;
+    RouteGridError naming the extent when it has more than max_cells cells (nothing allocated)."""
+    start, goal = np.asarray(start_xy, float), np.asarray(goal_xy, float)
+    lo = np.minimum(start, goal) - pad_m
+    hi = np.maximum(start, goal) + pad_m
+    extent = hi - lo
+    if not np.all(np.isfinite(extent)):
+        raise RouteGridError(f"route grid: start {start.tolist()} or goal {goal.tolist()} is not finite")
+    nx, ny = (int(v) for v in np.ceil(extent / cell_m) + 1)
+    if nx * ny > max_cells:
+        raise RouteGridError(
+            f"route grid: {extent[0]:.1f} m x {extent[1]:.1f} m (start {_xy(start)} to goal {_xy(goal)}, "
+            f"padded {pad_m:g} m) at {cell_m:g} m cells is {nx} x {ny} = {nx * ny} cells, more than "
+            f"map.route_max_cells = {max_cells}: a nearer goal, larger map.cell_m or map.route: false")
+    return lo, (nx, ny)
+
+
+def _xy(p) -> str:
+    return f"({p[0]:.1f}, {p[1]:.1f})"
+
+
 class Route:
     def __init__(self, cell_m: float = 0.04, inflation_m: float = 0.25, pad_m: float = 1.0,
-                 inflated_cost: float = 20.0, blocked_cost: float = 1000.0):
-        self.cell_m, self.inflation_m, self.pad_m = cell_m, inflation_m, pad_m
+                 inflated_cost: float = 20.0, blocked_cost: float = 1000.0, max_cells: int = MAX_CELLS):
+        self.cell_m, self.inflation_m, self.pad_m, self.max_cells = cell_m, inflation_m, pad_m, max_cells
         self.inflated_cost, self.blocked_cost = inflated_cost, blocked_cost
         self.path = None                       # (K, 2) world points of the last route, robot to goal
         self._field = None
@@ -31,16 +64,15 @@ class Route:
 
     def update(self, geometry, start_xy, goal_xy) -> None:
         """The cost-to-go field to goal_xy around `geometry` (a shapely geometry in the world frame,
-        or None / empty: straight lines) and the route from start_xy."""
+        or None / empty: straight lines) and the route from start_xy; RouteGridError when its grid
+        would have more than max_cells cells."""
         start, goal = np.asarray(start_xy, float), np.asarray(goal_xy, float)
         self._goal = goal
         if geometry is None or geometry.is_empty:
             self._field = None
             self.path = np.array([start, goal])
             return
-        lo = np.minimum(start, goal) - self.pad_m
-        hi = np.maximum(start, goal) + self.pad_m
-        nx, ny = (np.ceil((hi - lo) / self.cell_m).astype(int) + 1)
+        lo, (nx, ny) = grid_shape(start, goal, self.cell_m, self.pad_m, self.max_cells)
         xs, ys = lo[0] + self.cell_m * np.arange(nx), lo[1] + self.cell_m * np.arange(ny)
         X, Y = np.meshgrid(xs, ys, indexing="ij")
         cost = np.ones((nx, ny))
