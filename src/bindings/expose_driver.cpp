@@ -24,6 +24,23 @@ namespace {
 
 double yaw_of(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)); }
 
+// A trajectory's progress or final status as a dict (the fields of driver/trajectory_status).
+py::dict progress_dict(const driver::TrajectoryProgress& p) {
+  py::dict out;
+  out["id"] = std::string(p.id.data());
+  out["sequence"] = p.sequence;
+  out["phase"] = std::string(driver::to_string(p.phase));
+  out["abort"] = std::string(driver::to_string(p.abort));
+  out["reason"] = std::string(p.reason.data());
+  out["point_reached"] = p.point_reached;
+  out["num_points"] = p.num_points;
+  out["time_s"] = p.time_s;
+  out["duration_s"] = p.duration_s;
+  out["superseded_by"] = std::string(p.superseded_by.data());
+  out["superseded_by_sequence"] = p.superseded_by_sequence;
+  return out;
+}
+
 std::string join_keys() {
   std::string out;
   for (const auto& k : DriverConfig::keys()) out += (out.empty() ? "" : ", ") + k;
@@ -88,7 +105,8 @@ void expose_driver(py::module_& m) {
       .def_readwrite("command_timeout_s", &DriverConfig::command_timeout_s)
       .def_readwrite("pose_workspace_m", &DriverConfig::pose_workspace_m)
       .def_readwrite("quaternion_norm_tolerance", &DriverConfig::quaternion_norm_tolerance)
-      .def_readwrite("max_trajectory_points", &DriverConfig::max_trajectory_points);
+      .def_readwrite("max_trajectory_points", &DriverConfig::max_trajectory_points)
+      .def_readwrite("max_trajectory_duration_s", &DriverConfig::max_trajectory_duration_s);
 
   py::class_<DriverController>(
       m, "DriverController",
@@ -166,23 +184,21 @@ void expose_driver(py::module_& m) {
           "time_from_start, positions_rad (P, len(joint_names)), velocities_rad_s the same shape or None "
           "(estimated). Taken at the next update(); '' when accepted, else every reason.")
       .def_property_readonly(
-          "trajectory_progress",
-          [](const DriverController& d) {
-            const driver::TrajectoryProgress& p = d.trajectory_progress();
-            py::dict out;
-            out["id"] = std::string(p.id.data());
-            out["sequence"] = p.sequence;
-            out["phase"] = std::string(driver::to_string(p.phase));
-            out["abort"] = std::string(driver::to_string(p.abort));
-            out["reason"] = std::string(p.reason.data());
-            out["point_reached"] = p.point_reached;
-            out["num_points"] = p.num_points;
-            out["time_s"] = p.time_s;
-            out["duration_s"] = p.duration_s;
-            return out;
-          },
+          "trajectory_progress", [](const DriverController& d) { return progress_dict(d.trajectory_progress()); },
           "the latest trajectory (as driver/trajectory_status): id, sequence, phase ('idle', 'running', 'done', "
-          "'aborted'), abort, reason, point_reached, num_points, time_s, duration_s")
+          "'aborted'), abort, reason, point_reached, num_points, time_s, duration_s, superseded_by, "
+          "superseded_by_sequence")
+      .def(
+          "pop_trajectory_final",
+          [](DriverController& d) -> py::object {
+            driver::TrajectoryProgress p;
+            if (!d.pop_trajectory_final(&p)) return py::none();
+            return progress_dict(p);
+          },
+          "the next final status of an accepted trajectory (a dict as trajectory_progress), None when none is "
+          "queued: each accepted trajectory gets exactly one")
+      .def_property_readonly("trajectory_finals_dropped", &DriverController::trajectory_finals_dropped,
+                             "final statuses lost to a full queue (the consumer fell behind)")
       .def_property_readonly("trajectories_accepted", &DriverController::trajectories_accepted)
       .def_property_readonly("trajectories_refused", &DriverController::trajectories_refused)
       .def_property_readonly("last_trajectory_refusal", &DriverController::last_trajectory_refusal,

@@ -57,6 +57,8 @@ std::vector<std::string> DriverConfig::validate() const {
     bad("quaternion_norm_tolerance", quaternion_norm_tolerance, "is not in (0, 0.5)");
   if (max_trajectory_points < 1 || max_trajectory_points > 1000000)
     bad("max_trajectory_points", max_trajectory_points, "is not in 1 .. 1000000");
+  if (!(max_trajectory_duration_s > 0.0) || !(max_trajectory_duration_s <= 86400.0))
+    bad("max_trajectory_duration_s", max_trajectory_duration_s, "is not in (0, 86400] s");
   return errors;
 }
 
@@ -82,6 +84,7 @@ void for_each_field(DriverConfig& c, Visit&& visit) {
   visit("pose_workspace_m", c.pose_workspace_m);
   visit("quaternion_norm_tolerance", c.quaternion_norm_tolerance);
   visit("max_trajectory_points", c.max_trajectory_points);
+  visit("max_trajectory_duration_s", c.max_trajectory_duration_s);
 }
 
 }  // namespace

@@ -34,6 +34,7 @@ driver::TrajectoryLimits trajectory_limits(const RobotModel& model, const dynami
   l.limit_tolerance_rad = table.unit_scales().rad_per_tick;
   l.max_velocity_rad_s = config.max_joint_velocity_rad_s;
   l.max_points = config.max_trajectory_points;
+  l.max_duration_s = config.max_trajectory_duration_s;
   return l;
 }
 

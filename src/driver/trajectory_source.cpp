@@ -103,6 +103,8 @@ TrajectorySource::TrajectorySource(int num_joints, const TrajectoryLimits& limit
     throw std::invalid_argument("max_trajectory_points: " + std::to_string(limits.max_points) + " is not in 1 .. 1000000");
   if (!(limits.max_velocity_rad_s > 0.0) || !std::isfinite(limits.max_velocity_rad_s))
     throw std::invalid_argument("max_joint_velocity_rad_s: " + num(limits.max_velocity_rad_s) + " is not a positive number");
+  if (!(limits.max_duration_s > 0.0) || !std::isfinite(limits.max_duration_s))
+    throw std::invalid_argument("max_trajectory_duration_s: " + num(limits.max_duration_s) + " is not a positive number");
   set_joint_limits(limits.lower_rad, limits.upper_rad);
   const auto points = static_cast<std::size_t>(limits.max_points), values = points * static_cast<std::size_t>(n_);
   for (Buffer* b : {&active_, &pending_}) {
@@ -177,6 +179,9 @@ std::string TrajectorySource::check(const JointTrajectoryRequest& request) const
       why.add(kTimes, at + ".time_from_start: " + num(p.time_from_start_s) + " s, not after points[" +
                           std::to_string(k - 1) + "] at " + num(previous_t) + " s");
     }
+    if (k + 1 == count && std::isfinite(p.time_from_start_s) && p.time_from_start_s > limits_.max_duration_s)
+      why.add(kTimes, at + ".time_from_start: " + num(p.time_from_start_s) + " s, the trajectory would last longer than "
+                          "max_trajectory_duration_s " + num(limits_.max_duration_s) + " s");
     if (std::isfinite(p.time_from_start_s)) previous_t = p.time_from_start_s;
     for (std::size_t c = 0; c < p.positions_rad.size(); ++c) {
       const double x = p.positions_rad[c];
@@ -259,9 +264,29 @@ std::string TrajectorySource::submit(const JointTrajectoryRequest& request) {
   std::vector<int> joint_of(request.joint_names.size());
   for (std::size_t c = 0; c < joint_of.size(); ++c) joint_of[c] = std::stoi(request.joint_names[c].substr(6)) - 1;
   std::lock_guard<std::mutex> lock(mailbox_);
+  const std::uint64_t sequence = ++accepted_;
+  if (has_pending_) {  // accepted earlier, never taken: it ends here, superseded by this one
+    TrajectoryProgress replaced;
+    replaced.sequence = pending_.sequence;
+    replaced.id = pending_.id;
+    replaced.phase = TrajectoryPhase::kAborted;
+    replaced.abort = TrajectoryAbort::kSuperseded;
+    replaced.num_points = pending_.count;
+    replaced.duration_s = pending_.t_s[pending_.count - 1];
+    std::snprintf(replaced.superseded_by.data(), replaced.superseded_by.size(), "%s", request.id.c_str());
+    replaced.superseded_by_sequence = sequence;
+    std::snprintf(replaced.reason.data(), replaced.reason.size(), "superseded by '%s' (sequence %llu) before it started",
+                  replaced.superseded_by.data(), static_cast<unsigned long long>(sequence));
+    submit_finals_.push(replaced);
+  }
   fill(request, joint_of, pending_);  // into the storage reserved at construction: no allocation
+  pending_.sequence = sequence;
   has_pending_ = true;
   return "";
+}
+
+bool TrajectorySource::pop_final(TrajectoryProgress* out) noexcept {
+  return loop_finals_.pop(out) || submit_finals_.pop(out);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -274,6 +299,7 @@ bool TrajectorySource::take(double t_s, const Eigen::VectorXd& present_rad, bool
     return false;
   }
   std::swap(active_.id, pending_.id);
+  std::swap(active_.sequence, pending_.sequence);
   std::swap(active_.count, pending_.count);
   active_.t_s.swap(pending_.t_s);
   active_.q.swap(pending_.q);
@@ -283,9 +309,18 @@ bool TrajectorySource::take(double t_s, const Eigen::VectorXd& present_rad, bool
   has_pending_ = false;
   mailbox_.unlock();
 
-  if (running()) finish(TrajectoryPhase::kAborted, TrajectoryAbort::kSuperseded);
-  ++progress_.sequence;
+  if (running()) {
+    progress_.superseded_by = active_.id;
+    progress_.superseded_by_sequence = active_.sequence;
+    std::snprintf(progress_.reason.data(), progress_.reason.size(),
+                  "superseded by '%s' (sequence %llu) at %.3f s of %.3f s", active_.id.data(),
+                  static_cast<unsigned long long>(active_.sequence), progress_.time_s, progress_.duration_s);
+    finish(TrajectoryPhase::kAborted, TrajectoryAbort::kSuperseded);
+  }
+  progress_.sequence = active_.sequence;
   progress_.id = active_.id;
+  progress_.superseded_by[0] = '\0';
+  progress_.superseded_by_sequence = 0;
   progress_.phase = TrajectoryPhase::kRunning;
   progress_.abort = TrajectoryAbort::kNone;
   progress_.reason[0] = '\0';
@@ -369,6 +404,7 @@ void TrajectorySource::abort(TrajectoryAbort reason) noexcept {
 void TrajectorySource::finish(TrajectoryPhase phase, TrajectoryAbort reason) noexcept {
   progress_.phase = phase;
   progress_.abort = reason;
+  loop_finals_.push(progress_);  // a full queue counts the loss (finals_dropped)
 }
 
 }  // namespace snake_autonomy::driver

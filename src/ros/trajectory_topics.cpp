@@ -37,15 +37,34 @@ driver::JointTrajectoryRequest to_request(const trajectory_msgs::JointTrajectory
 TrajectoryTopics::TrajectoryTopics(ros::NodeHandle& nh, core::DriverController& controller,
                                    diagnostic_updater::Updater& updater)
     : controller_(controller) {
-  status_pub_ = nh.advertise<snake_autonomy::TrajectoryStatus>("driver/trajectory_status", 10, true);
-  sub_ = nh.subscribe("driver/joint_trajectory", 2, &TrajectoryTopics::on_trajectory, this);
+  // The status queue holds a burst of final statuses (kQueueSize trajectories superseded at once).
+  status_pub_ = nh.advertise<snake_autonomy::TrajectoryStatus>("driver/trajectory_status", 2 * kQueueSize, true);
+  sub_ = nh.subscribe("driver/joint_trajectory", kQueueSize, &TrajectoryTopics::on_trajectory, this);
   updater.add("trajectory", this, &TrajectoryTopics::diagnose);
   status_.phase = "idle";
   status_.point_reached = -1;
   status_pub_.publish(status_);
 }
 
-void TrajectoryTopics::on_trajectory(const trajectory_msgs::JointTrajectory::ConstPtr& msg) {
+void TrajectoryTopics::count_lost(const std::string& publisher, std::uint32_t seq) {
+  if (seq == 0) return;  // not numbered (roscpp leaves header.seq as the sender set it)
+  std::uint32_t gap = 0;
+  {
+    std::lock_guard<std::mutex> lock(seq_mutex_);
+    auto it = last_seq_.find(publisher);
+    if (it != last_seq_.end() && seq > it->second + 1) gap = seq - it->second - 1;
+    last_seq_[publisher] = seq;  // a lower seq: the publisher restarted
+  }
+  if (gap == 0) return;
+  lost_ += gap;
+  ROS_WARN("driver/joint_trajectory: %u message(s) from %s never reached the driver (header.seq jumped to %u): "
+           "lost in a queue (driver's: %u messages), they get no status",
+           gap, publisher.c_str(), seq, kQueueSize);
+}
+
+void TrajectoryTopics::on_trajectory(const ros::MessageEvent<const trajectory_msgs::JointTrajectory>& event) {
+  const trajectory_msgs::JointTrajectory::ConstPtr& msg = event.getConstMessage();
+  count_lost(event.getPublisherName(), msg->header.seq);
   const std::uint64_t n = ++received_;
   const std::string id = msg->header.frame_id.empty() ? "trajectory " + std::to_string(n) : msg->header.frame_id;
   const std::string why = controller_.command_trajectory(to_request(*msg, id));
@@ -64,10 +83,7 @@ void TrajectoryTopics::on_trajectory(const trajectory_msgs::JointTrajectory::Con
   status_pub_.publish(s);
 }
 
-void TrajectoryTopics::publish(const driver::TrajectoryProgress& p, const ros::Time& stamp) {
-  const bool changed = p.sequence != last_.sequence || p.phase != last_.phase || p.point_reached != last_.point_reached;
-  last_ = p;
-  if (!changed) return;
+void TrajectoryTopics::fill(const driver::TrajectoryProgress& p, const ros::Time& stamp) {
   status_.header.stamp = stamp;
   status_.id = p.id.data();
   status_.sequence = p.sequence;
@@ -78,11 +94,36 @@ void TrajectoryTopics::publish(const driver::TrajectoryProgress& p, const ros::T
   status_.num_points = p.num_points;
   status_.time_s = p.time_s;
   status_.duration_s = p.duration_s;
-  status_pub_.publish(status_);
-  if (p.phase == driver::TrajectoryPhase::kAborted)
-    ROS_WARN("driver/joint_trajectory '%s' aborted (%s): %s", p.id.data(), driver::to_string(p.abort), p.reason.data());
-  else if (p.phase == driver::TrajectoryPhase::kDone)
-    ROS_INFO("driver/joint_trajectory '%s' done: holding its last point", p.id.data());
+  status_.superseded_by = p.superseded_by.data();
+  status_.superseded_by_sequence = p.superseded_by_sequence;
+}
+
+void TrajectoryTopics::publish(const driver::TrajectoryProgress& p, const ros::Time& stamp) {
+  // Running (sampled): only for a trajectory whose final status has not been published yet.
+  const bool changed = p.sequence != last_.sequence || p.phase != last_.phase || p.point_reached != last_.point_reached;
+  last_ = p;
+  if (changed && p.phase == driver::TrajectoryPhase::kRunning && finished_.count(p.sequence) == 0) {
+    fill(p, stamp);
+    status_pub_.publish(status_);
+  }
+  // The loop runs trajectories in sequence order: the older ones can no longer show up running.
+  finished_.erase(finished_.begin(), finished_.lower_bound(p.sequence));
+  // Final statuses: each accepted trajectory's, exactly once, in the order the driver ended them.
+  driver::TrajectoryProgress f;
+  while (controller_.pop_trajectory_final(&f)) {
+    fill(f, stamp);
+    status_pub_.publish(status_);
+    ++finals_published_;
+    last_final_ = f;
+    finished_.insert(f.sequence);
+    if (f.abort == driver::TrajectoryAbort::kSuperseded)
+      ROS_INFO("driver/joint_trajectory '%s' (sequence %llu) superseded: %s", f.id.data(),
+               static_cast<unsigned long long>(f.sequence), f.reason.data());
+    else if (f.phase == driver::TrajectoryPhase::kAborted)
+      ROS_WARN("driver/joint_trajectory '%s' aborted (%s): %s", f.id.data(), driver::to_string(f.abort), f.reason.data());
+    else
+      ROS_INFO("driver/joint_trajectory '%s' done: holding its last point", f.id.data());
+  }
 }
 
 void TrajectoryTopics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
@@ -106,7 +147,17 @@ void TrajectoryTopics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& sta
                  kv("time_s", fixed(p.time_s)), kv("duration_s", fixed(p.duration_s)),
                  kv("trajectories_accepted", std::to_string(controller_.trajectories_accepted())),
                  kv("trajectories_refused", std::to_string(controller_.trajectories_refused())),
-                 kv("last_refusal", refusal)};
+                 kv("last_refusal", refusal), kv("final_statuses", std::to_string(finals_published_)),
+                 kv("last_final", last_final_.sequence == 0 ? "" : std::string(last_final_.id.data()) + " " +
+                                                                     driver::to_string(last_final_.phase) + " " +
+                                                                     driver::to_string(last_final_.abort)),
+                 kv("final_statuses_dropped", std::to_string(controller_.trajectory_finals_dropped())),
+                 kv("lost_before_driver", std::to_string(lost_.load())),
+                 kv("queue_size", std::to_string(kQueueSize))};
+  if (lost_.load() > 0 || controller_.trajectory_finals_dropped() > 0)
+    stat.mergeSummary(DiagnosticStatus::WARN, std::to_string(lost_.load()) + " trajectories lost before the driver, " +
+                                                  std::to_string(controller_.trajectory_finals_dropped()) +
+                                                  " final statuses dropped");
 }
 
 }  // namespace snake_autonomy::ros_driver

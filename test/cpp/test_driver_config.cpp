@@ -56,7 +56,7 @@ TEST(DriverConfigYaml, ApplyOverridesWithAPrefixAndKeysListEveryField) {
   EXPECT_EQ(c.max_failed_cycles, 7);
   ASSERT_EQ(errors.size(), 1u);
   EXPECT_EQ(errors[0].rfind("~shutdown_action: 'sideways'", 0), 0u) << errors[0];
-  EXPECT_EQ(DriverConfig::keys().size(), 17u);
+  EXPECT_EQ(DriverConfig::keys().size(), 18u);
   EXPECT_EQ(DriverConfig::keys().front(), "fast_sync_read");
 }
 

@@ -172,6 +172,88 @@ TEST(TrajectorySource, RefusesWholeWithEveryReason) {
   EXPECT_EQ(src.final_rad(), Eigen::Vector3d(-0.2, 0.3, 1.5005));
 }
 
+TEST(TrajectorySource, RefusesATrajectoryLongerThanTheMaximumDuration) {
+  // A point at 2^31 s would "run" for 68 years: the duration is bounded (max_duration_s, 600 s by default).
+  const int n = 2;
+  TrajectorySource src(n, limits(n));
+  const JointTrajectoryRequest r = ramp(n, {1.0, 2147483648.0}, {0.1, 0.2});
+  const std::string why = src.submit(r);
+  EXPECT_TRUE(contains(why, "points[1].time_from_start: 2.14748e+09 s, the trajectory would last longer than "
+                            "max_trajectory_duration_s 600 s"))
+      << why;
+  EXPECT_FALSE(src.take(0.0, Eigen::VectorXd::Zero(n))) << "nothing was handed over";
+  // At the bound it is accepted.
+  EXPECT_EQ(src.submit(ramp(n, {1.0, 600.0}, {0.1, 0.2})), "");
+}
+
+// Every final status queued so far.
+std::vector<TrajectoryProgress> finals(TrajectorySource& src) {
+  std::vector<TrajectoryProgress> out;
+  TrajectoryProgress p;
+  while (src.pop_final(&p)) out.push_back(p);
+  return out;
+}
+
+TEST(TrajectorySource, EveryAcceptedTrajectoryEndsWithExactlyOneFinalStatus) {
+  const int n = 2;
+  TrajectorySource src(n, limits(n));
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd goal = zero;
+  ASSERT_EQ(src.submit(ramp(n, {0.5, 1.0}, {0.1, 0.2}, "a")), "");
+  ASSERT_TRUE(src.take(0.0, zero));
+  EXPECT_TRUE(finals(src).empty()) << "a runs: no final status yet";
+  ASSERT_TRUE(src.update(0.2, goal));
+  // b is accepted, then c replaces it before the loop takes it; then c replaces the running a.
+  ASSERT_EQ(src.submit(ramp(n, {0.5, 1.0}, {0.1, 0.2}, "b")), "");
+  ASSERT_EQ(src.submit(ramp(n, {0.5, 1.0}, {0.1, 0.2}, "c")), "");
+  ASSERT_TRUE(src.take(0.3, goal));
+  std::vector<TrajectoryProgress> f = finals(src);
+  ASSERT_EQ(f.size(), 2u);
+  // The loop's first (a), then the one replaced before it started (b).
+  EXPECT_STREQ(f[0].id.data(), "a");
+  EXPECT_EQ(f[0].sequence, 1u);
+  EXPECT_EQ(f[0].phase, TrajectoryPhase::kAborted);
+  EXPECT_EQ(f[0].abort, TrajectoryAbort::kSuperseded);
+  EXPECT_STREQ(f[0].superseded_by.data(), "c");
+  EXPECT_EQ(f[0].superseded_by_sequence, 3u);
+  EXPECT_TRUE(contains(f[0].reason.data(), "superseded by 'c' (sequence 3) at 0.200 s of 1.000 s")) << f[0].reason.data();
+  EXPECT_STREQ(f[1].id.data(), "b");
+  EXPECT_EQ(f[1].sequence, 2u);
+  EXPECT_EQ(f[1].abort, TrajectoryAbort::kSuperseded);
+  EXPECT_STREQ(f[1].superseded_by.data(), "c");
+  EXPECT_EQ(f[1].point_reached, -1);
+  EXPECT_TRUE(contains(f[1].reason.data(), "before it started")) << f[1].reason.data();
+  // c runs to its end: done, once; later cycles and aborts add nothing.
+  EXPECT_EQ(src.progress().sequence, 3u);
+  EXPECT_TRUE(src.running());
+  while (src.update(0.3 + 1.5, goal)) {
+  }
+  src.abort(TrajectoryAbort::kFault);
+  EXPECT_FALSE(src.update(5.0, goal));
+  f = finals(src);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_STREQ(f[0].id.data(), "c");
+  EXPECT_EQ(f[0].phase, TrajectoryPhase::kDone);
+  EXPECT_EQ(f[0].superseded_by[0], '\0');
+  // Ended at take (torque off then): its final status says so.
+  ASSERT_EQ(src.submit(ramp(n, {0.5, 1.0}, {0.1, 0.2}, "d")), "");
+  ASSERT_TRUE(src.take(6.0, goal, false));
+  f = finals(src);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].abort, TrajectoryAbort::kNotAllowed);
+  EXPECT_EQ(src.finals_dropped(), 0u);
+}
+
+TEST(TrajectorySource, AFullFinalStatusQueueCountsWhatItDrops) {
+  const int n = 1;
+  TrajectorySource src(n, limits(n));
+  const int extra = 5;  // replaced before they started: one final status each, none popped
+  for (int k = 0; k < static_cast<int>(TrajectorySource::kFinalQueue) + extra + 1; ++k)
+    ASSERT_EQ(src.submit(ramp(n, {0.5}, {0.1}, "t" + std::to_string(k))), "");
+  EXPECT_EQ(src.finals_dropped(), static_cast<std::uint64_t>(extra));
+  EXPECT_EQ(finals(src).size(), TrajectorySource::kFinalQueue);
+}
+
 TEST(TrajectorySource, FirstSegmentFromThePresentPostureIsCheckedAtTake) {
   const int n = 2;
   TrajectorySource src(n, limits(n));
@@ -363,6 +445,38 @@ TEST(DriverTrajectory, EndsOnAHoldRequestAGaitCommandTorqueOffOrAFault) {
     EXPECT_EQ(rig.ctl->trajectory_progress().sequence, 2u);
     EXPECT_STREQ(rig.ctl->trajectory_progress().id.data(), "second");
   }
+}
+
+TEST(DriverTrajectory, EachEndIsAFinalStatusOnce) {
+  Rig rig;
+  rig.start();
+  ASSERT_EQ(rig.ctl->command_trajectory(cobra_pose(40 * kDeg, 3.0, "first")), "");
+  rig.step(20);
+  ASSERT_EQ(rig.ctl->command_trajectory(cobra_pose(-20 * kDeg, 3.0, "second")), "");
+  rig.step(20);
+  ASSERT_TRUE(rig.request(DriverRequest::kHold).success);
+  rig.step(20);
+  std::vector<TrajectoryProgress> f;
+  TrajectoryProgress p;
+  while (rig.ctl->pop_trajectory_final(&p)) f.push_back(p);
+  ASSERT_EQ(f.size(), 2u);
+  EXPECT_STREQ(f[0].id.data(), "first");
+  EXPECT_EQ(f[0].abort, TrajectoryAbort::kSuperseded);
+  EXPECT_STREQ(f[0].superseded_by.data(), "second");
+  EXPECT_STREQ(f[1].id.data(), "second");
+  EXPECT_EQ(f[1].abort, TrajectoryAbort::kHoldRequest);
+  EXPECT_EQ(rig.ctl->trajectory_finals_dropped(), 0u);
+}
+
+TEST(DriverTrajectory, MaximumDurationIsConfigured) {
+  DriverConfig cfg;
+  cfg.max_trajectory_duration_s = 2.0;
+  Rig rig(cfg);
+  rig.start();
+  const std::string why = rig.ctl->command_trajectory(cobra_pose(10 * kDeg, 3.0, "long"));
+  EXPECT_TRUE(contains(why, "longer than max_trajectory_duration_s 2 s")) << why;
+  cfg.max_trajectory_duration_s = 0.0;
+  EXPECT_FALSE(cfg.validate().empty());
 }
 
 TEST(DriverTrajectory, GoalsPassTheSlewLimitAndTheClamp) {

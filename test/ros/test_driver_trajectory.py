@@ -3,7 +3,8 @@
 trajectory reaches its final posture in joint_states and driver/trajectory_status says done (the
 driver then holds it: HoldReason trajectory done); a refused one leaves the posture where it was,
 and every reason is on the status topic and in /diagnostics; a planned FBSR raise sent by the mission's
-TopicTrajectoryExecutor is followed to its end through the status topic.
+TopicTrajectoryExecutor is followed to its end through the status topic; 20 trajectories sent back to
+back each get exactly one final status (issue 39); one longer than max_trajectory_duration_s is refused.
 
 Tolerance on the final posture: 2 servo ticks (2 x 0.088 deg = 0.0031 rad). The goal is rounded
 to a whole tick (<= 0.5 tick), the mock's shafts converge on their goals exponentially (a first-order
@@ -122,6 +123,54 @@ class DriverTrajectory(DriverTestCase):
         wait_for(lambda: executor.finished(rospy.get_time()), 5.0, "the refusal")
         self.assertIn("refused", executor.aborted)
         self.assertIn("points[0].time_from_start: -1 s, must be > 0", executor.aborted)
+
+    def test_4_back_to_back_trajectories_each_end_exactly_once(self):
+        """20 trajectories sent back to back: every one gets exactly one final status (issue 39, 2):
+        the last is done, each earlier one is superseded and names a later one that replaced it; none is
+        lost on the way (the driver's queue, its diagnostics say 0 lost)."""
+        h = self.h
+        pub = rospy.Publisher("driver/joint_trajectory", JointTrajectory, queue_size=100)
+        wait_for(lambda: pub.get_num_connections() > 0, 10.0, "a second publisher to connect")
+        now = self.positions()
+        ids = [f"b2b-{k}" for k in range(20)]
+        for k, trajectory_id in enumerate(ids):  # small moves from the present posture, 2 s each
+            msg = JointTrajectory()
+            msg.header.frame_id = trajectory_id
+            msg.joint_names = [f"joint_{j + 1}" for j in range(N)]
+            for t in (1.0, 2.0):
+                p = JointTrajectoryPoint()
+                p.positions = [q - math.copysign(0.002 * (k + 1) * t, q) for q in now]  # towards 0: inside the limits
+                p.time_from_start = rospy.Duration.from_sec(t)
+                msg.points.append(p)
+            pub.publish(msg)
+        ended = ("done", "aborted", "refused")
+
+        def finals():
+            with self.status_lock:
+                return [s for s in self.statuses if s.id in ids and s.phase in ended]
+        wait_for(lambda: {s.id for s in finals()} == set(ids), 15.0, "a final status for each of the 20")
+        rospy.sleep(1.0)  # a duplicate would come within the next publisher cycles
+        got = finals()
+        self.assertEqual(sorted(s.id for s in got), sorted(ids), "exactly one final status each")
+        by_id = {s.id: s for s in got}
+        self.assertEqual(by_id[ids[-1]].phase, "done")
+        for k, trajectory_id in enumerate(ids[:-1]):
+            s = by_id[trajectory_id]
+            self.assertEqual((s.phase, s.abort), ("aborted", "superseded"), s)
+            self.assertIn(s.superseded_by, ids[k + 1:], s)
+            self.assertGreater(s.superseded_by_sequence, s.sequence, s)
+            self.assertIn(f"superseded by '{s.superseded_by}'", s.reason)
+        self.assertEqual(len({s.sequence for s in got}), 20, "one sequence number each")
+        h.wait_diag(TRAJ, lambda s: h.value(TRAJ, "lost_before_driver") == "0"
+                    and h.value(TRAJ, "final_statuses_dropped") == "0", 5.0, "nothing lost, in the diagnostics")
+
+    def test_5_a_trajectory_longer_than_the_maximum_duration_is_refused(self):
+        """A point at 2^31 s used to be accepted and "run 68 years": refused, with the rule (issue 39, 2)."""
+        msg = trajectory("forever", self.positions(), 2.0)
+        msg.points[-1].time_from_start = rospy.Duration(2 ** 31 - 1)  # the largest a Duration carries
+        self.pub.publish(msg)
+        refused = self.status_of("forever", "refused", 5.0)
+        self.assertIn("longer than max_trajectory_duration_s 600 s", refused.reason)
 
 
 if __name__ == "__main__":

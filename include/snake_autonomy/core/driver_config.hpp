@@ -54,6 +54,8 @@ struct DriverConfig {
   // Joint trajectories (driver/joint_trajectory): the most points one may carry; storage for twice
   // this many points is reserved at construction (2 x points x joints x 16 bytes: 7 MB for COBRA).
   int max_trajectory_points = 20000;
+  // The longest a trajectory may last (its last time_from_start, s); longer ones are refused whole.
+  double max_trajectory_duration_s = 600.0;
 
   // Every problem, naming key and value; empty when usable.
   std::vector<std::string> validate() const;

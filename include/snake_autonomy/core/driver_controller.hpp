@@ -25,7 +25,8 @@
 // kRunning; the CPG is not stepped: waves off; no command lifetime and no pose gate: it ends by
 // itself), its goals through the same slew limit and clamp as the gait's. A fault, torque off, a
 // hold request, a gait command or a newer trajectory ends it (progress: aborted, with the reason);
-// at its end the driver holds the last point (kHolding, HoldReason::kTrajectoryDone).
+// at its end the driver holds the last point (kHolding, HoldReason::kTrajectoryDone). Each accepted
+// trajectory ends with exactly one final status (pop_trajectory_final).
 //
 // Threads: start(), update() and shutdown() run on one thread (the loop). command_gait(),
 // set_base_pose() and call() may be called from any other thread: they hand their data over through
@@ -153,6 +154,11 @@ class DriverController {
   std::uint64_t trajectories_refused() const noexcept { return trajectories_refused_.load(); }
   std::string last_trajectory_refusal() const;
   const driver::TrajectoryProgress& trajectory_progress() const noexcept { return trajectory_.progress(); }  // loop
+  // Every accepted trajectory's final status, exactly once (done; aborted with the reason; superseded,
+  // naming the trajectory that replaced it): driver::TrajectorySource::pop_final. Any ONE consumer
+  // thread (the node's publisher thread), lock-free. finals_dropped: lost to a full queue (counted).
+  bool pop_trajectory_final(driver::TrajectoryProgress* out) noexcept { return trajectory_.pop_final(out); }
+  std::uint64_t trajectory_finals_dropped() const noexcept { return trajectory_.finals_dropped(); }
 
   DriverState state() const noexcept { return supervisor_.state(); }
   std::uint64_t commands_accepted() const noexcept { return gait_.commands_accepted(); }
