@@ -117,6 +117,20 @@ def test_report_cli_on_a_missing_bag(tmp_path, capsys):
     assert "no such file" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("size", [0, 100])
+def test_report_refuses_a_truncated_bag_naming_it(tmp_path, capsys, size):
+    """A bag cut to its first bytes holds no run: exit 1 naming the bag, never "0/0 waypoints"."""
+    log = RunLog(tmp_path / "run", "cut", WPS, t_start_s=0.0, mission_yaml="")
+    log.add_decision(1.0, 0, 0, False, 1.0, 0.1, 0.2, 0.15)
+    log.close("aborted: test", plots=False)
+    bag = tmp_path / "cut.bag"
+    bag.write_bytes((tmp_path / "run" / "run.bag").read_bytes()[:size])
+    assert cli_main(["report", str(bag), "--out", str(tmp_path / "report"), "--no-plots"]) == 1
+    captured = capsys.readouterr()
+    assert str(bag) in captured.err and "0/0" not in captured.out
+    assert not (tmp_path / "report" / "metrics.json").exists()
+
+
 def test_a_decision_after_close_leaves_the_final_metrics(tmp_path):
     """A tracker step racing the shutdown must not turn the final outcome back into 'running'."""
     log = RunLog(tmp_path / "run", "race", [(1.0, 0.0, 0.0)], t_start_s=0.0, mission_yaml="")

@@ -1,7 +1,9 @@
 """Reading a run's bag back into the plain arrays of :mod:`.results` (needs rosbag, not a master).
 
 A recorder killed half-way leaves a bag without its index: :func:`open_bag` reindexes a temporary
-copy (the original is never modified) and reads every complete chunk from it.
+copy (the original is never modified) and reads every complete chunk from it. A bag without the run's
+start event (cut before its first chunk, or not a run's bag) holds no run: :func:`report_from_bag`
+refuses it (RunBagError) rather than report "0/0 waypoints".
 """
 import json
 import math
@@ -15,6 +17,10 @@ import numpy as np
 
 RUN_TOPIC = "/snake_autonomy/run"   # std_msgs/String, JSON events: start (mission, waypoints), scout, end (outcome)
 INTERRUPTED = "interrupted"          # outcome of a run whose bag has no end event
+
+
+class RunBagError(ValueError):
+    """A bag that holds no run to report."""
 
 
 def _basename(topic: str) -> str:
@@ -62,7 +68,8 @@ def _yaw(q) -> float:
 
 
 def read_run(path, com_topic: str = "com_pose", status_topic: str = "tracking_status") -> Dict[str, Any]:
-    """{waypoints, trajectory, decisions, meta, reindexed} of a run bag. Topics are matched by their
+    """{waypoints, trajectory, decisions, meta, reindexed, started, messages} of a run bag (started:
+    the run's start event is in it; messages: how many were read). Topics are matched by their
     last name component, so a namespaced run (/cobra/com_pose) reads the same; the simulator's
     ground_truth/com_pose is not the robot's estimate and is left out (it was interleaved once)."""
     traj = {"t": [], "x": [], "y": [], "yaw": []}
@@ -71,12 +78,15 @@ def read_run(path, com_topic: str = "com_pose", status_topic: str = "tracking_st
     dec = {k: [] for k in keys}
     meta: Dict[str, Any] = {}
     waypoints = []
+    started, messages = False, 0
     with open_bag(path) as (bag, reindexed):
         for topic, msg, t in bag.read_messages():
+            messages += 1
             name = _basename(topic)
             if topic == RUN_TOPIC:
                 event = json.loads(msg.data)
                 if event.get("event") == "start":
+                    started = True
                     meta.update({k: v for k, v in event.items() if k != "event"})
                     waypoints = [tuple(w) for w in event.get("waypoints", [])]
                 elif event.get("event") == "scout":   # a finished scout stop (missions/scout.py)
@@ -111,13 +121,18 @@ def read_run(path, com_topic: str = "com_pose", status_topic: str = "tracking_st
         meta["outcome_note"] = ("the bag has no end of run: the process recording it stopped before the "
                                 "run's final decision" + (" (the bag had no index: reindexed)" if reindexed else ""))
     return {"waypoints": waypoints, "trajectory": trajectory, "decisions": decisions, "meta": meta,
-            "reindexed": reindexed}
+            "reindexed": reindexed, "started": started, "messages": messages}
 
 
 def report_from_bag(bag_path, out_dir, plots: bool = True):
-    """Rebuilds the results folder of a run from its bag; returns write_results' paths."""
+    """Rebuilds the results folder of a run from its bag; returns write_results' paths. RunBagError
+    (nothing written) when the bag holds no run's start event."""
     from .results import write_results
     run = read_run(bag_path)
+    if not run["started"]:
+        raise RunBagError(f"no run in it: no start event on {RUN_TOPIC} among {run['messages']} message(s)"
+                          + (" (it had no index: reindexed)" if run["reindexed"] else "")
+                          + ": a truncated bag, or not a run's bag")
     meta = dict(run["meta"])
     meta["bag"] = str(bag_path)
     meta["bag_reindexed"] = run["reindexed"]

@@ -1,7 +1,8 @@
 """`snake_autonomy report BAG [--out DIR]`: rebuild a run's results folder from its bag.
 
 Works on a bag left by a killed run (no index): a temporary copy is reindexed, the bag itself is
-left untouched. Exit 0 and the written paths; 1 when the bag cannot be read.
+left untouched. Exit 0 and the written paths; 1, naming the bag, when it cannot be read or holds no
+run (a bag cut before the run's start event).
 """
 import sys
 from pathlib import Path
@@ -14,7 +15,7 @@ def add_arguments(parser):
 
 
 def main(args) -> int:
-    from .bag_io import report_from_bag
+    from .bag_io import RunBagError, report_from_bag
     bag = Path(args.bag)
     if not bag.is_file():
         print(f"report: {bag}: no such file", file=sys.stderr)
@@ -22,6 +23,9 @@ def main(args) -> int:
     out = Path(args.out) if args.out else bag.parent / (bag.stem + "_report")
     try:
         paths = report_from_bag(bag, out, plots=not args.no_plots)
+    except RunBagError as exc:
+        print(f"report: {bag}: {exc}", file=sys.stderr)
+        return 1
     except Exception as exc:  # noqa: BLE001 - any reading error is reported with the bag's name
         print(f"report: {bag}: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 1
