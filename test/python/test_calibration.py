@@ -52,6 +52,22 @@ def test_eq_3_31_fit_recovers_drift_gain_and_heading_offset():
     assert math.isnan(two.rate_residual_std_deg_s) and math.isnan(two.delta_offset_std_deg)
 
 
+def test_two_deltas_say_there_is_no_spread_instead_of_nan():
+    summary = fit([synthetic_segment(d) for d in (0.0, 4.0)]).summary()
+    assert "nan" not in summary.lower()
+    assert "no spread with 2 segments (3 or more needed)" in summary
+
+
+@pytest.mark.parametrize("deltas, message", [("a,b", "--deltas: expected degrees separated by commas, got 'a,b'"),
+                                             ("0,,5", "--deltas: expected degrees separated by commas, got '0,,5'"),
+                                             ("0,inf", "--deltas: must be finite, got '0,inf'"),
+                                             ("5", "--deltas: need two different values or more, got '5'")])
+def test_calibrate_deltas_errors_name_the_option_and_value(tmp_path, capsys, deltas, message):
+    from snake_autonomy.cli import main as cli_main
+    assert cli_main(["calibrate", "--sim", "--out", str(tmp_path / "out"), "--deltas", deltas]) == 2
+    assert message in capsys.readouterr().err
+
+
 def test_fit_scatter_and_per_run_values_on_noisy_runs():
     rng = np.random.default_rng(1)
     segs = [synthetic_segment(d, noise_deg_s=0.3, rng=rng, run=f"seed {k}", yaw0=k)

@@ -68,13 +68,22 @@ class CalibrationResult:
     per_run_delta_offset_deg: Dict[str, float] = field(default_factory=dict)
     warnings: List[str] = field(default_factory=list)
 
+    def spread(self, value: float, fmt: str = ".2f", unit: str = "", sign: str = "+-") -> str:
+        """A scatter figure as text: "+-0.12" + unit, or why there is none (a line through two
+        segments says nothing of the scatter: its residual is NaN), never "nan"."""
+        if math.isfinite(value):
+            return f"{sign}{value:{fmt}}{unit}"
+        return f"no spread with {len(self.segments)} segments (3 or more needed)"
+
     def summary(self) -> str:
+        rate_scatter = self.spread(self.rate_residual_std_deg_s, unit=" deg/s", sign="")
+        heading_scatter = self.spread(self.heading_offset_residual_std_deg, ".1f", " deg", "")
         lines = [f"delta_offset (eq. 3.31) = -K_bias * drift = -({self.k_bias_s:.3f} s) * "
                  f"({self.drift_rate_deg_s:+.2f} deg/s) = {self.delta_offset_deg:+.2f} deg "
-                 f"(+-{self.delta_offset_std_deg:.2f}); steering {self.steering_gain_deg_s_per_deg:+.3f} deg/s per deg, "
-                 f"turn-rate scatter {self.rate_residual_std_deg_s:.2f} deg/s",
+                 f"({self.spread(self.delta_offset_std_deg)}); steering {self.steering_gain_deg_s_per_deg:+.3f} "
+                 f"deg/s per deg, turn-rate scatter: {rate_scatter}",
                  f"heading offset (travel - chassis x axis) at delta_offset = {self.heading_offset_deg:+.1f} deg "
-                 f"(scatter {self.heading_offset_residual_std_deg:.1f} deg)"]
+                 f"(scatter: {heading_scatter})"]
         if len(self.per_run_delta_offset_deg) > 1:
             v = np.array(list(self.per_run_delta_offset_deg.values()))
             lines.append(f"per run: delta_offset median {np.median(v):+.2f} deg, range [{v.min():+.2f}, {v.max():+.2f}]")

@@ -13,6 +13,7 @@ OUT/calibration.png. Exit 0 with a calibration, 1 when the run or the fit failed
 import math
 import sys
 from pathlib import Path
+from typing import List
 
 from ..paths import config_path
 
@@ -49,7 +50,7 @@ def main(args) -> int:
     from .output import plot, tracker_block, write_yaml
     from .sequence import Plan
     try:
-        deltas = [float(v) for v in args.deltas.split(",")]
+        deltas = parse_deltas(args.deltas)
         period_s = 1.0 / _core.GaitLibrary.from_yaml(args.gaits).frequency_hz(args.gait)
         seeds = parse_seeds(args.seeds) if args.sim else []
         Plan(deltas, period_s, args.gait, args.settle_cycles, args.cycles).check()
@@ -81,6 +82,20 @@ def main(args) -> int:
           f"or merge into the tracker: section of config/sim.yaml (simulated robot) / config/tracker.yaml (robot):\n"
           f"  tracker:\n" + "".join(f"    {k}: {v}\n" for k, v in block.items()))
     return 0
+
+
+def parse_deltas(text: str) -> List[float]:
+    """--deltas '0,5,10' -> [0.0, 5.0, 10.0]; ValueError naming --deltas and the value otherwise."""
+    from ..safe_yaml import short_repr
+    try:
+        deltas = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise ValueError(f"--deltas: expected degrees separated by commas, got {short_repr(text)}") from None
+    if not all(math.isfinite(d) for d in deltas):
+        raise ValueError(f"--deltas: must be finite, got {short_repr(text)}")
+    if len(set(deltas)) < 2:
+        raise ValueError(f"--deltas: need two different values or more, got {short_repr(text)}")
+    return deltas
 
 
 def _sim(args, plans, seeds):

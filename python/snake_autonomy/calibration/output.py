@@ -65,13 +65,14 @@ def plot(path, result: CalibrationResult, title: str = "") -> Path:
         ax1.plot([s.delta_deg for s in mine], [s.turn_rate_deg_s for s in mine], "o", label=run or "run")
         ax2.plot([s.delta_deg for s in mine], [s.heading_offset_deg for s in mine], "o", label=run or "run")
     ax1.plot(span, r.drift_rate_deg_s + r.steering_gain_deg_s_per_deg * span, "k-",
-             label=f"fit: {r.drift_rate_deg_s:+.2f} {r.steering_gain_deg_s_per_deg:+.3f} δ (±{r.rate_residual_std_deg_s:.2f})")
+             label=f"fit: {r.drift_rate_deg_s:+.2f} {r.steering_gain_deg_s_per_deg:+.3f} δ "
+                   f"({r.spread(r.rate_residual_std_deg_s, sign='±')})")
     ax1.axhline(0.0, color="grey", lw=0.8)
     ax1.axvline(r.delta_offset_deg, color="tab:red", ls="--",
-                label=f"δ_offset = {r.delta_offset_deg:+.2f}° (±{r.delta_offset_std_deg:.2f})")
+                label=f"δ_offset = {r.delta_offset_deg:+.2f}° ({r.spread(r.delta_offset_std_deg, sign='±')})")
     ax1.set(xlabel="steering δ (deg)", ylabel="turn rate (deg/s)", title="eq. 3.31: heading drift vs δ")
     ax2.plot(span, r.heading_offset_deg + r.heading_offset_slope * (span - r.delta_offset_deg), "k-",
-             label=f"fit (±{r.heading_offset_residual_std_deg:.1f}°)")
+             label=f"fit ({r.spread(r.heading_offset_residual_std_deg, '.1f', '°', '±')})")
     ax2.axvline(r.delta_offset_deg, color="tab:red", ls="--",
                 label=f"heading offset {r.heading_offset_deg:+.1f}° at δ_offset")
     ax2.set(xlabel="steering δ (deg)", ylabel="travel − chassis x axis (deg)", title="heading offset")
