@@ -5,6 +5,10 @@
 //  - the loop thread: LoopTimer (absolute deadlines on the steady clock, overruns counted) ->
 //    controller.update() -> snapshot. It never allocates, never logs and never waits on a lock: it
 //    hands the snapshot over with try_lock (a missed handover is simply the next cycle's).
+//    Real-time mode (~realtime_priority > 0): before its first cycle the loop thread asks for SCHED_FIFO
+//    at that priority and locks the process's memory (core::enter_realtime); what it got is logged
+//    (a warning naming what was refused, e.g. EPERM, and the loop carries on with normal scheduling) and
+//    reported in the "loop" diagnostics (realtime, memory_locked).
 //  - the publisher thread: takes each new snapshot and publishes joint_states, TF, com_pose,
 //    bound_state and, every diagnostics_period_s, /diagnostics (diagnostic_updater tasks: loop,
 //    locomotion, bus, one per servo, and the rate and stamps of joint_states and com_pose, the 100 Hz
@@ -21,9 +25,7 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/TransformStamped.h>
-#include <pthread.h>
 #include <ros/ros.h>
-#include <sched.h>
 #include <sensor_msgs/JointState.h>
 #include <snake_autonomy/BoundState.h>
 #include <snake_autonomy/GaitCommand.h>
@@ -46,6 +48,7 @@
 #include "snake_autonomy/core/driver_controller.hpp"
 #include "snake_autonomy/core/gait_library.hpp"
 #include "snake_autonomy/core/loop_timer.hpp"
+#include "snake_autonomy/core/realtime.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
 #include "snake_autonomy/dynamixel/control_table.hpp"
 #include "snake_autonomy/dynamixel/serial_bus.hpp"
@@ -146,11 +149,8 @@ class DriverNode {
 
   // ---- the loop thread ----
   void loop() {
-    if (config_.realtime_priority > 0) {
-      sched_param p{};
-      p.sched_priority = config_.realtime_priority;
-      rt_error_ = pthread_setschedparam(pthread_self(), SCHED_FIFO, &p);
-    }
+    realtime_ = core::enter_realtime(config_.realtime_priority);
+    realtime_known_.store(true, std::memory_order_release);
     core::LoopTimer timer(config_.loop);
     Clock::time_point prev = Clock::now();
     timer.start(prev);
@@ -180,9 +180,16 @@ class DriverNode {
   void publish_loop() {
     std::uint64_t last_seq = 0;
     ros::WallTime next_diag = ros::WallTime::now();
-    if (rt_error_ != 0) ROS_WARN("realtime_priority %d: SCHED_FIFO refused (%s); the loop runs with normal scheduling",
-                                 config_.realtime_priority, std::strerror(rt_error_));
+    bool realtime_logged = false;
     while (running_) {
+      if (!realtime_logged && realtime_known_.load(std::memory_order_acquire)) {
+        realtime_logged = true;
+        if (realtime_.degraded()) {
+          ROS_WARN("driver: %s", realtime_.warning().c_str());
+        } else {
+          ROS_INFO("driver: loop thread real-time mode: %s", realtime_.mode().c_str());
+        }
+      }
       {
         std::unique_lock<std::mutex> lock(snapshot_mutex_);
         snapshot_cv_.wait_for(lock, std::chrono::milliseconds(20), [&] { return shared_.seq != last_seq || !running_; });
@@ -323,8 +330,11 @@ class DriverNode {
     const double rate = l.window_rate_hz();
     const bool rate_ok = std::abs(rate - config_.loop.rate_hz) <= 0.1 * config_.loop.rate_hz;
     const bool ok = l.window_overruns == 0 && rate_ok;
-    stat.summary(ok ? DiagnosticStatus::OK : DiagnosticStatus::WARN,
-                 ok ? "on time" : (l.window_overruns > 0 ? str(l.window_overruns) + " overruns" : "rate off by more than 10 %"));
+    const bool rt_known = realtime_known_.load(std::memory_order_acquire);
+    const bool rt_refused = rt_known && realtime_.degraded();
+    std::string summary = ok ? "on time" : (l.window_overruns > 0 ? str(l.window_overruns) + " overruns" : "rate off by more than 10 %");
+    if (rt_refused) summary += "; real-time mode refused: " + realtime_.mode();
+    stat.summary(ok && !rt_refused ? DiagnosticStatus::OK : DiagnosticStatus::WARN, summary);
     stat.values = {kv("target_rate_hz", fixed(config_.loop.rate_hz, 1)), kv("rate_hz", fixed(rate, 2)),
                    kv("period_mean_ms", fixed(l.window_period_mean_s() * 1e3, 3)),
                    kv("period_std_ms", fixed(l.window_period_std_s() * 1e3, 3)),
@@ -333,7 +343,10 @@ class DriverNode {
                    kv("work_mean_ms", fixed(l.window_cycles ? l.window_work_sum_s / l.window_cycles * 1e3 : 0.0, 3)),
                    kv("work_max_ms", fixed(l.window_work_max_s * 1e3, 3)), kv("overruns", str(l.overruns)),
                    kv("window_overruns", str(l.window_overruns)), kv("skipped_deadlines", str(l.skipped_deadlines)),
-                   kv("cycles", str(l.cycles))};
+                   kv("cycles", str(l.cycles)),
+                   kv("realtime", rt_known ? realtime_.mode() : "starting"),
+                   kv("realtime_priority", str(config_.realtime_priority)),
+                   kv("memory_locked", rt_known && realtime_.memory_locked ? "true" : "false")};
   }
 
   void diagnose_locomotion(diagnostic_updater::DiagnosticStatusWrapper& stat) {
@@ -480,7 +493,8 @@ class DriverNode {
 
   std::atomic<bool> running_{false};
   std::atomic<bool> reset_window_{false};
-  std::atomic<int> rt_error_{0};
+  core::RealtimeReport realtime_;           // written by the loop thread before realtime_known_
+  std::atomic<bool> realtime_known_{false};
   std::thread loop_thread_, publisher_thread_;
   LoopSnapshot work_;       // loop thread only
   std::mutex snapshot_mutex_;
