@@ -8,6 +8,7 @@ asked of rospkg. SNAKE_AUTONOMY_ROOT (set by scripts/with-env) overrides all of 
 """
 import functools
 import os
+import re
 from pathlib import Path
 
 PACKAGE = "snake_autonomy"
@@ -43,9 +44,34 @@ def config_path(*parts: str) -> Path:
     return package_root().joinpath("config", *parts)
 
 
-def robot_yaml(name_or_path: str) -> Path:
-    """A robot description: a path, or a name under config/robots/ ('cobra')."""
-    p = Path(name_or_path)
-    if p.suffix in (".yaml", ".yml") or p.exists():
+# The name of a provided file (config/<folder>/NAME.yaml): no path separator, no leading dot.
+NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}")
+
+
+class NotANameError(ValueError):
+    """Neither a provided file's name nor a YAML file's path; `value` is quoted (short, escaped)."""
+
+    def __init__(self, value: str, folder: str):
+        from .safe_yaml import short_repr
+        self.value = short_repr(value)
+        self.problem = (f"neither the name of a provided file ({folder}/NAME.yaml: NAME of letters, digits, "
+                        f"_ . -) nor a file (a path ending in .yaml or .yml)")
+        super().__init__(f"{self.value}: {self.problem}")
+
+
+def named_yaml(folder: str, name_or_path: str) -> Path:
+    """A YAML file given as a path ending in .yaml/.yml (taken as it is) or as the NAME of a provided
+    one, which means config/<folder>/NAME.yaml and nothing else: a name never leaves its folder
+    (../../etc/passwd is refused, NotANameError, before a byte is read)."""
+    text = str(name_or_path)
+    p = Path(os.path.expanduser(text))
+    if p.suffix in (".yaml", ".yml"):
         return p
-    return config_path("robots", f"{name_or_path}.yaml")
+    if NAME.fullmatch(text):
+        return config_path(folder, f"{text}.yaml")
+    raise NotANameError(text, f"config/{folder}")
+
+
+def robot_yaml(name_or_path: str) -> Path:
+    """A robot description: a path ending in .yaml/.yml, or a name under config/robots/ ('cobra')."""
+    return named_yaml("robots", name_or_path)

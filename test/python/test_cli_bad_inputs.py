@@ -163,3 +163,10 @@ def test_nav_run_refuses_a_world_wider_than_the_route_grid(tmp_path):
                                          b"height_m: 0.3}\n")
     proc = run_cli("nav", "run", "--world", world, "--time-limit", "5", "--out", tmp_path / "out")
     assert_refused(proc, "route grid", "182.0 m x 182.0 m", "map.route_max_cells")
+
+
+@pytest.mark.parametrize("command", [("urdf",), ("gait", "--duration", "0.1", "--robot")])
+def test_a_robot_name_resolves_only_inside_config_robots(tmp_path, command):
+    """A name is config/robots/NAME.yaml and nothing else: ../../../../etc/passwd is not read."""
+    proc = run_cli(*command, "../../../../etc/passwd", *(("--out", tmp_path / "out") if len(command) > 1 else ()))
+    assert_refused(proc, "'../../../../etc/passwd': neither the name of a provided file (config/robots/NAME.yaml")

@@ -19,15 +19,13 @@ each problem names the key and the value.
 """
 import copy
 import math
-import os
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from ..control.waypoint_tracker import TRACKER_GAITS, TrackerParams
 from ..safe_yaml import YamlFileError, load_yaml_file, load_yaml_text, short_repr
-from ..paths import config_path
+from ..paths import NotANameError, config_path, named_yaml
 from .scout import ScoutSpec, parse_scout
 
 CONFIG_DIR = config_path()
@@ -386,10 +384,6 @@ def _type_name(value) -> str:
     return "nothing (an empty document)" if value is None else f"a {type(value).__name__}"
 
 
-# A provided mission's name: config/missions/NAME.yaml, no path separator, no leading dot.
-MISSION_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}")
-
-
 def _path_text(path) -> str:
     """A path as a message shows it: as is when short and printable, else quoted (short_repr)."""
     text = str(path)
@@ -398,17 +392,12 @@ def _path_text(path) -> str:
 
 def resolve_mission_path(name_or_path: str) -> Path:
     """A mission file (a path ending in .yaml or .yml) or a provided mission's name, which resolves
-    only to config/missions/NAME.yaml; anything else is refused (MissionError) before a byte is read:
-    a name like ../../etc/passwd never reaches a file outside the folder."""
-    text = str(name_or_path)
-    p = Path(os.path.expanduser(text))
-    if p.suffix in (".yaml", ".yml"):
-        return p
-    if MISSION_NAME.fullmatch(text):
-        return MISSIONS_DIR / f"{text}.yaml"
-    raise MissionError(short_repr(text), [
-        "neither a provided mission's name (config/missions/NAME.yaml: NAME of letters, digits, _ . -) "
-        "nor a mission file (a path ending in .yaml or .yml)"])
+    only to config/missions/NAME.yaml (paths.named_yaml); anything else is refused (MissionError)
+    before a byte is read: a name like ../../etc/passwd never reaches a file outside the folder."""
+    try:
+        return named_yaml("missions", name_or_path)
+    except NotANameError as exc:
+        raise MissionError(exc.value, [exc.problem]) from None
 
 
 def load_mission(path, defaults=None, gait_library=None) -> Mission:

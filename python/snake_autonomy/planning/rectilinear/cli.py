@@ -24,9 +24,7 @@ import sys
 import time
 from pathlib import Path
 
-from ...paths import config_path
-
-ROBOTS = config_path("robots")
+from ...paths import config_path, robot_yaml
 
 
 def add_arguments(parser):
@@ -76,11 +74,6 @@ def add_arguments(parser):
         p.add_argument("--robot", default="cobra", help="robot name (config/robots/NAME.yaml) or YAML file")
         p.add_argument("--config", default=None,
                        help="nav config (default: config/nav_ROBOT.yaml if it exists, else config/nav.yaml)")
-
-
-def robot_yaml(name: str) -> Path:
-    p = Path(name)
-    return p if p.suffix in (".yaml", ".yml") else ROBOTS / f"{name}.yaml"
 
 
 def _setup(args):
