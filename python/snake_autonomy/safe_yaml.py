@@ -114,10 +114,11 @@ def _decode(data: bytes, source: str) -> str:
             from None
 
 
-def load_yaml_text(text: str, source: str = "<text>") -> Any:
-    """The document of a YAML text (None when empty); YamlFileError naming source on any problem."""
-    if len(text.encode("utf-8", "surrogatepass")) > MAX_FILE_BYTES:
-        raise YamlFileError(f"{source}: larger than {MAX_FILE_BYTES} bytes")
+def load_yaml_text(text: str, source: str = "<text>", max_bytes: int = MAX_FILE_BYTES) -> Any:
+    """The document of a YAML text (None when empty); YamlFileError naming source on any problem
+    (a text over max_bytes is refused unparsed)."""
+    if len(text) > max_bytes or len(text.encode("utf-8", "surrogatepass")) > max_bytes:
+        raise YamlFileError(f"{source}: larger than {max_bytes} bytes")
     if "\x00" in text:
         raise YamlFileError(f"{source}: not a text file (NUL character)")
     loader = _BoundedLoader(text)
@@ -136,9 +137,9 @@ def load_yaml_text(text: str, source: str = "<text>") -> Any:
         loader.dispose()
 
 
-def load_yaml_file(path) -> Any:
-    """The document of a YAML file (None when empty); YamlFileError naming the file on any problem,
-    FileNotFoundError (an OSError) when it does not exist."""
+def load_yaml_file(path, max_bytes: int = MAX_FILE_BYTES) -> Any:
+    """The document of a YAML file (None when empty); YamlFileError naming the file on any problem
+    (a file over max_bytes is not read), FileNotFoundError (an OSError) when it does not exist."""
     path = Path(os.path.expanduser(str(path)))
     source = str(path)
     if not path.exists():
@@ -147,10 +148,10 @@ def load_yaml_file(path) -> Any:
         raise YamlFileError(f"{source}: is a folder, not a YAML file")
     try:
         with open(path, "rb") as f:
-            data = f.read(MAX_FILE_BYTES + 1)
+            data = f.read(max_bytes + 1)
     except OSError as exc:
         raise YamlFileError(f"{source}: cannot read: {exc.strerror or exc}") from None
-    if len(data) > MAX_FILE_BYTES:
-        raise YamlFileError(f"{source}: larger than {MAX_FILE_BYTES} bytes ({MAX_FILE_BYTES // 1024} KiB): "
+    if len(data) > max_bytes:
+        raise YamlFileError(f"{source}: larger than {max_bytes} bytes ({max_bytes // 1024} KiB): "
                             "not a configuration file")
-    return load_yaml_text(_decode(data, source), source)
+    return load_yaml_text(_decode(data, source), source, max_bytes)

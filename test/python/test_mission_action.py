@@ -81,6 +81,27 @@ def test_a_mission_yaml_alias_bomb_is_refused_at_once():
     assert "RunMission goal mission_yaml" in message and "anchor &a refused" in message
 
 
+def test_a_mission_larger_than_any_real_one_is_refused_before_parsing(tmp_path):
+    """1000 waypoints with scout stops take 75 KB; a 1 MiB mission_yaml took 6-10 s to parse, with
+    mission_node's lock held (mission/abort waited): a mission over MAX_MISSION_BYTES is refused unread."""
+    import time
+    from snake_autonomy.missions.mission import MAX_MISSION_BYTES
+    text = "waypoints:\n" + "  - [1.0, 2.0, 3.0]\n" * (MAX_MISSION_BYTES // 20 + 1)
+    t0 = time.perf_counter()
+    refused = f"(?s)RunMission goal mission_yaml: .*larger than {MAX_MISSION_BYTES} bytes"
+    with pytest.raises(MissionError, match=refused):
+        mission_from_goal(goal(mission_yaml=text), None, None)
+    big = tmp_path / "big.yaml"
+    big.write_text(text)
+    with pytest.raises(MissionError, match=f"larger than {MAX_MISSION_BYTES} bytes"):
+        mission_from_goal(goal(mission=str(big)), None, None)
+    assert time.perf_counter() - t0 < 0.2
+    thousand = "waypoints:\n" + "".join(f"  - pose: [{k * 0.5:.3f}, {-k * 0.25:.3f}, {k % 360:.1f}]\n"
+                                         f"    scout: {{height_m: 0.2, hold_s: 5}}\n" for k in range(1000))
+    assert len(thousand) < MAX_MISSION_BYTES
+    assert len(mission_from_goal(goal(mission_yaml=thousand), None, None).waypoints) == 1000
+
+
 @pytest.mark.parametrize("name", ["../../../../etc/passwd", "/etc/passwd", "star/../../../../../etc/passwd",
                                   "..", "star\x1b[2J"])
 def test_a_goal_names_a_mission_only_inside_the_missions_folder(name):

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from ..control.waypoint_tracker import TRACKER_GAITS, TrackerParams
-from ..safe_yaml import YamlFileError, load_yaml_file, load_yaml_text, short_repr
+from ..safe_yaml import MAX_FILE_BYTES, YamlFileError, load_yaml_file, load_yaml_text, short_repr
 from ..paths import NotANameError, config_path, named_yaml
 from .scout import ScoutSpec, parse_scout
 
@@ -59,6 +59,9 @@ MAX_WAYPOINTS = 1000
 MAX_COORDINATE_M = 1000.0       # |x|, |y| of a waypoint
 MAX_HEADING_DEG = 360.0         # |heading|
 MAX_TIME_LIMIT_S = 86400.0      # one day
+# A mission file or text: 1000 waypoints with scout stops take 75 KB. PyYAML parses about 100-170 KB
+# a second here, while mission_node holds its lock: a 1 MiB mission_yaml kept mission/abort waiting 6-10 s.
+MAX_MISSION_BYTES = 128 * 1024
 # Position and heading closer than this count as the same waypoint.
 DUPLICATE_TOL_M = 1e-3
 DUPLICATE_TOL_DEG = 1e-2
@@ -141,10 +144,10 @@ def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
-def load_yaml(path) -> Any:
+def load_yaml(path, max_bytes: int = MAX_FILE_BYTES) -> Any:
     """A YAML file through the package's bounded loader (safe_yaml); MissionError naming the file."""
     try:
-        return load_yaml_file(path)
+        return load_yaml_file(path, max_bytes)
     except YamlFileError as exc:
         raise MissionError(str(path), [str(exc).removeprefix(f"{path}: ")]) from None
 
@@ -405,7 +408,7 @@ def load_mission(path, defaults=None, gait_library=None) -> Mission:
     p = resolve_mission_path(str(path))
     source = _path_text(p)
     try:
-        data = load_yaml(p)
+        data = load_yaml(p, MAX_MISSION_BYTES)
     except FileNotFoundError:
         raise MissionError(source, [f"file not found: {source}"]) from None
     return validate_mission(data, source, defaults, gait_library)
@@ -415,7 +418,7 @@ def mission_from_text(text: str, source: str, defaults=None, gait_library=None) 
     """A mission held in memory as YAML text (a RunMission goal's mission_yaml), read by the same
     bounded loader as the files (safe_yaml.load_yaml_text: size cap, no aliases, no duplicate keys)."""
     try:
-        data = load_yaml_text(text, source)
+        data = load_yaml_text(text, source, MAX_MISSION_BYTES)
     except YamlFileError as exc:
         raise MissionError(source, [str(exc).removeprefix(f"{source}: ")]) from None
     return validate_mission(data, source, defaults, gait_library)
