@@ -314,11 +314,16 @@ class MissionNode:
 
     def install(self, make_mission, what):
         """Loads a mission (make_mission() builds it) unless one is running; (ok, message)."""
+        try:
+            mission = make_mission()        # parsed outside the lock: mission/abort never waits on it
+        except MissionError as exc:
+            return False, str(exc)
+        except ValueError as exc:
+            return False, f"{what}: {exc}"
         with self.lock:
             if self.runner is not None and self.runner.running:
                 return False, f"mission {self.mission.name!r} is running: abort it first"
             try:
-                mission = make_mission()
                 runner = self.make_runner(mission)
             except MissionError as exc:
                 return False, str(exc)
