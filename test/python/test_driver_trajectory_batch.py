@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from snake_autonomy import _core
-from snake_autonomy.planning.fbsr.cli import build_planner
+from snake_autonomy.planning.fbsr.build import build_planner
 from snake_autonomy.planning.fbsr.trajectory import plan_points
 from snake_autonomy.sim.batch import LockStepDriver, load_driver_config
-from snake_autonomy.sim.config import SimConfig
+from snake_autonomy.sim.config import SimConfig, servo_torque_limit_nm
 from snake_autonomy.sim.plant import Plant
 from snake_autonomy.sim.scout_executor import DriverTrajectoryExecutor
 
@@ -24,7 +24,7 @@ HEAD_TOLERANCE_M = 0.01
 
 @pytest.fixture(scope="module")
 def rig(root):
-    planner = build_planner(str(root / "config/robots/unified_snake.yaml"))[0]
+    planner = build_planner(str(root / "config/robots/unified_snake.yaml"), torque_limit_nm=servo_torque_limit_nm())[0]
     plan = planner.plan(max_active=4, seed=0)
     robot = planner.chain.robot
     params = SimConfig.from_yaml(root / "config/sim.yaml").draw(0, num_joints=robot.num_joints)

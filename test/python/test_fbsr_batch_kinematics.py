@@ -3,13 +3,14 @@ cost, a gradient that matches finite differences of the reference cost."""
 import numpy as np
 import pytest
 
-from snake_autonomy.planning.fbsr.cli import build_planner
+from snake_autonomy.planning.fbsr.build import build_planner
 from snake_autonomy.planning.fbsr.cost import Directive, StageCost, Weights
+from snake_autonomy.sim.config import servo_torque_limit_nm
 
 
 @pytest.fixture(scope="module", params=["unified_snake", "cobra"])
 def planner(request, root):
-    return build_planner(str(root / f"config/robots/{request.param}.yaml"))[0]
+    return build_planner(str(root / f"config/robots/{request.param}.yaml"), torque_limit_nm=servo_torque_limit_nm())[0]
 
 
 @pytest.mark.parametrize("m", [2, 5])

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from snake_autonomy import _core
-from snake_autonomy.planning.fbsr.cli import build_planner
+from snake_autonomy.planning.fbsr.build import build_planner
 from snake_autonomy.planning.fbsr.execute import centre_of_pressure, run_plan
-from snake_autonomy.sim.config import SimConfig
+from snake_autonomy.sim.config import SimConfig, servo_torque_limit_nm
 from snake_autonomy.sim.plant import Plant
 
 
@@ -25,7 +25,7 @@ def test_centre_of_pressure_of_a_robot_at_rest_is_under_its_centre_of_gravity(ro
 
 
 def test_short_plan_executed_in_physics_does_not_tip(root):
-    planner = build_planner(str(root / "config/robots/unified_snake.yaml"))[0]
+    planner = build_planner(str(root / "config/robots/unified_snake.yaml"), torque_limit_nm=servo_torque_limit_nm())[0]
     plan = planner.plan(max_active=4, seed=0)
     result = run_plan(plan, root / "config/sim.yaml", seed=0)
     m = result["metrics"]

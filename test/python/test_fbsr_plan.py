@@ -7,13 +7,14 @@ import pytest
 
 from snake_autonomy import cli
 from snake_autonomy.planning.fbsr import plan_io
-from snake_autonomy.planning.fbsr.cli import build_planner
+from snake_autonomy.planning.fbsr.build import build_planner
 from snake_autonomy.planning.fbsr.planner import lowering
+from snake_autonomy.sim.config import servo_torque_limit_nm
 
 
 @pytest.fixture(scope="module")
 def planner(root):
-    return build_planner(str(root / "config/robots/unified_snake.yaml"))[0]
+    return build_planner(str(root / "config/robots/unified_snake.yaml"), torque_limit_nm=servo_torque_limit_nm())[0]
 
 
 @pytest.mark.parametrize("seed", [0, 1])

@@ -6,16 +6,17 @@ import numpy as np
 import pytest
 
 from snake_autonomy import cli
-from snake_autonomy.planning.fbsr.cli import build_planner
+from snake_autonomy.planning.fbsr.build import build_planner
 from snake_autonomy.planning.fbsr.planner import lowering
 from snake_autonomy.planning.fbsr.trajectory import (JointTrajectoryPoints, TrajectoryPoint, driver_joint_names,
                                                      driver_velocity_limit, lead_in_s, plan_points,
                                                      velocity_problems)
+from snake_autonomy.sim.config import servo_torque_limit_nm
 
 
 @pytest.fixture(scope="module")
 def planned(root):
-    planner = build_planner(str(root / "config/robots/unified_snake.yaml"))[0]
+    planner = build_planner(str(root / "config/robots/unified_snake.yaml"), torque_limit_nm=servo_torque_limit_nm())[0]
     return planner, planner.plan(max_active=4, seed=0)
 
 

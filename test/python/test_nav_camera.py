@@ -1,9 +1,9 @@
-"""The simulated head camera (sim/camera.py): geometry of depth, segmentation, intrinsics."""
+"""The head camera (sim/camera.py, perception/camera_model.py): depth, segmentation, intrinsics."""
 import numpy as np
 import pytest
 
-from snake_autonomy.sim.camera import (LABEL_GROUND, LABEL_OBSTACLE, CameraIntrinsics, CameraMount,
-                                       HeadCamera)
+from snake_autonomy.perception.camera_model import LABEL_GROUND, LABEL_OBSTACLE, CameraIntrinsics, CameraMount
+from snake_autonomy.sim.camera import HeadCamera
 from snake_autonomy.sim.world_file import World
 
 

@@ -91,7 +91,7 @@ def test_bad_settings_are_refused():
 def test_image_messages_round_trip():
     pytest.importorskip("sensor_msgs.msg")
     from snake_autonomy.nodes.image_msgs import from_camera_info, from_image, to_camera_info, to_image
-    from snake_autonomy.sim.camera import CameraIntrinsics
+    from snake_autonomy.perception.camera_model import CameraIntrinsics
     rgb = np.random.default_rng(0).integers(0, 255, (4, 5, 3), dtype=np.uint8)
     assert np.array_equal(from_image(to_image(rgb, "rgb8", None, "cam")), rgb)
     assert np.array_equal(from_image(to_image(rgb[..., ::-1], "bgr8", None, "cam")), rgb)
@@ -200,7 +200,7 @@ def test_bad_timeouts_and_goals_are_refused_with_their_values():
 def test_image_messages_that_cannot_be_read_name_the_field():
     pytest.importorskip("sensor_msgs.msg")
     from snake_autonomy.nodes.image_msgs import from_camera_info, from_image, to_camera_info, to_image
-    from snake_autonomy.sim.camera import CameraIntrinsics
+    from snake_autonomy.perception.camera_model import CameraIntrinsics
     depth = np.ones((4, 5), np.float32)
     m = to_image(depth, "32FC1", None, "cam")
     m.encoding = "64FC3"

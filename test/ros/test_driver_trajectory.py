@@ -20,8 +20,9 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from driver_test_helpers import LOCO, DriverTestCase, wait_for
 from snake_autonomy.msg import TrajectoryStatus
 from snake_autonomy.nodes.scout_trajectory import TopicTrajectoryExecutor
-from snake_autonomy.planning.fbsr.cli import build_planner
+from snake_autonomy.planning.fbsr.build import build_planner
 from snake_autonomy.planning.fbsr.trajectory import driver_velocity_limit, lead_in_s, plan_points
+from snake_autonomy.sim.config import servo_torque_limit_nm
 
 TRAJ = "snake_driver: trajectory"
 TICK_RAD = 2 * math.pi / 4096
@@ -104,7 +105,7 @@ class DriverTrajectory(DriverTestCase):
         self.assertEqual(h.value(LOCO, "state"), "holding")
 
     def test_3_planned_raise_through_the_mission_executor(self):
-        planner = build_planner("cobra")[0]
+        planner = build_planner("cobra", torque_limit_nm=servo_torque_limit_nm())[0]
         plan = planner.plan(max_active=2, seed=0)
         now = self.positions()
         traj = plan_points(plan, 0.05, lead_in_s(now, planner.chain.q_lying, driver_velocity_limit()))

@@ -115,7 +115,7 @@ class PlannerInputsTest(unittest.TestCase):
 
     def info(self, fx):
         k = self.k
-        from snake_autonomy.sim.camera import CameraIntrinsics
+        from snake_autonomy.perception.camera_model import CameraIntrinsics
         return to_camera_info(CameraIntrinsics(k.width, k.height, fx, k.fy, k.cx, k.cy), rospy.Time.now(),
                                    "camera_color_optical_frame")
 

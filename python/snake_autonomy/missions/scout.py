@@ -196,15 +196,16 @@ class ScoutStop:
         return self.phase
 
 
-def fbsr_scout_planner(robot_arg: str, scout_config=None, driver_yaml=None) -> ScoutPlanner:
+def fbsr_scout_planner(robot_arg: str, scout_config=None, driver_yaml=None, *,
+                       torque_limit_nm: float) -> ScoutPlanner:
     """A ScoutPlanner with the FBSR planner for a robot (name or YAML): plan, every check, the raise
     and lowering trajectories. Raises with the reason when any check fails."""
     from ..planning.fbsr import plan_io
-    from ..planning.fbsr.cli import build_planner
+    from ..planning.fbsr.build import build_planner
     from ..planning.fbsr.planner import lowering
     from ..planning.fbsr.trajectory import driver_velocity_limit, lead_in_s, plan_points, velocity_problems
 
-    planner, cfg = build_planner(robot_arg, scout_config)
+    planner, cfg = build_planner(robot_arg, scout_config, torque_limit_nm=torque_limit_nm)
     vmax = driver_velocity_limit(driver_yaml)
     period = cfg.planner.sample_period_s
     chain = planner.chain

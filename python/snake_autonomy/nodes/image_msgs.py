@@ -6,7 +6,7 @@ import math
 import numpy as np
 from sensor_msgs.msg import CameraInfo, Image
 
-from snake_autonomy.sim.camera import CameraIntrinsics
+from snake_autonomy.perception.camera_model import CameraIntrinsics
 
 _CHANNELS = {"rgb8": (3, np.uint8), "bgr8": (3, np.uint8), "mono8": (1, np.uint8),
              "32FC1": (1, np.float32), "16UC1": (1, np.uint16)}

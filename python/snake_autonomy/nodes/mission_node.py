@@ -57,6 +57,7 @@ from snake_autonomy.transforms import yaw_of_quat
 from snake_autonomy.missions import MissionError, gait_library_names, load_defaults, load_mission, read_overrides
 from snake_autonomy.experiments.recorded_topics import STATIC_TF_TOPIC, StaticTransforms, standard_topic_types
 from snake_autonomy.missions.runner import DONE, MissionRunner
+from snake_autonomy.sim.config import servo_torque_limit_nm
 from snake_autonomy.msg import (GaitCommand, RunMissionAction, RunMissionFeedback, RunMissionResult, TrackingStatus,
                                 WaypointResult)
 from snake_autonomy.nodes.mission_action import DecisionSeries, fill_feedback, fill_result, mission_from_goal
@@ -207,7 +208,8 @@ class MissionNode:
         if self._scout_parts is None:
             from snake_autonomy.missions.scout import fbsr_scout_planner
             from snake_autonomy.nodes.scout_trajectory import TopicTrajectoryExecutor
-            self._scout_parts = (fbsr_scout_planner(self.robot, self.scout_config), TopicTrajectoryExecutor())
+            planner = fbsr_scout_planner(self.robot, self.scout_config, torque_limit_nm=servo_torque_limit_nm())
+            self._scout_parts = (planner, TopicTrajectoryExecutor())
         return self._scout_parts
 
     def set_state(self, text):

@@ -10,7 +10,8 @@ from typing import Iterator, Optional
 
 import numpy as np
 
-from ..sim.camera import CameraFrame, CameraIntrinsics, CameraMount, HeadCamera
+from ..perception.camera_model import CameraFrame, CameraIntrinsics, CameraMount
+from ..sim.camera import HeadCamera
 from ..sim.scene import Appearance, build_scene, random_appearance
 from ..sim.world_file import World
 

@@ -200,8 +200,10 @@ class BatchRun:
         self.scout_executor, scout_planner = None, None
         if self.mission.scouts:     # scout stops: the FBSR planner, trajectories through the driver
             from ..missions.scout import fbsr_scout_planner
+            from .config import servo_torque_limit_nm
             from .scout_executor import DriverTrajectoryExecutor
-            scout_planner = fbsr_scout_planner(spec.robot, spec.scout_config, spec.driver_config)
+            scout_planner = fbsr_scout_planner(spec.robot, spec.scout_config, spec.driver_config,
+                                               torque_limit_nm=servo_torque_limit_nm())
             self.scout_executor = DriverTrajectoryExecutor(self.driver.controller)
         self.runner = MissionRunner(self.mission, self.defaults["pose_timeout_s"], self.defaults["yaw_filter_window"],
                                     heading_offset_rad=self.heading_offset_rad, scout_planner=scout_planner,

@@ -18,7 +18,7 @@ from typing import Optional
 
 import numpy as np
 
-from .camera import CameraIntrinsics, CameraMount
+from ..perception.camera_model import CameraIntrinsics, CameraMount
 
 
 @dataclass

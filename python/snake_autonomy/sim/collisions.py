@@ -14,7 +14,7 @@ from typing import List, Optional, Set, Tuple
 import mujoco
 import numpy as np
 
-from .camera import OBSTACLE_PREFIX
+from ..perception.camera_model import OBSTACLE_PREFIX
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,7 @@ from typing import List, Optional
 
 import numpy as np
 
+from ..paths import config_path
 from ..safe_yaml import load_yaml_file
 
 
@@ -257,6 +258,11 @@ class SimConfig:
                                                          v.drift_yaw_rad_per_sqrt_s))
         params.vio_loss_rate_per_min = float(pick("vio_loss_rate", v.loss_rate_per_min))
         return params
+
+
+def servo_torque_limit_nm(path=None) -> float:
+    """The servos' torque limit (N m) of config/sim.yaml (or PATH): also the FBSR planner's torque bound."""
+    return SimConfig.from_yaml(path or config_path("sim.yaml")).servo.torque_limit_nm
 
 
 @dataclass

@@ -13,5 +13,6 @@ figures.py    ZMP paths in the support polygons per stage (fig. 7), head height 
 execute.py    running a plan in the MuJoCo plant, centre of pressure, metrics.json
 pipe_scene.py the hanging pipe of fig. 6 as MJCF for the plant
 trajectory.py a plan as the driver's JointTrajectory points, checked against its velocity limit
+build.py      the planner for a robot name or YAML (model, config/scout.yaml, torque limit)
 cli.py        `snake_autonomy scout plan|run`
 """

@@ -16,6 +16,9 @@ import json
 import sys
 from pathlib import Path
 
+from snake_autonomy.planning.fbsr.build import build_planner
+from snake_autonomy.sim.config import servo_torque_limit_nm
+
 
 def _pipe(text):
     from .cost import Pipe
@@ -49,31 +52,6 @@ def add_arguments(parser):
             p.add_argument("--sim-seed", type=int, default=0, help="physics draws of config/sim.yaml")
 
 
-def build_planner(robot_arg: str, config_arg=None):
-    """(planner, robot) for a robot name or YAML; ValueError/FileNotFoundError with a message."""
-    from snake_autonomy import _core
-    from snake_autonomy.paths import config_path, robot_yaml
-
-    from .config import ScoutConfig, default_path
-    from .planner import FbsrPlanner
-
-    path = robot_yaml(robot_arg)
-    if not Path(path).is_file():
-        known = sorted(p.stem for p in config_path("robots").glob("*.yaml"))
-        raise ValueError(f"--robot {robot_arg}: unknown robot (known: {', '.join(known)})")
-    robot = _core.RobotModel.from_yaml(str(path))
-    cfg = ScoutConfig.from_yaml(config_arg or default_path())
-    torque = _servo_torque_limit()
-    return FbsrPlanner(robot, cfg.planner, cfg.posture(robot.name), torque), cfg
-
-
-def _servo_torque_limit() -> float:
-    from snake_autonomy.paths import config_path
-    from snake_autonomy.sim.config import SimConfig
-
-    return SimConfig.from_yaml(config_path("sim.yaml")).servo.torque_limit_nm
-
-
 def main(args) -> int:
     from .stage import PlanningError
 
@@ -84,7 +62,7 @@ def main(args) -> int:
         pipe = _pipe(args.pipe) if args.pipe else None
         if args.height_m is not None and not args.height_m > 0:
             raise ValueError(f"--height-m {args.height_m}: must be > 0")
-        planner, cfg = build_planner(args.robot, args.config)
+        planner, cfg = build_planner(args.robot, args.config, torque_limit_nm=servo_torque_limit_nm())
         reach = planner.robot.head_length_m + planner.robot.num_joints * planner.robot.link_length_m
         if args.height_m is not None and args.height_m > reach:
             raise ValueError(f"--height-m {args.height_m}: no plan reaches it, {planner.robot.name} "

@@ -13,7 +13,7 @@ import numpy as np
 from ...paths import config_path
 from ...safe_yaml import load_yaml_file
 from ...perception.depth_traversability import DepthTraversabilityParams
-from ...sim.camera import CameraIntrinsics, CameraMount
+from ...perception.camera_model import CameraIntrinsics, CameraMount
 from .follower import FollowerParams
 from .gait import RectilinearGait
 from .obstacle_map import MapParams
