@@ -15,7 +15,7 @@ from pathlib import Path
 
 from geometry_msgs.msg import PoseStamped
 
-from snake_autonomy.experiments import RunLog
+from snake_autonomy.runs.run_log import RunLog
 from snake_autonomy.msg import TrackingStatus
 
 run_dir, ready, handle = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3] == "1"

@@ -8,10 +8,10 @@ import pytest
 from snake_autonomy import _core
 from snake_autonomy.planning.fbsr.build import build_planner
 from snake_autonomy.planning.fbsr.trajectory import plan_points
-from snake_autonomy.sim.batch import LockStepDriver, load_driver_config
+from snake_autonomy.runs.batch import LockStepDriver, load_driver_config
 from snake_autonomy.sim.config import SimConfig, servo_torque_limit_nm
 from snake_autonomy.sim.plant import Plant
-from snake_autonomy.sim.scout_executor import DriverTrajectoryExecutor
+from snake_autonomy.runs.scout_executor import DriverTrajectoryExecutor
 
 DT = 0.01
 #: Measured joint error once held (seed 0, 4 active modules): at most 0.0047 rad, the simulated

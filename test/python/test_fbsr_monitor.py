@@ -1,10 +1,10 @@
-"""The scout run's monitor (planning/fbsr/execute.Monitor): a step with no floor pressure has no
+"""The scout run's monitor (runs/scout_execute.Monitor): a step with no floor pressure has no
 centre of pressure — counted apart, not as "outside" — unless it lasts (then the robot is off the
 floor: tipped), as run_plan decides."""
 import numpy as np
 
 from snake_autonomy import _core
-from snake_autonomy.planning.fbsr import execute
+from snake_autonomy.runs import scout_execute
 from snake_autonomy.sim.config import SimConfig
 from snake_autonomy.sim.plant import Plant
 
@@ -14,13 +14,13 @@ def monitor(root, monkeypatch, cops):
     params = SimConfig.from_yaml(root / "config/sim.yaml").draw(0, num_joints=robot.num_joints)
     plant = Plant(robot, params)
     plant.step(0.3)
-    m = execute.Monitor(plant, params.config.servo.torque_limit_nm)
-    real = execute.centre_of_pressure
+    m = scout_execute.Monitor(plant, params.config.servo.torque_limit_nm)
+    real = scout_execute.centre_of_pressure
     for cop in cops:
         if cop == "real":
-            monkeypatch.setattr(execute, "centre_of_pressure", real)
+            monkeypatch.setattr(scout_execute, "centre_of_pressure", real)
         else:
-            monkeypatch.setattr(execute, "centre_of_pressure", lambda *_a: (None, np.zeros((0, 2))))
+            monkeypatch.setattr(scout_execute, "centre_of_pressure", lambda *_a: (None, np.zeros((0, 2))))
         m()
     return m
 
@@ -33,4 +33,4 @@ def test_a_step_without_pressure_is_counted_apart(root, monkeypatch):
 
 def test_a_long_stretch_without_pressure_is_counted_for_tipping(root, monkeypatch):
     m = monitor(root, monkeypatch, ["real"] + [None] * 12)
-    assert m.longest_no_pressure * execute.DRIVER_PERIOD_S > 0.1
+    assert m.longest_no_pressure * scout_execute.DRIVER_PERIOD_S > 0.1

@@ -6,7 +6,7 @@ import pytest
 
 from snake_autonomy import _core
 from snake_autonomy.planning.fbsr.build import build_planner
-from snake_autonomy.planning.fbsr.execute import centre_of_pressure, run_plan
+from snake_autonomy.runs.scout_execute import centre_of_pressure, run_plan
 from snake_autonomy.sim.config import SimConfig, servo_torque_limit_nm
 from snake_autonomy.sim.plant import Plant
 

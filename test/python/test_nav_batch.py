@@ -1,4 +1,4 @@
-"""The closed loop in batch (sim/nav_batch.py) and `snake_autonomy nav run`: the metrics contract."""
+"""The closed loop in batch (runs/nav_batch.py) and `snake_autonomy nav run`: the metrics contract."""
 import json
 import math
 
@@ -53,8 +53,8 @@ def test_cobra_goes_round_two_cylinders_to_the_goal_without_touching_them():
     """The short version of the experiment (README round 5): random world 0 (a cylinder on the
     straight line 1.0 m ahead, another 0.34 m to its left), depth, seed 0, through the driver:
     reached in 175 s with no contact (round 5: 183 s); all 5 seeds of the 20 x 5 experiment did. About 15-30 s wall."""
-    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
-    from snake_autonomy.sim.nav_experiment import random_corridor
+    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.runs.nav_experiment import random_corridor
     result = NavRun(NavRunSpec(random_corridor(0), seed=0, time_limit_s=260.0, keep_frames=False)).run()
     m = result.metrics
     print({k: m[k] for k in ("goal_reached", "time_s", "collisions", "min_clearance_m", "stops_no_free_arc")})
@@ -71,8 +71,8 @@ def test_the_reference_gait_backs_off_too(root, tmp_path):
     round 6's steering (arcs to 2 /m, kappa <= 1: round 7's tighter arcs go round this cylinder
     without stopping): the cylinder ahead stops COBRA at 0.29 m after 42 s; measured: two back-off
     replans take base_link back 0.14 m (0.285 -> 0.148 m), then it turns. About 5 s wall."""
-    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
-    from snake_autonomy.sim.nav_experiment import random_corridor
+    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.runs.nav_experiment import random_corridor
     cfg = tmp_path / "nav_round6.yaml"
     cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nsampler: {{max_curvature_per_m: 2.0}}\n"
                    f"follower: {{gait_map: {root / 'config' / 'gait_maps' / 'cobra_rectilinear.yaml'}, "
@@ -92,8 +92,8 @@ def test_how_a_run_ended_is_classified():
     """NavRun._outcome on hand-made ends: COBRA's tightest circle (gait map) is 0.82 m."""
     import types
     from snake_autonomy.planning.rectilinear.follower import FollowerParams
-    from snake_autonomy.sim.nav_batch import NavRun
-    from snake_autonomy.sim.nav_experiment import random_corridor
+    from snake_autonomy.runs.nav_batch import NavRun
+    from snake_autonomy.runs.nav_experiment import random_corridor
     fp = FollowerParams(speed_m_s=0.00635, omega_per_kappa=0.0077, kappa_max_per_m=1.0)
     assert fp.min_radius_m == pytest.approx(0.825, abs=0.001)
 

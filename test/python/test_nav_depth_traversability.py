@@ -19,7 +19,7 @@ def test_ransac_plane_fit_ignores_an_obstacle():
 
 def test_depth_traversability_matches_the_segmentation_on_held_out_scenes(root):
     from snake_autonomy import _core
-    from snake_autonomy.perception.render_set import render_scenes
+    from snake_autonomy.runs.render_set import render_scenes
     from snake_autonomy.sim.config import SimConfig
     cfg = NavConfig.from_yaml()
     robot = _core.RobotModel.from_yaml(str(root / "config" / "robots" / "cobra.yaml"))

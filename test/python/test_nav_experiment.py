@@ -1,4 +1,4 @@
-"""The navigation experiment (sim/nav_experiment.py, `snake_autonomy nav experiment`): random
+"""The navigation experiment (runs/nav_experiment.py, `snake_autonomy nav experiment`): random
 corridors are solvable by construction and reproducible; the command writes its table through the
 sweep runner."""
 import csv
@@ -6,8 +6,8 @@ import json
 import math
 
 from snake_autonomy.cli import main as cli_main
-from snake_autonomy.planning.rectilinear.cli import parse_seeds
-from snake_autonomy.sim.nav_experiment import min_gap_m, outcome_table, random_corridor, summarise
+from snake_autonomy.cli.nav import parse_seeds
+from snake_autonomy.runs.nav_experiment import min_gap_m, outcome_table, random_corridor, summarise
 
 import pytest
 
@@ -90,7 +90,7 @@ def test_nav_experiment_mono_needs_a_classifier(tmp_path, capsys):
 
 def test_the_default_time_limit_is_three_times_the_straight_line_time_at_the_robots_speed():
     from snake_autonomy.planning.rectilinear.config import NavConfig, nav_config_path
-    from snake_autonomy.sim.nav_experiment import time_limit_s
+    from snake_autonomy.runs.nav_experiment import time_limit_s
     w = random_corridor(0)                                   # start (0, 0), goal (1.4, 0), disc 0.2 m
     assert time_limit_s(w, 0.01) == pytest.approx(3 * 1.2 / 0.01)
     assert time_limit_s(w, 0.01, factor=2.0) == pytest.approx(240.0)
@@ -126,7 +126,7 @@ def test_nav_experiment_records_each_worlds_time_limit_and_refuses_bad_ones(tmp_
 
 
 def test_experiment_tasks_take_one_time_limit_per_world():
-    from snake_autonomy.sim.nav_experiment import experiment_tasks
+    from snake_autonomy.runs.nav_experiment import experiment_tasks
     worlds = [random_corridor(0), random_corridor(1)]
     tasks = experiment_tasks(worlds, [0, 1], ["depth"], time_limits_s=[100.0, 200.0])
     assert [(t.world["name"], t.seed, t.time_limit_s) for t in tasks] == [

@@ -92,8 +92,8 @@ def test_cobra_passes_the_three_cylinders_of_world_6_without_its_front_links_tou
     runs to the time limit, no contact), and round 11's body model (with round 20's option
     reshape_keeps_centroid it reached with 6 contact episodes; without the map the tail guard does
     nothing)."""
-    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
-    from snake_autonomy.sim.nav_experiment import random_corridor
+    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.runs.nav_experiment import random_corridor
     world = random_corridor(6)
     cfg = tmp_path / "no_map.yaml"
     cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{source: none, route: false}}\n"

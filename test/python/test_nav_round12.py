@@ -70,8 +70,8 @@ def test_cobra_no_longer_turns_its_head_into_the_cylinder_of_world_6_seed_2(tmp_
     right ahead) kept turning: base_link touched it at 103 s (6 episodes by 123 s). With
     turn_free_m it backs off there instead; no contact (measured: none in the whole 567 s run).
     Both runs to 160 s, ~15 s wall."""
-    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
-    from snake_autonomy.sim.nav_experiment import random_corridor
+    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.runs.nav_experiment import random_corridor
     off, on = tmp_path / "off.yaml", tmp_path / "on.yaml"      # round 12's planner: without round 15's map
     off.write_text(f"base: {root / 'config' / 'nav.yaml'}\nsampler: {{turn_free_m: 0.0}}\nmap: {{source: none, route: false}}\n")
     on.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{source: none, route: false}}\n")

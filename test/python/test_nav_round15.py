@@ -14,7 +14,7 @@ from snake_autonomy.planning.rectilinear.config import NavConfig, NavConfigError
 from snake_autonomy.planning.rectilinear.obstacle_map import MapParams, ObstacleMap, view_on_floor
 from snake_autonomy.planning.rectilinear.route import Route
 from snake_autonomy.planning.rectilinear.sampler import TrajectorySampler
-from snake_autonomy.sim.nav_experiment import random_corridor
+from snake_autonomy.runs.nav_experiment import random_corridor
 from test_nav_planning import CFG, K, T_GC, drawn_mask
 
 CYL = (0.6, 0.0, 0.06)
@@ -136,7 +136,7 @@ def test_cobra_goes_round_world_6_instead_of_into_its_funnel(tmp_path, root):
     the map and this run stops in the funnel (31 stops to 400 s, no contact; README round 19). Both
     runs keep round 20's sampler (round 21's centroid, body and crawl guards: this run reaches the time
     limit, no contact)."""
-    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
     committed = NavConfig.from_yaml().map
     assert (committed.source, committed.route) == ("faces", True)
     off = tmp_path / "off.yaml"
@@ -171,7 +171,7 @@ def test_a_rotated_box_is_mapped_by_its_corners():
 def test_a_run_returns_its_map_and_draws_it(tmp_path):
     """The first replans of world 6 (start facing the cylinder on the start-goal line, 0.72 m ahead of
     the camera): the map holds that cylinder's near side; the run's top view is written with it."""
-    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
     world = random_corridor(6)
     result = NavRun(NavRunSpec(world, seed=7, time_limit_s=25.0, keep_frames=False)).run()
     geom = result.obstacle_map

@@ -46,8 +46,8 @@ def test_cobra_world_4_seed_3_backs_off_instead_of_swinging_its_head_back(tmp_pa
     whole run: goal reached, measured in the 20x5 experiment). Both runs to 150 s: round 15's
     planner (turn_keeps_side off, and round 19's keys at their round-18 values: with round 19's, this
     run has no contact to 150 s either way) and nav.yaml's."""
-    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
-    from snake_autonomy.sim.nav_experiment import random_corridor
+    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.runs.nav_experiment import random_corridor
     runs = {}
     for on in (False, True):
         cfg = tmp_path / f"keep_{on}.yaml"

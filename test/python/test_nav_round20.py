@@ -1,5 +1,5 @@
 """Issue 13 round 20: how COBRA's body really moves at a small curvature, measured with the gait map's
-own instrument (sim/gait_map.py simulate_point: the C++ driver's rectilinear gait, nav runs' flat
+own instrument (runs/gait_map.py simulate_point: the C++ driver's rectilinear gait, nav runs' flat
 belly, the centroid of the body's frames over 4 gait cycles, in base_link's frame).
 
 The planner's unicycle says the head moves along its heading and turns at omega_per_kappa * kappa
@@ -28,7 +28,7 @@ from snake_autonomy.planning.rectilinear.config import NavConfig, NavConfigError
 from snake_autonomy.planning.rectilinear.follower import RecedingHorizonFollower
 from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
 from snake_autonomy.planning.rectilinear.planner import NavPlanner
-from snake_autonomy.sim.gait_map import gait_map_points, simulate_point
+from snake_autonomy.runs.gait_map import gait_map_points, simulate_point
 from test_nav_planning import CFG, K, T_GC, drawn_mask
 from test_nav_round11 import COBRA
 
@@ -46,7 +46,7 @@ def points():
 def test_half_length_is_cobras():
     from snake_autonomy import _core
     from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
-    from snake_autonomy.planning.rectilinear.cli import robot_yaml
+    from snake_autonomy.cli.nav import robot_yaml
     body = BodyGeometry.of_robot(_core.RobotModel.from_yaml(str(robot_yaml("cobra"))))
     assert body.half_length_m == pytest.approx(HALF_LENGTH_M, abs=1e-3)
 
@@ -143,11 +143,11 @@ def test_the_crawl_guards_keys_are_validated(key):
 
 
 def test_cobra_reshapes_about_its_centroid_not_its_middle():
-    """Straight to 1 /m (sim/turn_sweep.py reshape_step, through the C++ driver): measured head +0.172,
+    """Straight to 1 /m (runs/turn_sweep.py reshape_step, through the C++ driver): measured head +0.172,
     tail +0.197 m to the inside, the frames at the middle -0.063..-0.075 m to the OUTSIDE, the
     centroid +0.029 m. body_model's middle-fixed model says +0.285 at both ends and 0 at the middle;
     keeping the centroid, +0.19 and -0.095. About 4 s."""
-    from snake_autonomy.sim.turn_sweep import reshape_step
+    from snake_autonomy.runs.turn_sweep import reshape_step
     r = reshape_step(1.0)
     assert abs(r.centroid_m) < 0.04
     mid = r.lateral_m[len(r.lateral_m) // 2 - 1:len(r.lateral_m) // 2 + 2]

@@ -24,8 +24,8 @@ def test_the_planned_arcs_are_ones_the_follower_can_drive(root, name):
 def _run(world_index, seed, robot="cobra"):
     """One run at the experiment's time limit for the robot (round 10: 3 x its straight-line time)."""
     from snake_autonomy.planning.rectilinear.config import nav_config_path
-    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
-    from snake_autonomy.sim.nav_experiment import random_corridor, time_limit_s
+    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.runs.nav_experiment import random_corridor, time_limit_s
     world = random_corridor(world_index)
     limit = time_limit_s(world, NavConfig.from_yaml(nav_config_path(robot)).follower.speed_m_s)
     result = NavRun(NavRunSpec(world, robot=robot, seed=seed, time_limit_s=limit, keep_frames=False)).run()

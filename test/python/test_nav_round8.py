@@ -90,8 +90,8 @@ def test_nav_config_refuses_a_stride_beyond_the_block(tmp_path, root):
 def _truth_run(tmp_path, root, stride_px):
     """COBRA in random world 0, seed 1, perception truth (the segmentation render through 40 px
     blocks judging cells of stride_px: the classifier's pipeline with a perfect classifier)."""
-    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
-    from snake_autonomy.sim.nav_experiment import random_corridor
+    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.runs.nav_experiment import random_corridor
     cfg = tmp_path / f"nav_{stride_px}.yaml"
     cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nclassifier: {{stride_px: {stride_px}}}\n"
                    "sampler: {blocked_wins: false, reshape_keeps_centroid: false, swing_guard_tail_m: 0.0}\n"
@@ -117,8 +117,8 @@ def test_held_out_figures_judge_the_classifier_against_truth_through_its_own_cel
     """`nav train-classifier` / `eval-perception` (cli.evaluate): the truth goes through the
     classifier's block and stride, depth's through its 8 px cells. A few seconds (4 rendered scenes)."""
     import types
-    from snake_autonomy.perception.render_set import render_scenes
-    from snake_autonomy.planning.rectilinear.cli import _setup, evaluate
+    from snake_autonomy.runs.render_set import render_scenes
+    from snake_autonomy.cli.nav import _setup, evaluate
     cfg, robot, params = _setup(types.SimpleNamespace(config=None, robot="cobra"))
     frames = list(render_scenes(robot, params, 4, 7, cfg.intrinsics, cfg.mount))
     clf = BlockClassifier.train([(f.rgb, f.ground_truth_ground()) for f in frames[:3]], 40, 4, stride_px=20)

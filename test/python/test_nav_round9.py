@@ -1,5 +1,5 @@
 """Issue 13 round 9: follow-the-leader steering (planning/rectilinear/follow_the_leader.py, nav.yaml
-gaits.steering) and the turn it changes (sim/turn_sweep.py, bench/nav_follow_the_leader)."""
+gaits.steering) and the turn it changes (runs/turn_sweep.py, bench/nav_follow_the_leader)."""
 import math
 
 import numpy as np
@@ -76,7 +76,7 @@ def test_a_bias_vector_of_the_wrong_length_is_refused_by_the_driver():
     from snake_autonomy import _core
     from snake_autonomy.paths import config_path
     from snake_autonomy.sim.config import SimConfig
-    from snake_autonomy.sim.gait_driver import PlantGaitDriver
+    from snake_autonomy.runs.gait_driver import PlantGaitDriver
     from snake_autonomy.sim.scales import ScaledPlant
     robot = _core.RobotModel.from_yaml(str(config_path("robots", "cobra.yaml")))
     plant = ScaledPlant(robot, SimConfig.from_yaml(str(config_path("sim.yaml"))).draw(seed=0, num_joints=11),
@@ -88,11 +88,11 @@ def test_a_bias_vector_of_the_wrong_length_is_refused_by_the_driver():
 
 
 def test_follow_the_leader_keeps_cobras_body_on_the_heads_track_through_the_driver():
-    """A 1.5 /m turn for 90 s on open floor (sim/turn_sweep.py, the gait through the C++ driver).
+    """A 1.5 /m turn for 90 s on open floor (runs/turn_sweep.py, the gait through the C++ driver).
     Measured: uniform curvature swings the head 0.33 m sideways in the first 10 s and the body strays
     0.37 m from the head's track; follow-the-leader 0.02 m and 0.11 m, turning 56 deg against 65.
     About 13 s."""
-    from snake_autonomy.sim.turn_sweep import turn_sweep
+    from snake_autonomy.runs.turn_sweep import turn_sweep
     uniform = turn_sweep("uniform")
     ftl = turn_sweep("follow_the_leader")
     assert uniform.head_sideways_m[0] > 0.25 and uniform.off_track_m > 0.3
@@ -104,8 +104,8 @@ def test_a_nav_run_with_follow_the_leader_steering(root):
     """config/nav_follow_the_leader.yaml through a whole run (truth perception, random world 8 seed 0:
     measured success in 188 s, one stop, backed off, never turned in place; round 10, an obstacle in
     one earlier view wins: 330 s, 7 stops, within COBRA's experiment limit of 567 s). About 25 s."""
-    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
-    from snake_autonomy.sim.nav_experiment import random_corridor
+    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.runs.nav_experiment import random_corridor
     result = NavRun(NavRunSpec(random_corridor(8), perception="truth", seed=0, time_limit_s=566.5,
                                keep_frames=False,
                                nav_config=str(root / "config" / "nav_follow_the_leader.yaml"))).run()

@@ -1,11 +1,11 @@
-"""The sweep runner (sim/sweep_runner.py): the same tasks give identical results, in task order,
+"""The sweep runner (runs/sweep_runner.py): the same tasks give identical results, in task order,
 on the serial, thread-pool and Dask LocalCluster engines; a gait-map point is deterministic."""
 import math
 
 import pytest
 
-from snake_autonomy.sim.gait_map import GaitPoint, fit_gait_map, simulate_point
-from snake_autonomy.sim.sweep_runner import SerialExecutor, open_executor, run_tasks
+from snake_autonomy.runs.gait_map import GaitPoint, fit_gait_map, simulate_point
+from snake_autonomy.runs.sweep_runner import SerialExecutor, open_executor, run_tasks
 
 
 def _square_plus_seed(task):

@@ -1,12 +1,12 @@
-"""The standard topics of a run's bag (experiments/recorded_topics.py): types resolve, static TF from
+"""The standard topics of a run's bag (runs/recorded_topics.py): types resolve, static TF from
 several publishers is merged by child frame and written into the bag at the run's start."""
 import rosbag
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import TransformStamped
 from tf2_msgs.msg import TFMessage
 
-from snake_autonomy.experiments.recorded_topics import STANDARD_TOPICS, StaticTransforms, standard_topic_types
-from snake_autonomy.experiments.run_log import RunLog
+from snake_autonomy.runs.recorded_topics import STANDARD_TOPICS, StaticTransforms, standard_topic_types
+from snake_autonomy.runs.run_log import RunLog
 
 
 def _tf(child, x):

@@ -1,6 +1,6 @@
 """The 12-link robot (config/robots/chang_rectilinear.yaml) with its own rectilinear gaits
 (config/gaits.yaml rectilinear_chang, rectilinear_chang_reverse) through the C++ driver on the
-simulated robot with nav runs' flat belly (sim/gait_map.py simulate_point with driver_gait: the
+simulated robot with nav runs' flat belly (runs/gait_map.py simulate_point with driver_gait: the
 PlantGaitDriver nav runs use), against its gait map (config/gait_maps/chang_rectilinear.yaml), and
 the per-robot nav config that makes `nav run --robot chang_rectilinear` use them."""
 import math
@@ -12,7 +12,7 @@ ROBOT = "chang_rectilinear"
 
 
 def _xi(root, gait, kappa_per_m):
-    from snake_autonomy.sim.gait_map import gait_map_points, simulate_point
+    from snake_autonomy.runs.gait_map import gait_map_points, simulate_point
     nav = yaml.safe_load((root / "config" / "nav.yaml").read_text())
     point, = gait_map_points(ROBOT, "rectilinear", [0.02], [kappa_per_m], driver_gait=gait,
                              flat_belly_fraction=nav["plant"]["flat_belly_fraction"], wavelength_m=0.5)
@@ -84,13 +84,13 @@ def test_a_nav_config_base_is_merged_and_its_problems_named(tmp_path, root):
 
 
 def test_a_gait_map_refuses_a_driver_gait_without_curvature_steering():
-    from snake_autonomy.sim.gait_map import gait_map_points
+    from snake_autonomy.runs.gait_map import gait_map_points
     with pytest.raises(ValueError, match="'sidewind' is not a gait of .* with steering: curvature"):
         gait_map_points(ROBOT, "rectilinear", [0.02], [0.0], driver_gait="sidewind")
 
 
 def test_nav_run_drives_the_12_link_robot_with_its_gait_without_naming_it(root):
-    from snake_autonomy.sim.nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
     from snake_autonomy.sim.world_file import load_world
     world = load_world(root / "config" / "worlds" / "one_obstacle.yaml")
     run = NavRun(NavRunSpec(world, robot=ROBOT, time_limit_s=4.0, keep_frames=False))
@@ -99,6 +99,6 @@ def test_nav_run_drives_the_12_link_robot_with_its_gait_without_naming_it(root):
     m = run.run().metrics
     assert (m["gait"], m["nav_config"]) == ("rectilinear_chang", f"nav_{ROBOT}.yaml")
     assert m["path_length_m"] > 0.005                                    # it moved (2 s of gait after the ramp)
-    cobra = NavRun(NavRunSpec(world, robot="cobra", time_limit_s=0.0, keep_frames=False))
+    cobra = NavRun(NavRunSpec(world, robot="cobra", time_limit_s=1.0, keep_frames=False))
     cobra.camera.close()
     assert (cobra.gait_name, cobra.reverse_gait_name) == ("rectilinear", "rectilinear_reverse")

@@ -15,8 +15,8 @@ MEASURE_CYCLES = 4    # 10 s at 0.4 Hz; each run 15 s of physics, two runs
 def _run(root, kappa_per_m):
     from snake_autonomy import _core
     from snake_autonomy.sim.config import SimConfig
-    from snake_autonomy.sim.gait_driver import PlantGaitDriver
-    from snake_autonomy.sim.gait_map import body_velocity, stroboscopic_sample
+    from snake_autonomy.runs.gait_driver import PlantGaitDriver
+    from snake_autonomy.runs.gait_map import body_velocity, stroboscopic_sample
     from snake_autonomy.sim.scales import ScaledPlant
     nav = yaml.safe_load((root / "config" / "nav.yaml").read_text())
     robot = _core.RobotModel.from_yaml(str(root / "config" / "robots" / "cobra.yaml"))

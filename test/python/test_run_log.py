@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 from snake_autonomy.cli import main as cli_main
-from snake_autonomy.experiments import RunLog, compute_metrics, read_run, write_results
-from snake_autonomy.experiments.results import path_length
+from snake_autonomy.runs.bag_io import read_run
+from snake_autonomy.runs.results import compute_metrics, path_length, write_results
+from snake_autonomy.runs.run_log import RunLog
 
 HERE = Path(__file__).resolve().parent
 WPS = [(1.0, 0.0, 0.0), (1.0, 1.0, math.pi / 2)]

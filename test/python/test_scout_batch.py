@@ -4,7 +4,7 @@ lowered, and the mission ends; the robot never rolls over and no joint goal leav
 
 import pytest
 
-from snake_autonomy.sim.batch import BatchRun, RunSpec
+from snake_autonomy.runs.batch import BatchRun, RunSpec
 
 MISSION = """name: scout_stop
 waypoints:

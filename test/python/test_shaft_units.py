@@ -7,7 +7,7 @@ import re
 import numpy as np
 
 from snake_autonomy import _core
-from snake_autonomy.sim.batch import LockStepDriver, load_driver_config
+from snake_autonomy.runs.batch import LockStepDriver, load_driver_config
 from snake_autonomy.sim.config import SimConfig
 from snake_autonomy.sim.plant import Plant
 from snake_autonomy.sim.servo_backend import ShaftState, ShaftUnits

@@ -15,9 +15,9 @@ import pytest
 from snake_autonomy import _core
 from snake_autonomy.control import WaypointTracker
 from snake_autonomy.missions import MissionError, load_defaults
-from snake_autonomy.sim.batch import BatchRun, RunSpec, load_driver_config
+from snake_autonomy.runs.batch import BatchRun, RunSpec, load_driver_config
 from snake_autonomy.sim.disturbances import parse_triggers
-from snake_autonomy.sim.experiments import SINGLE_STARTS, run_experiment
+from snake_autonomy.runs.mission_experiment import SINGLE_STARTS, run_experiment
 
 ROOT = Path(__file__).resolve().parents[2]
 SHORT = str(ROOT / "test" / "ros" / "missions" / "sim_short.yaml")

@@ -24,7 +24,7 @@ from geometry_msgs.msg import PoseStamped
 from std_msgs.msg import String
 
 from snake_autonomy.msg import TrackingStatus
-from snake_autonomy.sim.batch import BatchRun, RunSpec
+from snake_autonomy.runs.batch import BatchRun, RunSpec
 
 from driver_test_helpers import wait_for
 

@@ -13,7 +13,7 @@ from typing import Optional, Tuple
 
 from snake_autonomy import _core
 
-from ..sim.batch import DRIVER_RATE_HZ, LockStepDriver, load_driver_config
+from snake_autonomy.runs.batch import DRIVER_RATE_HZ, LockStepDriver, load_driver_config
 from ..sim.feedback import make_feedback
 from ..sim.world import CONFIG, SimWorld, WorldSpec
 

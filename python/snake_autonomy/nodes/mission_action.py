@@ -11,7 +11,7 @@ the defaults for the rest). Result: the run's outcome and per-waypoint metrics, 
 import math
 from typing import Any, Dict, List, Sequence
 
-from snake_autonomy.experiments.results import compute_metrics
+from snake_autonomy.runs.results import compute_metrics
 from snake_autonomy.missions import MissionError, load_mission
 from snake_autonomy.missions.mission import mission_from_text, validate_mission
 

@@ -55,7 +55,7 @@ from std_srvs.srv import Trigger, TriggerResponse
 
 from snake_autonomy.transforms import yaw_of_quat
 from snake_autonomy.missions import MissionError, gait_library_names, load_defaults, load_mission, read_overrides
-from snake_autonomy.experiments.recorded_topics import STATIC_TF_TOPIC, StaticTransforms, standard_topic_types
+from snake_autonomy.runs.recorded_topics import STATIC_TF_TOPIC, StaticTransforms, standard_topic_types
 from snake_autonomy.missions.runner import DONE, MissionRunner
 from snake_autonomy.sim.config import servo_torque_limit_nm
 from snake_autonomy.msg import (GaitCommand, RunMissionAction, RunMissionFeedback, RunMissionResult, TrackingStatus,
@@ -522,7 +522,7 @@ class MissionNode:
         self.run_ended.set()
 
     def open_log(self, t):
-        from snake_autonomy.experiments import RunLog
+        from snake_autonomy.runs.run_log import RunLog
         stamp = time.strftime("%Y%m%d-%H%M%S")
         safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", self.mission.name)
         self.run_dir = self.results_dir / f"{stamp}_{safe}"

@@ -1,6 +1,6 @@
 """planner_node: navigation among obstacles with the rectilinear gait (issue 13, Chang et al.).
 Wiring only: the logic is planning.rectilinear.nav_loop.NavLoop (perception -> perception-space
-arcs -> receding-horizon follower), the same classes the batch run (sim/nav_batch.py) uses.
+arcs -> receding-horizon follower), the same classes the batch run (runs/nav_batch.py) uses.
 
 Subscribes  base_pose (geometry_msgs/PoseWithCovarianceStamped): base_link's pose, what the driver
             steers with (motion capture, or pose_remap_node's from the VIO). Not com_pose: the arcs
@@ -326,7 +326,7 @@ class PlannerNode:
 
     def overlay(self, tick) -> np.ndarray:
         from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
-        from snake_autonomy.sim.nav_batch import overlay
+        from snake_autonomy.runs.nav_batch import overlay
         ground = tick.ground
         rgb = self.rgb
         if rgb is None or rgb.shape[:2] != ground.shape:

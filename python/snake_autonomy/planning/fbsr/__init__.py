@@ -10,9 +10,9 @@ stage.py      one optimised stage (scipy) with its global checks and random rest
 planner.py    the loop of section II / III.E, dynamic weighting of K1, lowering
 plan_io.py    plan.json (the issue's contract), reading and validating it
 figures.py    ZMP paths in the support polygons per stage (fig. 7), head height over time
-execute.py    running a plan in the MuJoCo plant, centre of pressure, metrics.json
 pipe_scene.py the hanging pipe of fig. 6 as MJCF for the plant
 trajectory.py a plan as the driver's JointTrajectory points, checked against its velocity limit
 build.py      the planner for a robot name or YAML (model, config/scout.yaml, torque limit)
-cli.py        `snake_autonomy scout plan|run`
+
+Running a plan in the MuJoCo plant: runs/scout_execute.py; the command line: cli/scout.py.
 """

@@ -14,7 +14,7 @@ pitch_sign and yaw_sign map these angles to the joints' q (the thesis's eq. 3.4 
 chosen so that kappa > 0 bends the body to the left (CCW path), measured on the plant.
 
 Driving goes through the driver now (config/gaits.yaml `rectilinear`, derived from this
-discretisation, with the C++ `curvature` steering law; sim/gait_driver.py): this module stays the
+discretisation, with the C++ `curvature` steering law; runs/gait_driver.py): this module stays the
 reference the gait map, the tests and `nav run --gait-source reference` check against.
 """
 import math

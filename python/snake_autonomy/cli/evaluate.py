@@ -7,11 +7,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .alignment import ALIGN_MODES
-from .errors import EvaluationError
-from .metrics import RELATIONS, EvaluationOptions
-from .readers import FORMATS, LOST_COVARIANCE, guess_format
-from .segments import SEGMENT_KEYS, STATUS_TOPIC
+from snake_autonomy.evaluation.alignment import ALIGN_MODES
+from snake_autonomy.evaluation.errors import EvaluationError
+from snake_autonomy.evaluation.metrics import RELATIONS, EvaluationOptions
+from snake_autonomy.evaluation.readers import FORMATS, LOST_COVARIANCE, guess_format
+from snake_autonomy.evaluation.segments import SEGMENT_KEYS, STATUS_TOPIC
 
 EPILOG = """examples:
   snake_autonomy evaluate gt.txt est.txt --align se3
@@ -79,9 +79,9 @@ def options_from_args(args) -> EvaluationOptions:
 
 
 def run(args) -> int:
-    from .metrics import evaluate
-    from .readers import load_trajectory
-    from .report import format_table, write_json, write_outputs
+    from snake_autonomy.evaluation.metrics import evaluate
+    from snake_autonomy.evaluation.readers import load_trajectory
+    from snake_autonomy.evaluation.report import format_table, write_json, write_outputs
 
     options = options_from_args(args)
     options.validate()
@@ -122,8 +122,8 @@ def _check_output_paths(args) -> None:
 
 
 def _status(args):
-    from .readers import bag_topics
-    from .segments import read_tracking_status
+    from snake_autonomy.evaluation.readers import bag_topics
+    from snake_autonomy.evaluation.segments import read_tracking_status
 
     if args.status_bag:
         return read_tracking_status(args.status_bag, args.status_topic)

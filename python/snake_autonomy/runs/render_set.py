@@ -10,10 +10,10 @@ from typing import Iterator, Optional
 
 import numpy as np
 
-from ..perception.camera_model import CameraFrame, CameraIntrinsics, CameraMount
-from ..sim.camera import HeadCamera
-from ..sim.scene import Appearance, build_scene, random_appearance
-from ..sim.world_file import World
+from snake_autonomy.perception.camera_model import CameraFrame, CameraIntrinsics, CameraMount
+from snake_autonomy.sim.camera import HeadCamera
+from snake_autonomy.sim.scene import Appearance, build_scene, random_appearance
+from snake_autonomy.sim.world_file import World
 
 
 def random_world(rng: np.random.Generator, min_obstacles: int = 1, max_obstacles: int = 5,
@@ -39,7 +39,7 @@ def render_scenes(robot, params, n: int, seed: int, intrinsics: Optional[CameraI
                   plain: bool = False, depth: bool = True) -> Iterator[CameraFrame]:
     """n frames of random scenes (plain: the default appearance instead of a random one; depth:
     render the depth image too)."""
-    from ..sim.plant import Plant
+    from snake_autonomy.sim.plant import Plant
     rng = np.random.default_rng(seed)
     mount = mount or CameraMount()
     for _ in range(n):

@@ -1,5 +1,5 @@
 """The navigation experiment over random worlds (issue 13): random solvable corridors, the closed
-loop (sim/nav_batch.py) per world x seed x perception through the sweep runner (Dask by default),
+loop (runs/nav_batch.py) per world x seed x perception through the sweep runner (Dask by default),
 success rate, collisions and time in a table.
 
     worlds = [random_corridor(k) for k in range(N)]
@@ -17,8 +17,8 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
-from ..planning.rectilinear.follower import MODES
-from .world_file import World
+from snake_autonomy.planning.rectilinear.follower import MODES
+from snake_autonomy.sim.world_file import World
 
 
 def random_corridor(index: int, body_width_m: float = 0.09, gap_factor: float = 2.0,
@@ -97,7 +97,7 @@ def experiment_tasks(worlds: Sequence[World], seeds: Sequence[int], perceptions:
 def run_nav_task(task: NavTask) -> Dict:
     """One closed-loop run; its metrics (module-level: process-based engines import it)."""
     import time
-    from .nav_batch import NavRun, NavRunSpec
+    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
     world = World.from_dict(task.world, task.world.get("name", "world"))
     t0 = time.perf_counter()
     spec = NavRunSpec(world, robot=task.robot, perception=task.perception, seed=task.seed,

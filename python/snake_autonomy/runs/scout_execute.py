@@ -6,7 +6,7 @@
 - The start: the plant's robot lying in the plan's first posture (q0_rad, its head placed where
   the planner's world puts it), left to settle with the servos holding it.
 - Execution: through the driver, as on the robot: the plan as a joint trajectory
-  (trajectory.plan_points) handed to the batch simulator's DriverController (sim/batch.py
+  (trajectory.plan_points) handed to the batch simulator's DriverController (runs/batch.py
   LockStepDriver: the C++ loop driver_node runs, over an in-process servo bus on this plant) by
   `command_trajectory`; the driver's TrajectorySource interpolates it at 100 Hz, slew-limits and
   clamps the goals, and holds the last point. A trajectory the driver refuses ends the run with
@@ -30,12 +30,12 @@ from typing import Callable, Optional
 import mujoco
 import numpy as np
 
-from ...sim.config import SimConfig
-from ...sim.plant import Plant
-from .pipe_scene import pipe_mjcf
-from .plan_io import stage_samples
-from .planner import Plan
-from .support import Support
+from snake_autonomy.sim.config import SimConfig
+from snake_autonomy.sim.plant import Plant
+from snake_autonomy.planning.fbsr.pipe_scene import pipe_mjcf
+from snake_autonomy.planning.fbsr.plan_io import stage_samples
+from snake_autonomy.planning.fbsr.planner import Plan
+from snake_autonomy.planning.fbsr.support import Support
 
 DRIVER_PERIOD_S = 0.01
 SETTLE_S = 1.0
@@ -54,9 +54,9 @@ def send_through_driver(plant: Plant, plan: Plan, sample_period_s: float,
     from snake_autonomy import _core
     from snake_autonomy.paths import config_path
 
-    from ...sim.batch import LockStepDriver, load_driver_config
-    from ...sim.scout_executor import DriverTrajectoryExecutor
-    from .trajectory import plan_points
+    from snake_autonomy.runs.batch import LockStepDriver, load_driver_config
+    from snake_autonomy.runs.scout_executor import DriverTrajectoryExecutor
+    from snake_autonomy.planning.fbsr.trajectory import plan_points
 
     robot = plant.robot
     driver = LockStepDriver(robot, _core.GaitLibrary.from_yaml(str(config_path("gaits.yaml"))), plant,

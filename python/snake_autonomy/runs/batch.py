@@ -35,13 +35,13 @@ import numpy as np
 
 from snake_autonomy import _core
 
-from ..control.angles import wrap
-from ..missions.runner import MissionRunner
-from .feedback import make_feedback
-from .mujoco_servo_backend import MujocoServoBackend
-from .plant import Plant
-from .servo_backend import ShaftUnits
-from .world import CONFIG, SimWorld, WorldSpec
+from snake_autonomy.control.angles import wrap
+from snake_autonomy.missions.runner import MissionRunner
+from snake_autonomy.sim.feedback import make_feedback
+from snake_autonomy.sim.mujoco_servo_backend import MujocoServoBackend
+from snake_autonomy.sim.plant import Plant
+from snake_autonomy.sim.servo_backend import ShaftUnits
+from snake_autonomy.sim.world import CONFIG, SimWorld, WorldSpec
 
 DRIVER_RATE_HZ = 100.0
 TRAJECTORY_RATE_HZ = 10.0
@@ -83,8 +83,8 @@ class RunResult:
         simulated RTAB-Map against the plant's camera pose in out_dir/evaluation. Returns the metrics."""
         import json
 
-        from ..experiments import write_results
-        from ..experiments.results import write_json_atomic
+        from snake_autonomy.runs.results import write_results
+        from snake_autonomy.runs.results import write_json_atomic
         out = Path(out_dir)
         p = self.tracker
         write_results(out, self.waypoints, self.trajectory, self.decisions, self.outcome, self.meta,
@@ -104,7 +104,7 @@ class RunResult:
 def evaluate_vio_samples(samples, out_dir, plots: bool = True) -> Dict[str, Any]:
     """The simulated RTAB-Map (camera odometry, losses as null poses) against the plant's camera
     pose, yaw-only alignment (snake_autonomy.evaluation); figures and stats.json into out_dir."""
-    from ..evaluation import EvaluationOptions, evaluate, trajectory_from_arrays, write_outputs
+    from snake_autonomy.evaluation import EvaluationOptions, evaluate, trajectory_from_arrays, write_outputs
     t = np.array([s[0] for s in samples])
     est = trajectory_from_arrays(t, np.array([s[1] for s in samples]), np.array([s[2] for s in samples]),
                                  name="simulated RTAB-Map", lost=np.array([s[3] for s in samples]))
@@ -199,9 +199,9 @@ class BatchRun:
         self.feedback = make_feedback(spec.feedback, self.params, self.robot)
         self.scout_executor, scout_planner = None, None
         if self.mission.scouts:     # scout stops: the FBSR planner, trajectories through the driver
-            from ..missions.scout import fbsr_scout_planner
-            from .config import servo_torque_limit_nm
-            from .scout_executor import DriverTrajectoryExecutor
+            from snake_autonomy.missions.scout import fbsr_scout_planner
+            from snake_autonomy.sim.config import servo_torque_limit_nm
+            from snake_autonomy.runs.scout_executor import DriverTrajectoryExecutor
             scout_planner = fbsr_scout_planner(spec.robot, spec.scout_config, spec.driver_config,
                                                torque_limit_nm=servo_torque_limit_nm())
             self.scout_executor = DriverTrajectoryExecutor(self.driver.controller)

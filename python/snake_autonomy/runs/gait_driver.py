@@ -13,9 +13,9 @@ command_timeout_s, config/driver.yaml); a refused command raises with the driver
 """
 from typing import Optional
 
-from .. import _core
-from ..paths import config_path
-from .batch import LockStepDriver, load_driver_config
+from snake_autonomy import _core
+from snake_autonomy.paths import config_path
+from snake_autonomy.runs.batch import LockStepDriver, load_driver_config
 
 
 class PlantGaitDriver:

@@ -11,7 +11,7 @@ kappa(omega)) and the forward speed, written to YAML that config/nav.yaml's foll
 
 A rectilinear point runs the Python reference (planning/rectilinear/gait.py) with its A, lambda and
 f, or, with driver_gait, that config/gaits.yaml entry (steering: curvature) through the C++ driver
-(sim/gait_driver.py: the gait nav runs drive; its wave is the entry's, amplitude and wavelength are
+(runs/gait_driver.py: the gait nav runs drive; its wave is the entry's, amplitude and wavelength are
 then the values it was derived for, recorded as labels; its CPG ramps the wave in from the hold
 posture during ramp_s).
 
@@ -65,8 +65,8 @@ def gait_map_points(robot: str, gait: str, amplitudes: Sequence[float], kappas: 
 
 def driver_gait_frequency_hz(name: str, gaits_yaml=None) -> float:
     """The frequency of a config/gaits.yaml entry with steering: curvature (ValueError naming it else)."""
-    from ..paths import config_path
-    from ..safe_yaml import load_yaml_file
+    from snake_autonomy.paths import config_path
+    from snake_autonomy.safe_yaml import load_yaml_file
     path = gaits_yaml or config_path("gaits.yaml")
     entry = ((load_yaml_file(path) or {}).get("gaits") or {}).get(name)
     if not isinstance(entry, dict) or entry.get("steering") != "curvature":
@@ -79,10 +79,10 @@ def driver_gait_frequency_hz(name: str, gaits_yaml=None) -> float:
 
 def _joint_pattern(point: GaitPoint, robot):
     if point.gait == "rectilinear":
-        from ..planning.rectilinear.gait import RectilinearGait
+        from snake_autonomy.planning.rectilinear.gait import RectilinearGait
         g = RectilinearGait(point.amplitude, point.wavelength_m, point.frequency_hz)
         return (lambda t: g.joint_angles(robot, t, point.kappa_per_m)), point.frequency_hz
-    from .serpenoid import SIDEWINDING
+    from snake_autonomy.sim.serpenoid import SIDEWINDING
     g = SIDEWINDING.__class__(**{**asdict(SIDEWINDING), "yaw_amplitude_rad": math.radians(point.amplitude),
                                  "delta_rad": math.radians(point.delta_deg)})
     return (lambda t: g.joint_angles(robot, t)), g.frequency_hz
@@ -92,11 +92,11 @@ def simulate_point(point: GaitPoint) -> Dict:
     """The steady body velocity of one gait-map point (runs the plant; a module-level function so
     that process-based engines can import it)."""
     import dataclasses
-    from .. import _core
-    from ..paths import config_path
-    from ..planning.rectilinear.cli import robot_yaml
-    from .config import SimConfig
-    from .scales import ScaledPlant
+    from snake_autonomy import _core
+    from snake_autonomy.paths import config_path
+    from snake_autonomy.paths import robot_yaml
+    from snake_autonomy.sim.config import SimConfig
+    from snake_autonomy.sim.scales import ScaledPlant
     robot = _core.RobotModel.from_yaml(str(robot_yaml(point.robot)))
     cfg = SimConfig.from_yaml(str(config_path("sim.yaml")))
     cfg = dataclasses.replace(cfg.with_flat_belly(point.flat_belly_fraction),
@@ -105,7 +105,7 @@ def simulate_point(point: GaitPoint) -> Dict:
     plant = ScaledPlant(robot, params, (0.0, 0.0, 0.0))
     dt = 0.01
     if point.driver_gait:
-        from .gait_driver import PlantGaitDriver
+        from snake_autonomy.runs.gait_driver import PlantGaitDriver
         drive = PlantGaitDriver(robot, plant)
         drive.command(point.driver_gait, kappa_per_m=point.kappa_per_m)
         f = point.frequency_hz

@@ -127,7 +127,7 @@ def read_run(path, com_topic: str = "com_pose", status_topic: str = "tracking_st
 def report_from_bag(bag_path, out_dir, plots: bool = True):
     """Rebuilds the results folder of a run from its bag; returns write_results' paths. RunBagError
     (nothing written) when the bag holds no run's start event."""
-    from .results import write_results
+    from snake_autonomy.runs.results import write_results
     run = read_run(bag_path)
     if not run["started"]:
         raise RunBagError(f"no run in it: no start event on {RUN_TOPIC} among {run['messages']} message(s)"

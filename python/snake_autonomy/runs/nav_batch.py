@@ -25,7 +25,7 @@ The camera's pose in the planning frame is the true one at the frame (the head b
 kappa is updated every command_period_s and slewed at kappa_slew_per_m_s (the body reshapes over a
 gait cycle; an instant 0.5 rad jump of every lateral joint whips the body).
 Joint targets (NavRunSpec.gait_source): "driver" (default) commands config/gaits.yaml's rectilinear
-gait with curve + kappa through the C++ driver on the plant (sim/gait_driver.py: LockStepDriver, the
+gait with curve + kappa through the C++ driver on the plant (runs/gait_driver.py: LockStepDriver, the
 DriverController driver_node runs; its CPG ramps the wave in from the hold posture); "reference"
 writes the Python reference's gait.joint_angles(t, kappa) (config/nav.yaml gait:) straight to the
 plant every control period, ramped in over ramp_s. The driver's gaits are the nav config's `gaits:`
@@ -46,15 +46,15 @@ from typing import Any, List, Optional
 
 import numpy as np
 
-from ..experiments.results import PathLength
-from ..paths import config_path
-from ..planning.rectilinear.follower import BACK_OFF, MODES
-from .camera import HeadCamera
-from .collisions import CollisionMonitor
-from .config import SimConfig
-from .scales import ScaledPlant
-from .scene import build_scene
-from .world_file import World
+from snake_autonomy.runs.results import PathLength
+from snake_autonomy.paths import config_path
+from snake_autonomy.planning.rectilinear.follower import BACK_OFF, MODES
+from snake_autonomy.sim.camera import HeadCamera
+from snake_autonomy.sim.collisions import CollisionMonitor
+from snake_autonomy.sim.config import SimConfig
+from snake_autonomy.sim.scales import ScaledPlant
+from snake_autonomy.sim.scene import build_scene
+from snake_autonomy.sim.world_file import World
 
 
 
@@ -191,13 +191,13 @@ def overlay(rgb: np.ndarray, ground: np.ndarray, selection, checker) -> np.ndarr
 
 class NavRun:
     def __init__(self, spec: NavRunSpec):
-        from .. import _core
-        from ..planning.rectilinear.body_model import BodyGeometry
-        from ..planning.rectilinear.cli import robot_yaml
-        from ..planning.rectilinear.config import NavConfig, head_width_m, nav_config_path
-        from ..planning.rectilinear.follower import RecedingHorizonFollower
-        from ..planning.rectilinear.planner import NavPlanner
-        from ..planning.rectilinear.route import grid_shape
+        from snake_autonomy import _core
+        from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
+        from snake_autonomy.paths import robot_yaml
+        from snake_autonomy.planning.rectilinear.config import NavConfig, head_width_m, nav_config_path
+        from snake_autonomy.planning.rectilinear.follower import RecedingHorizonFollower
+        from snake_autonomy.planning.rectilinear.planner import NavPlanner
+        from snake_autonomy.planning.rectilinear.route import grid_shape
         self.spec = spec
         if not (isinstance(spec.time_limit_s, (int, float)) and math.isfinite(spec.time_limit_s)
                 and spec.time_limit_s > 0):
@@ -225,24 +225,24 @@ class NavRun:
                                   self.cfg.map)
         self.rollover_deg = sim_cfg.monitor.rollover_tilt_deg
         if self.cfg.map.source == "truth":          # the diagnostic: the planner knows every obstacle
-            from ..planning.rectilinear.obstacle_map import ObstacleMap
+            from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
             self.planner.obstacle_map = ObstacleMap.from_world(spec.world.obstacles)
         if spec.gait_source not in ("driver", "reference"):
             raise ValueError(f"gait_source: expected driver or reference, got {spec.gait_source!r}")
         self.drive = None
         if spec.gait_source == "driver":
-            from .gait_driver import PlantGaitDriver
+            from snake_autonomy.runs.gait_driver import PlantGaitDriver
             self.drive = PlantGaitDriver(self.robot, self.plant)
         self.flat_belly_fraction = belly
         if spec.perception == "depth":
-            from ..perception.depth_traversability import DepthTraversability
-            from ..planning.rectilinear.config import T_ground_camera
+            from snake_autonomy.perception.depth_traversability import DepthTraversability
+            from snake_autonomy.planning.rectilinear.config import T_ground_camera
             self._depth = DepthTraversability(self.cfg.intrinsics,
                                               T_ground_camera(self.cfg.mount, self.robot.link_radius_m),
                                               self.cfg.depth, seed=spec.seed)
             self.perceive = lambda f: self._depth(f.depth_m)
         elif spec.perception == "mono":
-            from ..perception.block_classifier import BlockClassifier
+            from snake_autonomy.perception.block_classifier import BlockClassifier
             if not spec.classifier:
                 raise ValueError("perception mono needs a classifier model (snake_autonomy nav "
                                  "train-classifier --out FILE; then --classifier FILE)")
@@ -252,7 +252,7 @@ class NavRun:
         elif spec.perception == "truth":
             # a perfect classifier (round 8): the segmentation render through the classifier's
             # blocks and cells (nav.yaml classifier: block_px, stride_px): what mono could reach
-            from ..perception.block_classifier import truth_traversable
+            from snake_autonomy.perception.block_classifier import truth_traversable
             c = self.cfg.classifier
             self.perceive = lambda f: truth_traversable(f.ground_truth_ground(), c.block_px, c.stride_px,
                                                         c.ground_fraction)
@@ -260,8 +260,8 @@ class NavRun:
             raise ValueError(f"perception: expected depth, mono or truth, got {spec.perception!r}")
 
     def run(self) -> NavResult:
-        from ..planning.rectilinear.collision_check import PerceptionCollisionChecker
-        from ..planning.rectilinear.planner import T_world_ground, ground_frame
+        from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
+        from snake_autonomy.planning.rectilinear.planner import T_world_ground, ground_frame
         spec, plant, gait, world = self.spec, self.plant, self.cfg.gait, self.spec.world
         dt = spec.control_period_s
         t, kappa = 0.0, 0.0
@@ -274,7 +274,7 @@ class NavRun:
         reverse = dataclasses.replace(gait, direction=-gait.direction)
         ftl, next_bias = None, 0.0
         if self.cfg.gaits.steering == "follow_the_leader":
-            from ..planning.rectilinear.follow_the_leader import FollowTheLeader
+            from snake_autonomy.planning.rectilinear.follow_the_leader import FollowTheLeader
             ftl = FollowTheLeader.of_robot(self.robot)
         while t < spec.time_limit_s:
             T_wb = plant.frame_transform("base_link")

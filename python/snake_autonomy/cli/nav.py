@@ -9,12 +9,12 @@
                                                     method (and the classifier) on held-out scenes
     snake_autonomy nav run --world FILE [--robot R] [--perception depth|mono|truth] [--seed N]
                            [--time-limit S] [--classifier FILE] --out DIR
-                                                    the closed loop in batch (sim/nav_batch.py):
+                                                    the closed loop in batch (runs/nav_batch.py):
                                                     DIR/metrics.json, topview.png, frames/
     snake_autonomy nav experiment --worlds N --seeds 0-4 [--perception depth|mono|both|truth]
                            [--robot R] [--time-limit S|auto] [--time-factor F]
                            [--engine dask|threads|serial] [--scheduler ADDR] --out DIR
-                                                    random solvable corridors (sim/nav_experiment.py);
+                                                    random solvable corridors (runs/nav_experiment.py);
                                                     auto: 3 x each world's straight-line time
                                                     on Dask: DIR/runs.csv, summary.json, table.md
 """
@@ -24,7 +24,7 @@ import sys
 import time
 from pathlib import Path
 
-from ...paths import config_path, robot_yaml
+from snake_autonomy.paths import config_path, robot_yaml
 
 
 def add_arguments(parser):
@@ -55,7 +55,7 @@ def add_arguments(parser):
                           "reference: the Python reference planning/rectilinear/gait.py (backing off: its "
                           "wave reversed)")
     ex = sub.add_parser("experiment", help="random solvable corridors x seeds: success rate, collisions, time")
-    ex.add_argument("--worlds", type=int, default=20, help="random corridors 0..N-1 (sim/nav_experiment.py)")
+    ex.add_argument("--worlds", type=int, default=20, help="random corridors 0..N-1 (runs/nav_experiment.py)")
     ex.add_argument("--first-world", type=int, default=0)
     ex.add_argument("--seeds", default="0-4", help="plant seeds: 0-4 or 0,2,3")
     ex.add_argument("--perception", choices=("depth", "mono", "both", "truth"), default="depth",
@@ -64,11 +64,11 @@ def add_arguments(parser):
                     help="seconds per run, or auto (default): --time-factor x the straight-line time from "
                          "the start to the goal's disc at the robot's follower speed (its nav config)")
     ex.add_argument("--time-factor", type=float, default=None, metavar="F",
-                    help="with --time-limit auto (default 3; sim/nav_experiment.py time_limit_s)")
+                    help="with --time-limit auto (default 3; runs/nav_experiment.py time_limit_s)")
     ex.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono, both)")
     ex.add_argument("--keep-runs", action="store_true", help="each run's figures under DIR/runs/")
     ex.add_argument("--out", required=True, metavar="DIR")
-    from ...sim.gait_map_cli import add_engine_arguments
+    from snake_autonomy.cli.gait_map import add_engine_arguments
     add_engine_arguments(ex)
     for p in (tr, ev, run, ex):
         p.add_argument("--robot", default="cobra", help="robot name (config/robots/NAME.yaml) or YAML file")
@@ -77,9 +77,9 @@ def add_arguments(parser):
 
 
 def _setup(args):
-    from ... import _core
-    from ...sim.config import SimConfig
-    from .config import NavConfig, nav_config_path
+    from snake_autonomy import _core
+    from snake_autonomy.sim.config import SimConfig
+    from snake_autonomy.planning.rectilinear.config import NavConfig, nav_config_path
     cfg = NavConfig.from_yaml(args.config or nav_config_path(args.robot))
     robot = _core.RobotModel.from_yaml(str(robot_yaml(args.robot)))
     params = SimConfig.from_yaml(str(config_path("sim.yaml"))).draw(seed=0)
@@ -90,9 +90,9 @@ def evaluate(cfg, robot, frames, classifier=None) -> dict:
     """Precision/recall (pixels of the grown region vs the segmentation's, grown the same way)
     and ms per frame, per method, over the frames."""
     import numpy as np
-    from ...perception.depth_traversability import DepthTraversability
-    from ...perception.ground_region import precision_recall, traversable
-    from .config import T_ground_camera
+    from snake_autonomy.perception.depth_traversability import DepthTraversability
+    from snake_autonomy.perception.ground_region import precision_recall, traversable
+    from snake_autonomy.planning.rectilinear.config import T_ground_camera
     methods = {}
     dt = DepthTraversability(cfg.intrinsics, T_ground_camera(cfg.mount, robot.link_radius_m + 0.001), cfg.depth)
     methods["depth"] = (lambda f: dt(f.depth_m), (cfg.depth.block_px, cfg.depth.block_px))
@@ -125,7 +125,7 @@ def _print(results: dict) -> None:
 
 def main(args) -> int:
     if args.nav_command == "check-world":
-        from ...sim.world_file import WorldError, load_world
+        from snake_autonomy.sim.world_file import WorldError, load_world
         bad = 0
         for f in args.files:
             try:
@@ -137,8 +137,8 @@ def main(args) -> int:
                 bad += 1
         return 1 if bad else 0
     if args.nav_command == "train-classifier":
-        from ...perception.block_classifier import BlockClassifier
-        from ...perception.render_set import render_scenes
+        from snake_autonomy.perception.block_classifier import BlockClassifier
+        from snake_autonomy.runs.render_set import render_scenes
         cfg, robot, params = _setup(args)
         t0 = time.perf_counter()
         train = [(f.rgb, f.ground_truth_ground()) for f in render_scenes(
@@ -162,18 +162,18 @@ def main(args) -> int:
         _print(results)
         return 0
     if args.nav_command == "eval-perception":
-        from ...perception.render_set import render_scenes
+        from snake_autonomy.runs.render_set import render_scenes
         cfg, robot, params = _setup(args)
         clf = None
         if args.model:
-            from ...perception.block_classifier import BlockClassifier
+            from snake_autonomy.perception.block_classifier import BlockClassifier
             clf = BlockClassifier.load(args.model)
         frames = list(render_scenes(robot, params, args.scenes, args.seed, cfg.intrinsics, cfg.mount))
         _print(evaluate(cfg, robot, frames, clf))
         return 0
     if args.nav_command == "run":
-        from ...sim.nav_batch import NavRun, NavRunSpec
-        from ...sim.world_file import WorldError, load_world
+        from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+        from snake_autonomy.sim.world_file import WorldError, load_world
         if not (math.isfinite(args.time_limit) and args.time_limit > 0):
             print(f"nav run: --time-limit: must be a finite number of seconds > 0, got {args.time_limit}",
                   file=sys.stderr)
@@ -214,11 +214,11 @@ def parse_seeds(text: str):
 
 
 def _experiment(args) -> int:
-    from ...sim.gait_map_cli import write_csv
-    from ...sim.nav_experiment import (experiment_tasks, markdown_table, outcome_table, random_corridor,
+    from snake_autonomy.cli.gait_map import write_csv
+    from snake_autonomy.runs.nav_experiment import (experiment_tasks, markdown_table, outcome_table, random_corridor,
                                        run_nav_task, summarise)
-    from ...sim.sweep_runner import open_executor, run_tasks
-    from .config import head_width_m
+    from snake_autonomy.runs.sweep_runner import open_executor, run_tasks
+    from snake_autonomy.planning.rectilinear.config import head_width_m
     seeds = parse_seeds(args.seeds)
     perceptions = ("depth", "mono") if args.perception == "both" else (args.perception,)
     if "mono" in perceptions and not args.classifier:
@@ -228,7 +228,7 @@ def _experiment(args) -> int:
     if args.worlds < 1:
         print(f"nav experiment: --worlds must be >= 1, got {args.worlds}", file=sys.stderr)
         return 1
-    from ... import _core
+    from snake_autonomy import _core
     ry = robot_yaml(args.robot)
     body = max(head_width_m(ry), 2.0 * _core.RobotModel.from_yaml(str(ry)).link_radius_m)
     worlds = [random_corridor(k, body_width_m=body) for k in range(args.first_world, args.first_world + args.worlds)]
@@ -265,9 +265,9 @@ def _experiment(args) -> int:
 
 def _time_limits(args, worlds):
     """(per world: --time-limit S, or auto: --time-factor x its straight-line time at the follower's
-    speed of the robot's nav config (sim/nav_experiment.py time_limit_s); the factor, None with S)."""
-    from ...sim.nav_experiment import TIME_FACTOR, time_limit_s
-    from .config import NavConfig, nav_config_path
+    speed of the robot's nav config (runs/nav_experiment.py time_limit_s); the factor, None with S)."""
+    from snake_autonomy.runs.nav_experiment import TIME_FACTOR, time_limit_s
+    from snake_autonomy.planning.rectilinear.config import NavConfig, nav_config_path
     if args.time_limit != "auto":
         try:
             limit = float(args.time_limit)
@@ -292,5 +292,5 @@ def _write_worlds(worlds, folder: Path) -> None:
     folder.mkdir(parents=True, exist_ok=True)
     for w in worlds:
         (folder / f"{w.name}.yaml").write_text(
-            f"# {w.source or w.name} (snake_autonomy nav experiment, sim/nav_experiment.py)\n"
+            f"# {w.source or w.name} (snake_autonomy nav experiment, runs/nav_experiment.py)\n"
             + yaml.safe_dump(w.to_dict(), sort_keys=False))

@@ -16,7 +16,7 @@ def _pyplot():
 
 
 def _shade_segments(ax, dec, t0):
-    from .results import segments
+    from snake_autonomy.runs.results import segments
     colours = ["#dbe9f6", "#fde5cc"]
     for n, seg in enumerate(segments(dec)):
         a, b = seg["t_start"] - t0, seg["t_end"] - t0

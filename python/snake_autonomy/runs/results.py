@@ -246,7 +246,7 @@ def write_results(out_dir, waypoints, trajectory: Mapping[str, Any], decisions: 
     paths["trajectory_csv"] = out / "trajectory.csv"
     _write_csv(paths["trajectory_csv"], {k: (v - t0 if k == "t" and t0 is not None else v) for k, v in traj.items()})
     if plots:
-        from . import plots as plotting
+        from snake_autonomy.runs import plots as plotting
         paths.update(plotting.plot_all(out, waypoints, traj, dec, t0 or 0.0, d_th, psi_wp, psi_turn,
                                        title or (meta or {}).get("mission", "")))
     return paths

@@ -15,7 +15,7 @@ def add_arguments(parser):
 
 
 def main(args) -> int:
-    from .bag_io import RunBagError, report_from_bag
+    from snake_autonomy.runs.bag_io import RunBagError, report_from_bag
     bag = Path(args.bag)
     if not bag.is_file():
         print(f"report: {bag}: no such file", file=sys.stderr)

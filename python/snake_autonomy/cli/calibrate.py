@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import List
 
-from ..paths import config_path
+from snake_autonomy.paths import config_path
 
 DEFAULT_DELTAS = "0,5,10,15"
 
@@ -45,10 +45,10 @@ def add_arguments(parser):
 def main(args) -> int:
     from snake_autonomy import _core
 
-    from ..sim.experiments import parse_seeds
-    from .analysis import CalibrationError, fit
-    from .output import plot, tracker_block, write_yaml
-    from .sequence import Plan
+    from snake_autonomy.runs.mission_experiment import parse_seeds
+    from snake_autonomy.calibration.analysis import CalibrationError, fit
+    from snake_autonomy.calibration.output import plot, tracker_block, write_yaml
+    from snake_autonomy.calibration.sequence import Plan
     try:
         deltas = parse_deltas(args.deltas)
         period_s = 1.0 / _core.GaitLibrary.from_yaml(args.gaits).frequency_hz(args.gait)
@@ -86,7 +86,7 @@ def main(args) -> int:
 
 def parse_deltas(text: str) -> List[float]:
     """--deltas '0,5,10' -> [0.0, 5.0, 10.0]; ValueError naming --deltas and the value otherwise."""
-    from ..safe_yaml import short_repr
+    from snake_autonomy.safe_yaml import short_repr
     try:
         deltas = [float(v) for v in text.split(",")]
     except ValueError:
@@ -99,8 +99,8 @@ def parse_deltas(text: str) -> List[float]:
 
 
 def _sim(args, plans, seeds):
-    from .sequence import run_plan
-    from .sim_backend import SimRobot
+    from snake_autonomy.calibration.sequence import run_plan
+    from snake_autonomy.calibration.sim_backend import SimRobot
     segments, stopped = [], []
     for seed, plan in zip(seeds, plans):
         robot = SimRobot(seed=seed, feedback=args.feedback, sim_config=args.sim_config, gaits=args.gaits)
@@ -118,8 +118,8 @@ def _ros(args, plan):
     import rosgraph
     import rospy
 
-    from .ros_backend import connect
-    from .sequence import run_plan
+    from snake_autonomy.calibration.ros_backend import connect
+    from snake_autonomy.calibration.sequence import run_plan
     if not rosgraph.is_master_online():
         print("snake_autonomy calibrate: no ROS master (start the driver and the pose source first)", file=sys.stderr)
         return [], ["no ROS master"]

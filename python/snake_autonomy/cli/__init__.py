@@ -14,19 +14,19 @@ import sys
 
 # subcommand -> (module, one-line help)
 SUBCOMMANDS = {
-    "gait": ("snake_autonomy.gait_cli", "run a gait open-loop through the core and plot it"),
-    "mission": ("snake_autonomy.missions.cli", "check mission files"),
-    "sim": ("snake_autonomy.sim.cli", "run missions on the simulated robot (no ROS)"),
-    "evaluate": ("snake_autonomy.evaluation.cli", "evaluate a state estimate against ground truth"),
-    "urdf": ("snake_autonomy.urdf_cli", "print the URDF generated from a robot description"),
-    "nav": ("snake_autonomy.planning.rectilinear.cli",
+    "gait": ("snake_autonomy.cli.gait", "run a gait open-loop through the core and plot it"),
+    "mission": ("snake_autonomy.cli.mission", "check mission files"),
+    "sim": ("snake_autonomy.cli.sim", "run missions on the simulated robot (no ROS)"),
+    "evaluate": ("snake_autonomy.cli.evaluate", "evaluate a state estimate against ground truth"),
+    "urdf": ("snake_autonomy.cli.urdf", "print the URDF generated from a robot description"),
+    "nav": ("snake_autonomy.cli.nav",
             "navigation among obstacles (rectilinear gait, head camera): classifier, perception"),
-    "gait-map": ("snake_autonomy.sim.gait_map_cli",
+    "gait-map": ("snake_autonomy.cli.gait_map",
                  "gait map: sweep amplitude and steering on Dask -> steady body velocity, fits, plot"),
-    "report": ("snake_autonomy.experiments.cli", "rebuild a run's results folder from its bag"),
-    "calibrate": ("snake_autonomy.calibration.cli",
+    "report": ("snake_autonomy.cli.report", "rebuild a run's results folder from its bag"),
+    "calibrate": ("snake_autonomy.cli.calibrate",
                   "steering offset (eq. 3.31) and heading offset, on the simulated robot or through ROS"),
-    "scout": ("snake_autonomy.planning.fbsr.cli", "raise the head stably (FBSR planner): plan, run in physics"),
+    "scout": ("snake_autonomy.cli.scout", "raise the head stably (FBSR planner): plan, run in physics"),
 }
 
 
@@ -71,6 +71,3 @@ def one_line(exc: BaseException) -> str:
     text = " ".join(str(exc).split()) or type(exc).__name__
     return text if isinstance(exc, ValueError) else f"{type(exc).__name__}: {text}"
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,5 +1,5 @@
-"""`snake_autonomy gait-map --robot R --gait G --out DIR`: a gait map (sim/gait_map.py) swept on
-Dask (sim/sweep_runner.py): DIR/points.csv, DIR/gait_map.yaml (fits; `follower:` keys that
+"""`snake_autonomy gait-map --robot R --gait G --out DIR`: a gait map (runs/gait_map.py) swept on
+Dask (runs/sweep_runner.py): DIR/points.csv, DIR/gait_map.yaml (fits; `follower:` keys that
 config/nav.yaml's `follower.gait_map: FILE` reads) and DIR/gait_map.png.
 
     snake_autonomy gait-map --robot cobra --gait rectilinear --amplitudes 0.01 0.02 \\
@@ -57,8 +57,8 @@ def write_csv(rows, path) -> None:
 
 def main(args) -> int:
     import yaml
-    from .gait_map import fit_gait_map, gait_map_points, plot_gait_map, simulate_point
-    from .sweep_runner import open_executor, run_tasks
+    from snake_autonomy.runs.gait_map import fit_gait_map, gait_map_points, plot_gait_map, simulate_point
+    from snake_autonomy.runs.sweep_runner import open_executor, run_tasks
     amps = args.amplitudes or ([0.01, 0.02] if args.gait == "rectilinear" else [35.0, 45.0])
     if args.driver_gait and len(amps) != 1:
         print(f"gait-map: --driver-gait runs one gait: give the one amplitude it was derived for, got {amps}",
@@ -84,7 +84,7 @@ def main(args) -> int:
            "wavelength_m": args.wavelength if args.gait == "rectilinear" else None, "scales": bool(args.scales), "flat_belly_fraction": args.flat_belly, "seed": args.seed,
            "engine": args.engine, "points": len(rows), "wall_s": round(wall, 1), **summary}
     (out / "gait_map.yaml").write_text(
-        "# snake_autonomy gait-map: steady body velocity fits (sim/gait_map.py). follower: keys are\n"
+        "# snake_autonomy gait-map: steady body velocity fits (runs/gait_map.py). follower: keys are\n"
         "# what config/nav.yaml's `follower.gait_map: FILE` reads.\n" + yaml.safe_dump(doc, sort_keys=False))
     write_csv(rows, out / "points.csv")
     plot_gait_map(rows, summary, out / "gait_map.png")

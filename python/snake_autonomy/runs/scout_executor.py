@@ -1,14 +1,14 @@
 """The batch simulator's trajectory executor for scout stops (missions/scout.py TrajectoryExecutor).
 
 Scout trajectories go through the driver's own trajectory execution, as on the robot: the batch
-simulator's DriverController (sim/batch.py LockStepDriver, the C++ loop driver_node runs) takes them
+simulator's DriverController (runs/batch.py LockStepDriver, the C++ loop driver_node runs) takes them
 with `command_trajectory` (driver::TrajectorySource: refused whole with every reason; cubic Hermite
 from the present goals; the same slew limit and clamp as the gait's; the last point held, state
 holding). The ROS side's executor publishes on driver/joint_trajectory (nodes/scout_trajectory.py).
 """
 import numpy as np
 
-from ..planning.fbsr.trajectory import driver_joint_names
+from snake_autonomy.planning.fbsr.trajectory import driver_joint_names
 
 
 class DriverTrajectoryExecutor:

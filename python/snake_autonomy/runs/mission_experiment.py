@@ -24,7 +24,7 @@ from typing import Any, Dict, List, Optional, Sequence
 
 import numpy as np
 
-from .batch import RunSpec
+from snake_autonomy.runs.batch import RunSpec
 
 EXPERIMENTS = {
     "single": "single_waypoint",
@@ -71,7 +71,7 @@ def runs_of(name: str, seeds: Sequence[int], feedback: str, starts: Optional[Seq
 
 def _run_one(args):
     spec, out_dir, plots = args
-    from .batch import BatchRun
+    from snake_autonomy.runs.batch import BatchRun
     result = BatchRun(spec).run(progress=False)
     metrics = result.write(Path(out_dir) / spec.label, plots=plots)
     return spec.label, metrics
@@ -190,7 +190,7 @@ def table_row(s: Dict[str, Any]) -> str:
 
 
 def write_summary(out_dir: Path, summary: Dict[str, Any], results, plots: bool = True) -> None:
-    from ..experiments.results import write_json_atomic
+    from snake_autonomy.runs.results import write_json_atomic
     write_json_atomic(out_dir / "summary.json", {**summary, "runs_detail": [
         {"label": label, "outcome": m["outcome"], "success": run_success(m), "start": m.get("start"),
          "seed": m.get("seed"), "mission_time_s": m["mission_time_s"],
@@ -210,7 +210,7 @@ def write_summary(out_dir: Path, summary: Dict[str, Any], results, plots: bool =
 
 
 def summary_figure(out_dir: Path, summary, results) -> Path:
-    from ..experiments.plots import _pyplot
+    from snake_autonomy.runs.plots import _pyplot
     plt = _pyplot()
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 6), gridspec_kw={"width_ratios": [1.2, 1]})
     cmap = plt.get_cmap("tab10")

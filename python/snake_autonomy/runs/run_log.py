@@ -17,8 +17,8 @@ import time
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence
 
-from .bag_io import RUN_TOPIC
-from .results import PathLength, compute_metrics, write_json_atomic
+from snake_autonomy.runs.bag_io import RUN_TOPIC
+from snake_autonomy.runs.results import PathLength, compute_metrics, write_json_atomic
 
 BAG_NAME = "run.bag"
 LIVE_NOTE = ("written while the run was live; if the process died this is where it stopped: "
@@ -131,5 +131,5 @@ class RunLog:
             bag, self._bag = self._bag, None
             bag.close()
         self._write_metrics(outcome)          # never lost, whatever happens below
-        from .bag_io import report_from_bag
+        from snake_autonomy.runs.bag_io import report_from_bag
         return report_from_bag(self.bag_path, self.run_dir, plots=plots)
