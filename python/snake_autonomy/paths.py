@@ -11,6 +11,8 @@ import os
 import re
 from pathlib import Path
 
+from .safe_yaml import short_repr
+
 PACKAGE = "snake_autonomy"
 
 
@@ -31,7 +33,7 @@ def package_root() -> Path:
         if _is_package(candidate):
             return candidate
     try:
-        import rospkg
+        import rospkg  # lazy: ROS's package index, asked only when the data is in neither place
 
         return Path(rospkg.RosPack().get_path(PACKAGE))
     except Exception as exc:  # noqa: BLE001 - any failure means: not found
@@ -52,7 +54,6 @@ class NotANameError(ValueError):
     """Neither a provided file's name nor a YAML file's path; `value` is quoted (short, escaped)."""
 
     def __init__(self, value: str, folder: str):
-        from .safe_yaml import short_repr
         self.value = short_repr(value)
         self.problem = (f"neither the name of a provided file ({folder}/NAME.yaml: NAME of letters, digits, "
                         f"_ . -) nor a file (a path ending in .yaml or .yml)")

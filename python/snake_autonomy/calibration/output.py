@@ -50,7 +50,7 @@ def write_yaml(path, result: CalibrationResult, source: Dict) -> Path:
 
 
 def plot(path, result: CalibrationResult, title: str = "") -> Path:
-    import matplotlib
+    import matplotlib  # lazy: matplotlib is heavy and only this path needs it
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

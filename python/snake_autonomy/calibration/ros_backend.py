@@ -47,7 +47,7 @@ class RosRobot:
 def connect(command_topic: str = "gait_command", pose_topic: str = "com_pose",
             subscriber_timeout_s: float = 5.0) -> RosRobot:
     """The rospy wiring (rospy.init_node first); RuntimeError when no driver listens."""
-    import rospy
+    import rospy  # lazy: ROS only on this path; the module is imported without ROS too
     from geometry_msgs.msg import PoseStamped
 
     from snake_autonomy.msg import GaitCommand

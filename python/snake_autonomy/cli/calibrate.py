@@ -15,7 +15,15 @@ import sys
 from pathlib import Path
 from typing import List
 
+from snake_autonomy import _core
+from snake_autonomy.calibration.analysis import CalibrationError, fit
+from snake_autonomy.calibration.output import plot, tracker_block, write_yaml
+from snake_autonomy.calibration.ros_backend import connect
+from snake_autonomy.calibration.sequence import Plan, run_plan
+from snake_autonomy.calibration.sim_backend import SimRobot
 from snake_autonomy.paths import config_path
+from snake_autonomy.runs.mission_experiment import parse_seeds
+from snake_autonomy.safe_yaml import short_repr
 
 DEFAULT_DELTAS = "0,5,10,15"
 
@@ -43,12 +51,6 @@ def add_arguments(parser):
 
 
 def main(args) -> int:
-    from snake_autonomy import _core
-
-    from snake_autonomy.runs.mission_experiment import parse_seeds
-    from snake_autonomy.calibration.analysis import CalibrationError, fit
-    from snake_autonomy.calibration.output import plot, tracker_block, write_yaml
-    from snake_autonomy.calibration.sequence import Plan
     try:
         deltas = parse_deltas(args.deltas)
         period_s = 1.0 / _core.GaitLibrary.from_yaml(args.gaits).frequency_hz(args.gait)
@@ -86,7 +88,6 @@ def main(args) -> int:
 
 def parse_deltas(text: str) -> List[float]:
     """--deltas '0,5,10' -> [0.0, 5.0, 10.0]; ValueError naming --deltas and the value otherwise."""
-    from snake_autonomy.safe_yaml import short_repr
     try:
         deltas = [float(v) for v in text.split(",")]
     except ValueError:
@@ -99,8 +100,6 @@ def parse_deltas(text: str) -> List[float]:
 
 
 def _sim(args, plans, seeds):
-    from snake_autonomy.calibration.sequence import run_plan
-    from snake_autonomy.calibration.sim_backend import SimRobot
     segments, stopped = [], []
     for seed, plan in zip(seeds, plans):
         robot = SimRobot(seed=seed, feedback=args.feedback, sim_config=args.sim_config, gaits=args.gaits)
@@ -115,11 +114,9 @@ def _sim(args, plans, seeds):
 
 
 def _ros(args, plan):
-    import rosgraph
+    import rosgraph  # lazy: ROS only on this path; the module is imported without ROS too
     import rospy
 
-    from snake_autonomy.calibration.ros_backend import connect
-    from snake_autonomy.calibration.sequence import run_plan
     if not rosgraph.is_master_online():
         print("snake_autonomy calibrate: no ROS master (start the driver and the pose source first)", file=sys.stderr)
         return [], ["no ROS master"]

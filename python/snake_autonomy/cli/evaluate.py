@@ -9,9 +9,10 @@ import numpy as np
 
 from snake_autonomy.evaluation.alignment import ALIGN_MODES
 from snake_autonomy.evaluation.errors import EvaluationError
-from snake_autonomy.evaluation.metrics import RELATIONS, EvaluationOptions
-from snake_autonomy.evaluation.readers import FORMATS, LOST_COVARIANCE, guess_format
-from snake_autonomy.evaluation.segments import SEGMENT_KEYS, STATUS_TOPIC
+from snake_autonomy.evaluation.metrics import RELATIONS, EvaluationOptions, evaluate
+from snake_autonomy.evaluation.readers import FORMATS, LOST_COVARIANCE, bag_topics, guess_format, load_trajectory
+from snake_autonomy.evaluation.report import format_table, write_json, write_outputs
+from snake_autonomy.evaluation.segments import SEGMENT_KEYS, STATUS_TOPIC, read_tracking_status
 
 EPILOG = """examples:
   snake_autonomy evaluate gt.txt est.txt --align se3
@@ -79,10 +80,6 @@ def options_from_args(args) -> EvaluationOptions:
 
 
 def run(args) -> int:
-    from snake_autonomy.evaluation.metrics import evaluate
-    from snake_autonomy.evaluation.readers import load_trajectory
-    from snake_autonomy.evaluation.report import format_table, write_json, write_outputs
-
     options = options_from_args(args)
     options.validate()
     if not (np.isfinite(args.lost_covariance) and args.lost_covariance > 0):
@@ -122,9 +119,6 @@ def _check_output_paths(args) -> None:
 
 
 def _status(args):
-    from snake_autonomy.evaluation.readers import bag_topics
-    from snake_autonomy.evaluation.segments import read_tracking_status
-
     if args.status_bag:
         return read_tracking_status(args.status_bag, args.status_topic)
     topic = args.status_topic

@@ -55,7 +55,7 @@ def run_open_loop(model, gaits, gait, duration_s, dt_s, steer_rad=0.0):
 
 
 def write_plots(result, model, gait, out_dir: Path):
-    import matplotlib
+    import matplotlib  # lazy: matplotlib is heavy and only this path needs it
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -14,6 +14,11 @@ import sys
 import time
 from pathlib import Path
 
+import yaml
+
+from snake_autonomy.runs.gait_map import fit_gait_map, gait_map_points, plot_gait_map, simulate_point
+from snake_autonomy.runs.sweep_runner import open_executor, run_tasks
+
 
 def add_engine_arguments(p) -> None:
     p.add_argument("--engine", choices=("dask", "threads", "serial"), default="dask",
@@ -56,9 +61,6 @@ def write_csv(rows, path) -> None:
 
 
 def main(args) -> int:
-    import yaml
-    from snake_autonomy.runs.gait_map import fit_gait_map, gait_map_points, plot_gait_map, simulate_point
-    from snake_autonomy.runs.sweep_runner import open_executor, run_tasks
     amps = args.amplitudes or ([0.01, 0.02] if args.gait == "rectilinear" else [35.0, 45.0])
     if args.driver_gait and len(amps) != 1:
         print(f"gait-map: --driver-gait runs one gait: give the one amplitude it was derived for, got {amps}",

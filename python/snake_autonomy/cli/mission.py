@@ -6,7 +6,7 @@ otherwise. FILE may also be the name of a provided mission (config/missions/NAME
 """
 import sys
 
-from snake_autonomy.missions.mission import MISSIONS_DIR, MissionError, load_mission
+from snake_autonomy.missions.mission import MISSIONS_DIR, MissionError, gait_library_names, load_defaults, load_mission
 
 
 def add_arguments(parser):
@@ -27,7 +27,6 @@ def main(args) -> int:
     if args.mission_command != "check":
         print("usage: snake_autonomy mission {check FILE...|list}", file=sys.stderr)
         return 2
-    from snake_autonomy.missions.mission import gait_library_names, load_defaults
     try:
         defaults = load_defaults(args.defaults)
     except (MissionError, OSError) as exc:

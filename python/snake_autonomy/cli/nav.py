@@ -24,7 +24,23 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+import yaml
+
+from snake_autonomy import _core
+from snake_autonomy.cli.gait_map import add_engine_arguments, write_csv
 from snake_autonomy.paths import config_path, robot_yaml
+from snake_autonomy.perception.block_classifier import BlockClassifier
+from snake_autonomy.perception.depth_traversability import DepthTraversability
+from snake_autonomy.perception.ground_region import precision_recall, traversable
+from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m, nav_config_path
+from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+from snake_autonomy.runs.nav_experiment import (TIME_FACTOR, experiment_tasks, markdown_table, outcome_table,
+                                                random_corridor, run_nav_task, summarise, time_limit_s)
+from snake_autonomy.runs.render_set import render_scenes
+from snake_autonomy.runs.sweep_runner import open_executor, run_tasks
+from snake_autonomy.sim.config import SimConfig
+from snake_autonomy.sim.world_file import WorldError, load_world
 
 
 def add_arguments(parser):
@@ -68,7 +84,6 @@ def add_arguments(parser):
     ex.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono, both)")
     ex.add_argument("--keep-runs", action="store_true", help="each run's figures under DIR/runs/")
     ex.add_argument("--out", required=True, metavar="DIR")
-    from snake_autonomy.cli.gait_map import add_engine_arguments
     add_engine_arguments(ex)
     for p in (tr, ev, run, ex):
         p.add_argument("--robot", default="cobra", help="robot name (config/robots/NAME.yaml) or YAML file")
@@ -77,9 +92,6 @@ def add_arguments(parser):
 
 
 def _setup(args):
-    from snake_autonomy import _core
-    from snake_autonomy.sim.config import SimConfig
-    from snake_autonomy.planning.rectilinear.config import NavConfig, nav_config_path
     cfg = NavConfig.from_yaml(args.config or nav_config_path(args.robot))
     robot = _core.RobotModel.from_yaml(str(robot_yaml(args.robot)))
     params = SimConfig.from_yaml(str(config_path("sim.yaml"))).draw(seed=0)
@@ -89,10 +101,6 @@ def _setup(args):
 def evaluate(cfg, robot, frames, classifier=None) -> dict:
     """Precision/recall (pixels of the grown region vs the segmentation's, grown the same way)
     and ms per frame, per method, over the frames."""
-    import numpy as np
-    from snake_autonomy.perception.depth_traversability import DepthTraversability
-    from snake_autonomy.perception.ground_region import precision_recall, traversable
-    from snake_autonomy.planning.rectilinear.config import T_ground_camera
     methods = {}
     dt = DepthTraversability(cfg.intrinsics, T_ground_camera(cfg.mount, robot.link_radius_m + 0.001), cfg.depth)
     methods["depth"] = (lambda f: dt(f.depth_m), (cfg.depth.block_px, cfg.depth.block_px))
@@ -125,7 +133,6 @@ def _print(results: dict) -> None:
 
 def main(args) -> int:
     if args.nav_command == "check-world":
-        from snake_autonomy.sim.world_file import WorldError, load_world
         bad = 0
         for f in args.files:
             try:
@@ -137,8 +144,6 @@ def main(args) -> int:
                 bad += 1
         return 1 if bad else 0
     if args.nav_command == "train-classifier":
-        from snake_autonomy.perception.block_classifier import BlockClassifier
-        from snake_autonomy.runs.render_set import render_scenes
         cfg, robot, params = _setup(args)
         t0 = time.perf_counter()
         train = [(f.rgb, f.ground_truth_ground()) for f in render_scenes(
@@ -162,18 +167,14 @@ def main(args) -> int:
         _print(results)
         return 0
     if args.nav_command == "eval-perception":
-        from snake_autonomy.runs.render_set import render_scenes
         cfg, robot, params = _setup(args)
         clf = None
         if args.model:
-            from snake_autonomy.perception.block_classifier import BlockClassifier
             clf = BlockClassifier.load(args.model)
         frames = list(render_scenes(robot, params, args.scenes, args.seed, cfg.intrinsics, cfg.mount))
         _print(evaluate(cfg, robot, frames, clf))
         return 0
     if args.nav_command == "run":
-        from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
-        from snake_autonomy.sim.world_file import WorldError, load_world
         if not (math.isfinite(args.time_limit) and args.time_limit > 0):
             print(f"nav run: --time-limit: must be a finite number of seconds > 0, got {args.time_limit}",
                   file=sys.stderr)
@@ -214,11 +215,6 @@ def parse_seeds(text: str):
 
 
 def _experiment(args) -> int:
-    from snake_autonomy.cli.gait_map import write_csv
-    from snake_autonomy.runs.nav_experiment import (experiment_tasks, markdown_table, outcome_table, random_corridor,
-                                       run_nav_task, summarise)
-    from snake_autonomy.runs.sweep_runner import open_executor, run_tasks
-    from snake_autonomy.planning.rectilinear.config import head_width_m
     seeds = parse_seeds(args.seeds)
     perceptions = ("depth", "mono") if args.perception == "both" else (args.perception,)
     if "mono" in perceptions and not args.classifier:
@@ -228,7 +224,6 @@ def _experiment(args) -> int:
     if args.worlds < 1:
         print(f"nav experiment: --worlds must be >= 1, got {args.worlds}", file=sys.stderr)
         return 1
-    from snake_autonomy import _core
     ry = robot_yaml(args.robot)
     body = max(head_width_m(ry), 2.0 * _core.RobotModel.from_yaml(str(ry)).link_radius_m)
     worlds = [random_corridor(k, body_width_m=body) for k in range(args.first_world, args.first_world + args.worlds)]
@@ -266,8 +261,6 @@ def _experiment(args) -> int:
 def _time_limits(args, worlds):
     """(per world: --time-limit S, or auto: --time-factor x its straight-line time at the follower's
     speed of the robot's nav config (runs/nav_experiment.py time_limit_s); the factor, None with S)."""
-    from snake_autonomy.runs.nav_experiment import TIME_FACTOR, time_limit_s
-    from snake_autonomy.planning.rectilinear.config import NavConfig, nav_config_path
     if args.time_limit != "auto":
         try:
             limit = float(args.time_limit)
@@ -288,7 +281,6 @@ def _time_limits(args, worlds):
 def _write_worlds(worlds, folder: Path) -> None:
     """Each generated world as the world file `nav run --world` reads (folder/NAME.yaml): a row of
     runs.csv is reproduced without regenerating it."""
-    import yaml
     folder.mkdir(parents=True, exist_ok=True)
     for w in worlds:
         (folder / f"{w.name}.yaml").write_text(

@@ -4,8 +4,11 @@ Works on a bag left by a killed run (no index): a temporary copy is reindexed, t
 left untouched. Exit 0 and the written paths; 1, naming the bag, when it cannot be read or holds no
 run (a bag cut before the run's start event).
 """
+import json
 import sys
 from pathlib import Path
+
+from snake_autonomy.runs.bag_io import RunBagError, report_from_bag
 
 
 def add_arguments(parser):
@@ -15,7 +18,6 @@ def add_arguments(parser):
 
 
 def main(args) -> int:
-    from snake_autonomy.runs.bag_io import RunBagError, report_from_bag
     bag = Path(args.bag)
     if not bag.is_file():
         print(f"report: {bag}: no such file", file=sys.stderr)
@@ -29,7 +31,6 @@ def main(args) -> int:
     except Exception as exc:  # noqa: BLE001 - any reading error is reported with the bag's name
         print(f"report: {bag}: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 1
-    import json
     metrics = json.loads(paths["metrics"].read_text())
     print(f"{bag}: outcome {metrics['outcome']}, {metrics['waypoints_reached']}/{metrics['num_waypoints']} "
           f"waypoints reached, {metrics['num_decisions']} decisions")

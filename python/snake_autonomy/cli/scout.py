@@ -16,13 +16,19 @@ import json
 import sys
 from pathlib import Path
 
+from snake_autonomy.paths import config_path
+from snake_autonomy.planning.fbsr import plan_io
 from snake_autonomy.planning.fbsr.build import build_planner
+from snake_autonomy.planning.fbsr.cost import Pipe
+from snake_autonomy.planning.fbsr.figures import write_figures
+from snake_autonomy.planning.fbsr.planner import lowering
+from snake_autonomy.planning.fbsr.stage import PlanningError
+from snake_autonomy.planning.fbsr.trajectory import driver_velocity_limit, lead_in_s, plan_points, velocity_problems
+from snake_autonomy.runs.scout_execute import run_plan
 from snake_autonomy.sim.config import servo_torque_limit_nm
 
 
 def _pipe(text):
-    from snake_autonomy.planning.fbsr.cost import Pipe
-
     try:
         x, y, r = (float(v) for v in text.split(","))
     except ValueError:
@@ -53,8 +59,6 @@ def add_arguments(parser):
 
 
 def main(args) -> int:
-    from snake_autonomy.planning.fbsr.stage import PlanningError
-
     if args.scout_command is None:
         print("usage: snake_autonomy scout {plan,run} --robot ROBOT --out DIR [options]", file=sys.stderr)
         return 2
@@ -77,10 +81,6 @@ def main(args) -> int:
     except (ValueError, FileNotFoundError, PlanningError) as err:
         print(f"scout {args.scout_command}: {err}", file=sys.stderr)
         return 1
-    from snake_autonomy.planning.fbsr import plan_io
-    from snake_autonomy.planning.fbsr.figures import write_figures
-    from snake_autonomy.planning.fbsr.planner import lowering
-    from snake_autonomy.planning.fbsr.trajectory import driver_velocity_limit, lead_in_s, plan_points, velocity_problems
 
     chain = planner.chain
     vmax = driver_velocity_limit()
@@ -107,9 +107,7 @@ def main(args) -> int:
           f"planned in {plan.planning_time_s:.1f} s -> {out / 'plan.json'} ({len(doc['samples'])} samples)")
     if args.scout_command != "run":
         return 0
-    from snake_autonomy.paths import config_path
 
-    from snake_autonomy.runs.scout_execute import run_plan
 
     result = run_plan(plan, config_path("sim.yaml"), args.sim_seed, pipe, period)
     (out / "metrics.json").write_text(json.dumps(result["metrics"], indent=2) + "\n")

@@ -16,13 +16,17 @@ import math
 import sys
 from pathlib import Path
 
+from snake_autonomy.missions import MissionError
+from snake_autonomy.missions.mission import MAX_COORDINATE_M, MAX_HEADING_DEG, MAX_TIME_LIMIT_S
 from snake_autonomy.paths import config_path
+from snake_autonomy.runs.batch import BatchRun, RunSpec
+from snake_autonomy.runs.mission_experiment import (TABLE_HEADER, TABLE_RULE, parse_seeds, run_experiment,
+                                                    run_success, table_row)
 
 EXPERIMENT_NAMES = ("single", "star", "bidirectional", "disturbance")
 
 
 def _start(text):
-    from snake_autonomy.missions.mission import MAX_COORDINATE_M, MAX_HEADING_DEG
     try:
         x, y, h = (float(v) for v in text.split(","))
     except ValueError:
@@ -36,7 +40,6 @@ def _start(text):
 
 def _check_options(args) -> None:
     """Range checks of the numeric options (ValueError naming the option and its value)."""
-    from snake_autonomy.missions.mission import MAX_TIME_LIMIT_S
     limit = getattr(args, "time_limit", None)
     if limit is not None and not (math.isfinite(limit) and 0 < limit <= MAX_TIME_LIMIT_S):
         raise ValueError(f"--time-limit: must be a number of seconds in (0, {MAX_TIME_LIMIT_S:g}], got {limit!r}")
@@ -78,7 +81,6 @@ def _common(p):
 
 
 def main(args) -> int:
-    from snake_autonomy.missions import MissionError
     if args.sim_command is None:
         print("snake_autonomy sim: give a command: run or experiment (--help)", file=sys.stderr)
         return 2
@@ -93,8 +95,6 @@ def main(args) -> int:
 
 
 def _run(args) -> int:
-    from snake_autonomy.runs.batch import BatchRun, RunSpec
-    from snake_autonomy.runs.mission_experiment import run_success
     spec = RunSpec(mission=args.mission, seed=args.seed, feedback=args.feedback, start=_start(args.start),
                    time_limit_s=args.time_limit, sim_config=args.sim_config, gaits=args.gaits)
     run = BatchRun(spec)
@@ -116,7 +116,6 @@ def _run(args) -> int:
 
 
 def _experiment(args) -> int:
-    from snake_autonomy.runs.mission_experiment import TABLE_HEADER, TABLE_RULE, parse_seeds, run_experiment, table_row
     seeds = parse_seeds(args.seeds)
     feedbacks = ("mocap", "vio") if args.feedback == "both" else (args.feedback,)
     summaries = []

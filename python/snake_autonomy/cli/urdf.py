@@ -4,6 +4,7 @@ in config/camera.yaml only)."""
 import sys
 
 from snake_autonomy import _core
+from snake_autonomy.estimation import load_camera_calibration
 from snake_autonomy.paths import config_path, robot_yaml
 
 
@@ -21,8 +22,6 @@ def main(args) -> int:
         model = _core.RobotModel.from_yaml(str(robot_yaml(args.robot)))
         camera_in_head = None
         if not args.no_camera:
-            from snake_autonomy.estimation import load_camera_calibration
-
             camera_in_head = load_camera_calibration(args.camera).camera_in_head
     except (ValueError, OSError) as err:
         print(err, file=sys.stderr)

@@ -25,15 +25,16 @@ simulator's ground truth); rows that are null poses are dropped and reported as 
 Every user-fixable problem raises ``EvaluationError`` with a message; the CLI prints it and exits 1.
 
 Files: readers.py (TUM, EuRoC, bag topics/TF), alignment.py (yaw-only + dispatch), metrics.py
-(options, evaluate, result), tracking_loss.py, segments.py (TrackingStatus), plots.py, report.py;
+(options, evaluate, result), stats.py (evo's statistics), tracking_loss.py, segments.py (TrackingStatus), plots.py, report.py;
 the command line: cli/evaluate.py.
 """
 from .alignment import ALIGN_MODES, yaw_alignment
 from .errors import EvaluationError
-from .metrics import EvaluationOptions, EvaluationResult, evaluate, statistics
+from .metrics import EvaluationOptions, EvaluationResult, evaluate
 from .readers import LoadedTrajectory, bag_topics, load_trajectory, trajectory_from_arrays
 from .report import format_table, write_json, write_outputs
 from .segments import StatusSample, read_tracking_status
+from .stats import statistics
 from .tracking_loss import LossInterval
 
 __all__ = [

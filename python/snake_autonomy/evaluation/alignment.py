@@ -58,7 +58,7 @@ def align(traj_est, traj_ref, mode: str, n_to_align: int = -1) -> Optional[np.nd
     (as evo's --n_to_align). Returns None for mode 'none'. For se3/sim3/origin prefer passing the
     mode to evo's ape()/rpe() (metrics.evaluate does): this function is for callers who only align.
     """
-    from evo.core import lie_algebra
+    from evo.core import lie_algebra  # lazy: evo is heavy and only this path needs it
 
     if mode not in ALIGN_MODES:
         raise EvaluationError(f"unknown alignment {mode!r}: use one of {', '.join(ALIGN_MODES)}")

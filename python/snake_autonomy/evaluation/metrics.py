@@ -15,10 +15,10 @@ import numpy as np
 from . import alignment as alignment_mod
 from .errors import EvaluationError
 from .readers import LoadedTrajectory
-from .segments import SEGMENT_KEYS, StatusSample, segment_statistics, status_loss_intervals
+from .segments import SEGMENT_KEYS, StatusSample, segment_statistics, spans, status_loss_intervals
+from .stats import STAT_KEYS, statistics
 from .tracking_loss import LossInterval, gap_intervals, merge_intervals, points_in_loss, spans_in_loss
 
-STAT_KEYS = ("max", "mean", "median", "min", "rmse", "sse", "std")
 METRICS = ("ape", "rpe")
 # our name -> evo PoseRelation value; evo's CLI names are accepted too
 RELATIONS = {"trans": "translation part", "trans_part": "translation part",
@@ -139,18 +139,6 @@ class EvaluationResult:
         return doc
 
 
-def statistics(errors: np.ndarray) -> Dict[str, float]:
-    """evo's statistics (its own PE.get_all_statistics) of any error array."""
-    from evo.core import metrics as evo_metrics
-
-    errors = np.asarray(errors, dtype=float)
-    if errors.size == 0:
-        return {k: float("nan") for k in STAT_KEYS}
-    m = evo_metrics.APE()
-    m.error = errors
-    return {k: float(v) for k, v in m.get_all_statistics().items()}
-
-
 def evaluate(ref: Union[LoadedTrajectory, object], est: Union[LoadedTrajectory, object],
              options: Optional[EvaluationOptions] = None,
              status: Optional[Sequence[StatusSample]] = None,
@@ -162,7 +150,7 @@ def evaluate(ref: Union[LoadedTrajectory, object], est: Union[LoadedTrajectory, 
     ``loss_intervals``: extra tracking-loss intervals (estimate time) to exclude.
     Raises EvaluationError for anything the user can fix.
     """
-    from evo.core import metrics as evo_metrics
+    from evo.core import metrics as evo_metrics  # lazy: evo is heavy and only this path needs it
     from evo.core.sync import SyncMethod
     from evo.core.trajectory import PoseTrajectory3D
 
@@ -269,7 +257,6 @@ def evaluate(ref: Union[LoadedTrajectory, object], est: Union[LoadedTrajectory, 
         traj_ref=ref_sync, traj_est=est_sync, alignment=transform, loss_intervals=intervals,
         traj_ref_full=traj_ref_full, evo_result=res)
     if status:
-        from .segments import spans
         result.segments = segment_statistics(errors, stamps, status, options.segment_keys)
         end = float(traj_est.timestamps[-1])
         result.segment_spans = {k: spans(status, k, end) for k in options.segment_keys}
@@ -285,7 +272,7 @@ def _unpack(item, role: str):
 
 def no_match_message(traj_ref, traj_est, options: EvaluationOptions, ref_name: str, est_name: str) -> str:
     """Why no timestamps matched, and which --t-max-diff / --t-offset would match, from the data."""
-    from evo.core.sync import matching_time_indices
+    from evo.core.sync import matching_time_indices  # lazy: evo is heavy and only this path needs it
 
     ref_t = np.sort(np.asarray(traj_ref.timestamps, dtype=float))
     est_t = np.asarray(traj_est.timestamps, dtype=float) + options.t_offset_s

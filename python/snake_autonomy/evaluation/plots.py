@@ -8,7 +8,11 @@ report reuses them.
   shaded alternately as in the thesis's Fig. 4.16.
 Time axes are seconds from the first associated estimate stamp.
 """
+from pathlib import Path
+
 import numpy as np
+
+from .tracking_loss import spans_in_loss
 
 LOSS_COLOR = "tab:red"
 REF_STYLE = dict(color="0.35", linestyle="--", linewidth=1.2, label="reference")
@@ -26,7 +30,6 @@ def break_at_loss(t_s: np.ndarray, values: np.ndarray, result) -> tuple:
     values = np.asarray(values, dtype=float)
     if len(t_s) < 2 or not result.loss_intervals:
         return t_s, values
-    from .tracking_loss import spans_in_loss
     cut = np.nonzero(spans_in_loss(t_s[:-1], t_s[1:], result.loss_intervals))[0] + 1
     nan_row = np.full((len(cut),) + values.shape[1:], np.nan)
     return np.insert(t_s, cut, np.nan), np.insert(values, cut, nan_row, axis=0)
@@ -135,10 +138,9 @@ def plot_error(ax, result, segment_key: str = "leg") -> None:
 
 def save_figures(result, out_dir) -> dict:
     """Writes xy.png, xyz.png, error.png (and axis_error.png for APE); returns {name: path}."""
-    import matplotlib
+    import matplotlib  # lazy: matplotlib is heavy and only this path needs it
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from pathlib import Path
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -61,7 +61,7 @@ def load_trajectory(path: str, fmt: Optional[str] = None, topic: Optional[str] =
         traj, cov_lost = _read_bag_topic(path, topic, lost_covariance)
         name = f"{os.path.basename(path)}:{traj.name}"
     else:
-        from evo.tools import file_interface
+        from evo.tools import file_interface  # lazy: evo is heavy and only this path needs it
         reader = (file_interface.read_euroc_csv_trajectory if fmt == "euroc"
                   else file_interface.read_tum_trajectory_file)
         try:
@@ -86,7 +86,7 @@ def trajectory_from_arrays(stamps_s, xyz, quat_xyzw, name: str = "trajectory",
     ``lost`` (n booleans, optional) marks poses known to be tracking losses; null poses are found
     anyway. Stamps must increase.
     """
-    from evo.core.trajectory import PoseTrajectory3D
+    from evo.core.trajectory import PoseTrajectory3D  # lazy: evo is heavy and only this path needs it
 
     stamps = np.asarray(stamps_s, dtype=float).reshape(-1)
     xyz = np.asarray(xyz, dtype=float)
@@ -125,7 +125,7 @@ def _drop_lost(traj, name: str, cov_lost: np.ndarray, kind: str = "covariance") 
 
 # ---------------------------------------------------------------------------------------------- bags
 def _open_bag(path: str):
-    from rosbags.rosbag1 import Reader
+    from rosbags.rosbag1 import Reader  # lazy: rosbags is heavy and only this path needs it
     reader = Reader(path)
     try:
         reader.open()
@@ -161,7 +161,7 @@ def _resolve_topic(reader, topic: str) -> Optional[str]:
 
 
 def _read_bag_topic(path: str, topic: str, lost_covariance: float):
-    from evo.tools import file_interface
+    from evo.tools import file_interface  # lazy: evo is heavy and only this path needs it
     reader = _open_bag(path)
     try:
         if topic.split(":", 1)[0].lstrip("/") in ("tf",) and ":" in topic:
@@ -227,6 +227,7 @@ def _tf_identifier(reader, path: str, topic: str) -> str:
 def typestore_for(connections):
     """rosbags' ROS 1 typestore plus the message types these connections define in the bag
     (tf2_msgs/TFMessage and snake_autonomy/TrackingStatus are not in rosbags' own store)."""
+    # lazy: rosbags is heavy and only this path needs it
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
     typestore = get_typestore(Stores.ROS1_NOETIC)
     for c in connections:

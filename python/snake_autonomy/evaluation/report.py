@@ -8,7 +8,9 @@ import json
 from pathlib import Path
 from typing import Dict, Optional
 
-from .metrics import STAT_KEYS
+from . import plots
+from . import plots as plots_mod
+from .stats import STAT_KEYS
 
 
 def format_table(result) -> str:
@@ -56,11 +58,10 @@ def _json_default(obj):
 
 def write_report(result, out_dir, name: str = "report") -> Dict[str, str]:
     """One A4-landscape page: statistics, segments and the four plots; as PDF and PNG."""
-    import matplotlib
+    import matplotlib  # lazy: matplotlib is heavy and only this path needs it
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from . import plots
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -114,7 +115,6 @@ def _summary_text(result) -> str:
 def write_outputs(result, out_dir, plots: bool = True, report: bool = True,
                   json_path: Optional[str] = None) -> Dict[str, str]:
     """Writes stats.json (or json_path), the PNG plots and the one-page report; returns {name: path}."""
-    from . import plots as plots_mod
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -16,6 +16,8 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from .errors import EvaluationError
+from .readers import _resolve_topic, describe_topics, typestore_for
+from .stats import statistics
 from .tracking_loss import LossInterval
 
 STATUS_TOPIC = "/tracking_status"
@@ -52,9 +54,8 @@ def read_tracking_status(bag_path: str, topic: str = STATUS_TOPIC) -> List[Statu
 
     The message definition is taken from the bag itself, so this works without the package built.
     """
-    from rosbags.rosbag1 import Reader
+    from rosbags.rosbag1 import Reader  # lazy: rosbags is heavy and only this path needs it
 
-    from .readers import _resolve_topic, describe_topics, typestore_for
 
     try:
         reader = Reader(bag_path)
@@ -126,7 +127,6 @@ def spans(samples: Sequence[StatusSample], key: str, end_s: Optional[float] = No
 def segment_statistics(errors: np.ndarray, stamps: np.ndarray, samples: Sequence[StatusSample],
                        keys: Sequence[str] = SEGMENT_KEYS) -> Dict[str, List[dict]]:
     """{key: [{label, pairs, stats}, ...]} in order of first appearance, over the given pairs."""
-    from .metrics import statistics
 
     errors = np.asarray(errors, dtype=float)
     out: Dict[str, List[dict]] = {}

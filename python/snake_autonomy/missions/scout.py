@@ -34,6 +34,11 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, List, Optional, Protocol
 
+from ..planning.fbsr import plan_io
+from ..planning.fbsr.build import build_planner
+from ..planning.fbsr.planner import lowering
+from ..planning.fbsr.trajectory import driver_velocity_limit, lead_in_s, plan_points, velocity_problems
+
 PLANNING, RAISING, HOLDING, LOWERING, DONE, FAILED = "planning", "raising", "holding", "lowering", "done", "failed"
 #: Phases in which a trajectory owns the joints: no gait command may be sent.
 TRAJECTORY_PHASES = (RAISING, HOLDING, LOWERING)
@@ -200,10 +205,6 @@ def fbsr_scout_planner(robot_arg: str, scout_config=None, driver_yaml=None, *,
                        torque_limit_nm: float) -> ScoutPlanner:
     """A ScoutPlanner with the FBSR planner for a robot (name or YAML): plan, every check, the raise
     and lowering trajectories. Raises with the reason when any check fails."""
-    from ..planning.fbsr import plan_io
-    from ..planning.fbsr.build import build_planner
-    from ..planning.fbsr.planner import lowering
-    from ..planning.fbsr.trajectory import driver_velocity_limit, lead_in_s, plan_points, velocity_problems
 
     planner, cfg = build_planner(robot_arg, scout_config, torque_limit_nm=torque_limit_nm)
     vmax = driver_velocity_limit(driver_yaml)

@@ -53,15 +53,18 @@ from geometry_msgs.msg import Pose, PoseArray, PoseStamped, PoseWithCovarianceSt
 from std_msgs.msg import String
 from std_srvs.srv import Trigger, TriggerResponse
 
-from snake_autonomy.transforms import yaw_of_quat
 from snake_autonomy.missions import MissionError, gait_library_names, load_defaults, load_mission, read_overrides
-from snake_autonomy.runs.recorded_topics import STATIC_TF_TOPIC, StaticTransforms, standard_topic_types
 from snake_autonomy.missions.runner import DONE, MissionRunner
-from snake_autonomy.sim.config import servo_torque_limit_nm
-from snake_autonomy.msg import (GaitCommand, RunMissionAction, RunMissionFeedback, RunMissionResult, TrackingStatus,
-                                WaypointResult)
+from snake_autonomy.missions.scout import fbsr_scout_planner
+from snake_autonomy.msg import (BoundState, GaitCommand, RunMissionAction, RunMissionFeedback, RunMissionResult,
+                                TrackingStatus, WaypointResult)
 from snake_autonomy.nodes.mission_action import DecisionSeries, fill_feedback, fill_result, mission_from_goal
+from snake_autonomy.nodes.scout_trajectory import TopicTrajectoryExecutor
+from snake_autonomy.runs.recorded_topics import STATIC_TF_TOPIC, StaticTransforms, standard_topic_types
+from snake_autonomy.runs.run_log import RunLog
+from snake_autonomy.sim.config import servo_torque_limit_nm
 from snake_autonomy.srv import LoadMission, LoadMissionResponse
+from snake_autonomy.transforms import yaw_of_quat
 
 RECORDED = {  # topic -> type, recorded into the run's bag besides com_pose and our own outputs
     "base_pose": PoseWithCovarianceStamped,
@@ -84,7 +87,6 @@ def _optional_types():
         out["joint_states"] = JointState
     except ImportError:
         pass
-    from snake_autonomy.msg import BoundState
     out["bound_state"] = BoundState
     return out
 
@@ -206,8 +208,6 @@ class MissionNode:
         """The scout planner (FBSR, ~robot) and the executor that publishes driver/joint_trajectory,
         made once, when the first mission with a scout stop is loaded."""
         if self._scout_parts is None:
-            from snake_autonomy.missions.scout import fbsr_scout_planner
-            from snake_autonomy.nodes.scout_trajectory import TopicTrajectoryExecutor
             planner = fbsr_scout_planner(self.robot, self.scout_config, torque_limit_nm=servo_torque_limit_nm())
             self._scout_parts = (planner, TopicTrajectoryExecutor())
         return self._scout_parts
@@ -522,7 +522,6 @@ class MissionNode:
         self.run_ended.set()
 
     def open_log(self, t):
-        from snake_autonomy.runs.run_log import RunLog
         stamp = time.strftime("%Y%m%d-%H%M%S")
         safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", self.mission.name)
         self.run_dir = self.results_dir / f"{stamp}_{safe}"

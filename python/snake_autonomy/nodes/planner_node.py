@@ -31,6 +31,7 @@ Inputs      every message is checked before it is used: camera_info (size, fx, f
             warning too); a pose or frame older than its timeout holds the robot. Nothing that
             arrives, and no bug in a tick, can end the command loop: a tick that fails sends hold.
 """
+import dataclasses
 import math
 
 import diagnostic_updater
@@ -43,9 +44,19 @@ from sensor_msgs.msg import CameraInfo, Image
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
+from snake_autonomy import _core
 from snake_autonomy.msg import GaitCommand
 from snake_autonomy.nodes.image_msgs import from_camera_info, from_image, to_image
 from snake_autonomy.paths import config_path
+from snake_autonomy.perception.block_classifier import BlockClassifier
+from snake_autonomy.perception.depth_traversability import DepthTraversability
+from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
+from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
+from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m
+from snake_autonomy.planning.rectilinear.nav_loop import NavLoop
+from snake_autonomy.planning.rectilinear.planner import to_world
+from snake_autonomy.runs.nav_batch import overlay
+from snake_autonomy.sim.world_file import load_world
 from snake_autonomy.transforms import pose_to_matrix
 
 QUATERNION_TOLERANCE = 0.01     # | |q| - 1 | beyond this is not an orientation (as the driver's rule)
@@ -56,9 +67,6 @@ GREEN, YELLOW, RED = ColorRGBA(0.1, 0.9, 0.1, 1.0), ColorRGBA(0.95, 0.85, 0.1, 1
 
 class PlannerNode:
     def __init__(self):
-        import dataclasses
-
-        from snake_autonomy.planning.rectilinear.config import NavConfig, head_width_m
         self.cfg = NavConfig.from_yaml(rospy.get_param("~nav_config", str(config_path("nav.yaml"))))
         self.robot_yaml = rospy.get_param("~robot_config", str(config_path("robots", "cobra.yaml")))
         self.head_width_m = head_width_m(self.robot_yaml)
@@ -117,7 +125,6 @@ class PlannerNode:
     def _goal(self):
         world = rospy.get_param("~world", "")
         if world:
-            from snake_autonomy.sim.world_file import load_world
             w = load_world(world)
             return tuple(w.goal), float(w.goal_radius_m)
         goal = str(rospy.get_param("~goal", ""))
@@ -173,17 +180,11 @@ class PlannerNode:
                                            f"({self.intrinsics.width}x{self.intrinsics.height} fx "
                                            f"{self.intrinsics.fx:g}): restart the planner to change cameras")
             return
-        from snake_autonomy import _core
-        from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
-        from snake_autonomy.planning.rectilinear.nav_loop import NavLoop
         cfg = self._replace(self.cfg, intrinsics=intr)
         if self.perception == "depth":
-            from snake_autonomy.perception.depth_traversability import DepthTraversability
-            from snake_autonomy.planning.rectilinear.config import T_ground_camera
             radius = _core.RobotModel.from_yaml(self.robot_yaml).link_radius_m
             perceive = DepthTraversability(intr, T_ground_camera(cfg.mount, radius), cfg.depth)
         else:
-            from snake_autonomy.perception.block_classifier import BlockClassifier
             clf, margin = BlockClassifier.load(self.classifier), cfg.classifier.ground_margin
             perceive = lambda rgb: clf.traversable(rgb, margin)
         loop = NavLoop(cfg, self.head_width_m, perceive, self.goal, self.goal_radius_m,
@@ -285,7 +286,6 @@ class PlannerNode:
         self.pub_cmd.publish(c)
 
     def publish_replan(self, stamp, tick):
-        from snake_autonomy.planning.rectilinear.planner import to_world
         r = tick.replan
         self.pub_path.publish(self.path_msg(stamp, r.path_world))
         if r.route_world is not None:
@@ -325,8 +325,6 @@ class PlannerNode:
         return path
 
     def overlay(self, tick) -> np.ndarray:
-        from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
-        from snake_autonomy.runs.nav_batch import overlay
         ground = tick.ground
         rgb = self.rgb
         if rgb is None or rgb.shape[:2] != ground.shape:

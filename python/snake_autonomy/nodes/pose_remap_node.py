@@ -15,8 +15,8 @@ Params      ~camera_config (config/camera.yaml: the lost-tracking thresholds; an
             ~camera_frame (camera_link): the URDF's fixed joint, generated from camera.yaml, which stays
             the one file a person edits; poses wait until the transform is known | file: camera.yaml).
 """
-import numpy as np
 import diagnostic_updater
+import numpy as np
 import rospy
 import tf2_ros
 from diagnostic_msgs.msg import DiagnosticStatus
@@ -24,6 +24,7 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
 from std_srvs.srv import Trigger, TriggerResponse
 
+from snake_autonomy import _core
 from snake_autonomy.estimation import (PoseRemapper, TrackingGate, base_covariance, load_camera_calibration,
                                        load_gate_params)
 from snake_autonomy.paths import config_path
@@ -53,7 +54,6 @@ class PoseRemapNode:
         if not self.calib.calibrated:
             rospy.logwarn(f"{self.camera_config}: the camera-to-head calibration is marked uncalibrated "
                           f"(calibrated: false): base poses are only as good as its placeholder values")
-        from snake_autonomy import _core
         self.head_length = _core.RobotModel.from_yaml(robot_config).head_length_m
         self.remapper = None
         self.extrinsic_source = ""

@@ -46,11 +46,17 @@ from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import CameraInfo, Image
 
 from snake_autonomy.msg import GaitCommand, TrackingStatus, TrajectoryStatus
+from snake_autonomy.nodes.image_msgs import to_camera_info, to_image
 from snake_autonomy.paths import config_path
+from snake_autonomy.planning.rectilinear.config import NavConfig
+from snake_autonomy.sim.camera_process import CameraProcess
+from snake_autonomy.sim.collisions import CollisionMonitor
 from snake_autonomy.sim.realtime import RealTimeSim, SimSetup
-
+from snake_autonomy.sim.scene import world_plant_fields
+from snake_autonomy.sim.world_file import load_world
 
 
 def _pose(msg_pose, position, quat):
@@ -72,9 +78,6 @@ class SimNode:
         self.nav_cfg, self.camera = None, None
         extra = {}
         if self.world_file:
-            from snake_autonomy.planning.rectilinear.config import NavConfig
-            from snake_autonomy.sim.scene import world_plant_fields
-            from snake_autonomy.sim.world_file import load_world
             self.nav_cfg = NavConfig.from_yaml(rospy.get_param("~nav_config", str(config / "nav.yaml")))
             extra = world_plant_fields(load_world(self.world_file), self.nav_cfg.plant.flat_belly_fraction)
         setup = SimSetup(feedback=rospy.get_param("~feedback", "mocap"), seed=int(rospy.get_param("~seed", 0)),
@@ -124,7 +127,6 @@ class SimNode:
         # batch nav run counts them), in the diagnostics and the log
         self.contacts = None
         if self.world_file:
-            from snake_autonomy.sim.collisions import CollisionMonitor
             self.contacts = CollisionMonitor(self.sim.plant.model)
         self.sim.start()
         rospy.loginfo(f"simulated {self.sim.robot.name}: seed {setup.seed}, {self.feedback} feedback, servo bus on "
@@ -137,9 +139,6 @@ class SimNode:
 
     # -- the head camera (with a world) ---------------------------------------------------------------
     def start_camera(self):
-        from sensor_msgs.msg import CameraInfo, Image
-
-        from snake_autonomy.sim.camera_process import CameraProcess
         self.camera_rate_hz = float(rospy.get_param("~camera_rate_hz", 0.5))
         if not self.camera_rate_hz > 0:
             raise ValueError(f"~camera_rate_hz: must be > 0, got {self.camera_rate_hz}")
@@ -157,7 +156,6 @@ class SimNode:
                       f"{self.camera_rate_hz:g} Hz, world {self.world_file}")
 
     def camera_loop(self):
-        from snake_autonomy.nodes.image_msgs import to_camera_info, to_image
         period = 1.0 / self.camera_rate_hz
         next_t = time.monotonic()
         wall0 = time.monotonic()

@@ -14,6 +14,7 @@ The model is a file written by `snake_autonomy nav train-classifier --out FILE` 
 committed blob: the command renders its own training set.
 """
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Iterable, Optional, Tuple
 
 import cv2
@@ -77,7 +78,7 @@ class BlockClassifier:
               ground_fraction: float = GROUND_FRACTION) -> "BlockClassifier":
         """samples: (rgb, ground mask) pairs; the blocks of every cell of stride_px, labelled ground
         when at least ground_fraction of the block is."""
-        from sklearn.pipeline import make_pipeline
+        from sklearn.pipeline import make_pipeline  # lazy: scikit-learn is heavy and only this path needs it
         from sklearn.preprocessing import StandardScaler
         from sklearn.svm import SVC
         xs, ys = [], []
@@ -106,8 +107,7 @@ class BlockClassifier:
     def save(self, path) -> None:
         """Writes the model; creates the parent folder (`--out results/nav/block_svm.joblib` on a fresh
         checkout, where results/nav does not exist yet)."""
-        import joblib
-        from pathlib import Path
+        import joblib  # lazy: joblib is heavy and only this path needs it
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         joblib.dump({"format": MODEL_FORMAT, "block_px": self.block_px, "k": self.k,
                      "stride_px": self.stride_px, "ground_fraction": self.ground_fraction,
@@ -115,7 +115,7 @@ class BlockClassifier:
 
     @classmethod
     def load(cls, path) -> "BlockClassifier":
-        import joblib
+        import joblib  # lazy: joblib is heavy and only this path needs it
         d = joblib.load(path)
         if not isinstance(d, dict) or d.get("format") != MODEL_FORMAT:
             raise ValueError(f"{path}: not a block classifier model (format "

@@ -15,6 +15,8 @@ from typing import Any, Dict
 
 import numpy as np
 
+from snake_autonomy.runs.results import write_results
+
 RUN_TOPIC = "/snake_autonomy/run"   # std_msgs/String, JSON events: start (mission, waypoints), scout, end (outcome)
 INTERRUPTED = "interrupted"          # outcome of a run whose bag has no end event
 
@@ -35,7 +37,7 @@ def _is_ground_truth(topic: str) -> bool:
 @contextmanager
 def open_bag(path):
     """Yields (rosbag.Bag opened for reading, reindexed: bool)."""
-    import rosbag
+    import rosbag  # lazy: ROS only on this path; the module is imported without ROS too
     path = Path(path)
     try:
         bag = rosbag.Bag(str(path), "r")
@@ -127,7 +129,6 @@ def read_run(path, com_topic: str = "com_pose", status_topic: str = "tracking_st
 def report_from_bag(bag_path, out_dir, plots: bool = True):
     """Rebuilds the results folder of a run from its bag; returns write_results' paths. RunBagError
     (nothing written) when the bag holds no run's start event."""
-    from snake_autonomy.runs.results import write_results
     run = read_run(bag_path)
     if not run["started"]:
         raise RunBagError(f"no run in it: no start event on {RUN_TOPIC} among {run['messages']} message(s)"

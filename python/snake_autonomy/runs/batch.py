@@ -25,6 +25,7 @@ section merged over config/tracker.yaml). The start pose is the tracker's view: 
 of a straight body at (x, y), heading (direction of travel) in degrees. A roll-over (SimWorld's
 monitor) ends the run.
 """
+import json
 import math
 import time
 from dataclasses import dataclass, field
@@ -32,11 +33,16 @@ from pathlib import Path
 from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
+from tqdm import tqdm
 
 from snake_autonomy import _core
-
 from snake_autonomy.control.angles import wrap
+from snake_autonomy.evaluation import EvaluationOptions, evaluate, trajectory_from_arrays, write_outputs
 from snake_autonomy.missions.runner import MissionRunner
+from snake_autonomy.missions.scout import fbsr_scout_planner
+from snake_autonomy.runs.results import write_json_atomic, write_results
+from snake_autonomy.runs.scout_executor import DriverTrajectoryExecutor
+from snake_autonomy.sim.config import servo_torque_limit_nm
 from snake_autonomy.sim.feedback import make_feedback
 from snake_autonomy.sim.mujoco_servo_backend import MujocoServoBackend
 from snake_autonomy.sim.plant import Plant
@@ -81,10 +87,7 @@ class RunResult:
     def write(self, out_dir, plots: bool = True, evaluate_vio: bool = True) -> Dict[str, Any]:
         """The results folder (experiments.write_results) plus, after a VIO run, the evaluation of the
         simulated RTAB-Map against the plant's camera pose in out_dir/evaluation. Returns the metrics."""
-        import json
 
-        from snake_autonomy.runs.results import write_results
-        from snake_autonomy.runs.results import write_json_atomic
         out = Path(out_dir)
         p = self.tracker
         write_results(out, self.waypoints, self.trajectory, self.decisions, self.outcome, self.meta,
@@ -104,7 +107,6 @@ class RunResult:
 def evaluate_vio_samples(samples, out_dir, plots: bool = True) -> Dict[str, Any]:
     """The simulated RTAB-Map (camera odometry, losses as null poses) against the plant's camera
     pose, yaw-only alignment (snake_autonomy.evaluation); figures and stats.json into out_dir."""
-    from snake_autonomy.evaluation import EvaluationOptions, evaluate, trajectory_from_arrays, write_outputs
     t = np.array([s[0] for s in samples])
     est = trajectory_from_arrays(t, np.array([s[1] for s in samples]), np.array([s[2] for s in samples]),
                                  name="simulated RTAB-Map", lost=np.array([s[3] for s in samples]))
@@ -199,9 +201,6 @@ class BatchRun:
         self.feedback = make_feedback(spec.feedback, self.params, self.robot)
         self.scout_executor, scout_planner = None, None
         if self.mission.scouts:     # scout stops: the FBSR planner, trajectories through the driver
-            from snake_autonomy.missions.scout import fbsr_scout_planner
-            from snake_autonomy.sim.config import servo_torque_limit_nm
-            from snake_autonomy.runs.scout_executor import DriverTrajectoryExecutor
             scout_planner = fbsr_scout_planner(spec.robot, spec.scout_config, spec.driver_config,
                                                torque_limit_nm=servo_torque_limit_nm())
             self.scout_executor = DriverTrajectoryExecutor(self.driver.controller)
@@ -374,6 +373,5 @@ class BatchRun:
 def _progress_bar(enabled: bool, total_s: float, desc: str):
     if not enabled:
         return None
-    from tqdm import tqdm
     return tqdm(total=round(total_s), desc=desc, unit="sim s", leave=False, dynamic_ncols=True,
                 bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}, {rate_fmt}{postfix}]")

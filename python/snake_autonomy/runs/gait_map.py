@@ -22,11 +22,21 @@ the window's start (x: base_link's heading there, y: left) per second, and xi_w 
 unwrapped yaw change per second. Every point is a pure function of its fields (seed included): the
 same points give the same numbers on any engine.
 """
+import dataclasses
 import math
 from dataclasses import asdict, dataclass
 from typing import Dict, List, Optional, Sequence
 
 import numpy as np
+
+from snake_autonomy import _core
+from snake_autonomy.paths import config_path, robot_yaml
+from snake_autonomy.planning.rectilinear.gait import RectilinearGait
+from snake_autonomy.runs.gait_driver import PlantGaitDriver
+from snake_autonomy.safe_yaml import load_yaml_file
+from snake_autonomy.sim.config import SimConfig
+from snake_autonomy.sim.scales import ScaledPlant
+from snake_autonomy.sim.serpenoid import SIDEWINDING
 
 GAITS = ("rectilinear", "sidewinding")
 
@@ -65,8 +75,6 @@ def gait_map_points(robot: str, gait: str, amplitudes: Sequence[float], kappas: 
 
 def driver_gait_frequency_hz(name: str, gaits_yaml=None) -> float:
     """The frequency of a config/gaits.yaml entry with steering: curvature (ValueError naming it else)."""
-    from snake_autonomy.paths import config_path
-    from snake_autonomy.safe_yaml import load_yaml_file
     path = gaits_yaml or config_path("gaits.yaml")
     entry = ((load_yaml_file(path) or {}).get("gaits") or {}).get(name)
     if not isinstance(entry, dict) or entry.get("steering") != "curvature":
@@ -79,10 +87,8 @@ def driver_gait_frequency_hz(name: str, gaits_yaml=None) -> float:
 
 def _joint_pattern(point: GaitPoint, robot):
     if point.gait == "rectilinear":
-        from snake_autonomy.planning.rectilinear.gait import RectilinearGait
         g = RectilinearGait(point.amplitude, point.wavelength_m, point.frequency_hz)
         return (lambda t: g.joint_angles(robot, t, point.kappa_per_m)), point.frequency_hz
-    from snake_autonomy.sim.serpenoid import SIDEWINDING
     g = SIDEWINDING.__class__(**{**asdict(SIDEWINDING), "yaw_amplitude_rad": math.radians(point.amplitude),
                                  "delta_rad": math.radians(point.delta_deg)})
     return (lambda t: g.joint_angles(robot, t)), g.frequency_hz
@@ -91,12 +97,6 @@ def _joint_pattern(point: GaitPoint, robot):
 def simulate_point(point: GaitPoint) -> Dict:
     """The steady body velocity of one gait-map point (runs the plant; a module-level function so
     that process-based engines can import it)."""
-    import dataclasses
-    from snake_autonomy import _core
-    from snake_autonomy.paths import config_path
-    from snake_autonomy.paths import robot_yaml
-    from snake_autonomy.sim.config import SimConfig
-    from snake_autonomy.sim.scales import ScaledPlant
     robot = _core.RobotModel.from_yaml(str(robot_yaml(point.robot)))
     cfg = SimConfig.from_yaml(str(config_path("sim.yaml")))
     cfg = dataclasses.replace(cfg.with_flat_belly(point.flat_belly_fraction),
@@ -105,7 +105,6 @@ def simulate_point(point: GaitPoint) -> Dict:
     plant = ScaledPlant(robot, params, (0.0, 0.0, 0.0))
     dt = 0.01
     if point.driver_gait:
-        from snake_autonomy.runs.gait_driver import PlantGaitDriver
         drive = PlantGaitDriver(robot, plant)
         drive.command(point.driver_gait, kappa_per_m=point.kappa_per_m)
         f = point.frequency_hz
@@ -202,7 +201,7 @@ def fit_gait_map(rows: List[Dict], nominal_amplitude: Optional[float] = None) ->
 
 
 def plot_gait_map(rows: List[Dict], summary: Dict, path) -> None:
-    import matplotlib
+    import matplotlib  # lazy: matplotlib is heavy and only this path needs it
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     rect = rows[0]["gait"] == "rectilinear"

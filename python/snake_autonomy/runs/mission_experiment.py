@@ -19,12 +19,16 @@ import math
 import os
 import sys
 import time
+from multiprocessing import get_context
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence
 
 import numpy as np
+from tqdm import tqdm
 
-from snake_autonomy.runs.batch import RunSpec
+from snake_autonomy.runs.batch import BatchRun, RunSpec
+from snake_autonomy.runs.plots import _pyplot
+from snake_autonomy.runs.results import write_json_atomic
 
 EXPERIMENTS = {
     "single": "single_waypoint",
@@ -71,7 +75,6 @@ def runs_of(name: str, seeds: Sequence[int], feedback: str, starts: Optional[Seq
 
 def _run_one(args):
     spec, out_dir, plots = args
-    from snake_autonomy.runs.batch import BatchRun
     result = BatchRun(spec).run(progress=False)
     metrics = result.write(Path(out_dir) / spec.label, plots=plots)
     return spec.label, metrics
@@ -89,10 +92,8 @@ def run_experiment(name: str, seeds: Sequence[int], feedback: str, out, jobs: in
     t0 = time.perf_counter()
     bar = None
     if progress:
-        from tqdm import tqdm
         bar = tqdm(total=len(work), desc=f"{name} {feedback}", unit="run", dynamic_ncols=True, file=sys.stderr)
     if jobs > 1:
-        from multiprocessing import get_context
         with get_context("fork").Pool(jobs) as pool:
             for label, metrics in pool.imap_unordered(_run_one, work):
                 results.append((label, metrics))
@@ -190,7 +191,6 @@ def table_row(s: Dict[str, Any]) -> str:
 
 
 def write_summary(out_dir: Path, summary: Dict[str, Any], results, plots: bool = True) -> None:
-    from snake_autonomy.runs.results import write_json_atomic
     write_json_atomic(out_dir / "summary.json", {**summary, "runs_detail": [
         {"label": label, "outcome": m["outcome"], "success": run_success(m), "start": m.get("start"),
          "seed": m.get("seed"), "mission_time_s": m["mission_time_s"],
@@ -210,7 +210,6 @@ def write_summary(out_dir: Path, summary: Dict[str, Any], results, plots: bool =
 
 
 def summary_figure(out_dir: Path, summary, results) -> Path:
-    from snake_autonomy.runs.plots import _pyplot
     plt = _pyplot()
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 6), gridspec_kw={"width_ratios": [1.2, 1]})
     cmap = plt.get_cmap("tab10")

@@ -37,6 +37,7 @@ and each yaw joint gets its own curvature: through the driver as explicit per-jo
 command (GaitCommand bias, every command_period_s), with the reference as its yaw angles.
 """
 import collections
+import csv
 import dataclasses
 import json
 import math
@@ -46,16 +47,26 @@ from typing import Any, List, Optional
 
 import numpy as np
 
+from snake_autonomy import _core
+from snake_autonomy.paths import config_path, robot_yaml
+from snake_autonomy.perception.block_classifier import BlockClassifier, truth_traversable
+from snake_autonomy.perception.depth_traversability import DepthTraversability
+from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
+from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
+from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m, nav_config_path
+from snake_autonomy.planning.rectilinear.follow_the_leader import FollowTheLeader
+from snake_autonomy.planning.rectilinear.follower import BACK_OFF, MODES, RecedingHorizonFollower
+from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
+from snake_autonomy.planning.rectilinear.planner import NavPlanner, T_world_ground, ground_frame
+from snake_autonomy.planning.rectilinear.route import grid_shape
+from snake_autonomy.runs.gait_driver import PlantGaitDriver
 from snake_autonomy.runs.results import PathLength
-from snake_autonomy.paths import config_path
-from snake_autonomy.planning.rectilinear.follower import BACK_OFF, MODES
 from snake_autonomy.sim.camera import HeadCamera
 from snake_autonomy.sim.collisions import CollisionMonitor
 from snake_autonomy.sim.config import SimConfig
 from snake_autonomy.sim.scales import ScaledPlant
 from snake_autonomy.sim.scene import build_scene
 from snake_autonomy.sim.world_file import World
-
 
 
 @dataclass
@@ -100,7 +111,7 @@ class NavResult:
                 f.write(f"{e.t_s:.2f},{e.obstacle},{e.link},{e.x_m:.4f},{e.y_m:.4f},{mode}\n")
         self._write_replans(out / "replans.csv")
         if self.frames:
-            import cv2
+            import cv2  # lazy: OpenCV is heavy and only this path needs it
             (out / "frames").mkdir(exist_ok=True)
             for i, img in enumerate(self.frames):
                 cv2.imwrite(str(out / "frames" / f"replan_{i:03d}.png"), cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
@@ -110,7 +121,6 @@ class NavResult:
         """One row per replan: base_link's pose, the candidate arcs as curvature:free_m pairs (path
         curvature 1/m, free prefix m), the chosen arc's (empty when none was free) and the planner's
         reason (back off, turn in place, ...): why a run went where it did, without re-running it."""
-        import csv
         with open(path, "w", newline="") as f:
             w = csv.writer(f)
             w.writerow(["t_s", "x_m", "y_m", "heading_deg", "arcs", "chosen_curvature_per_m", "chosen_free_m",
@@ -123,7 +133,7 @@ class NavResult:
                             "" if arc is None else f"{arc.free_m:.2f}", r.reason])
 
     def _topview(self, path) -> None:
-        import matplotlib
+        import matplotlib  # lazy: matplotlib is heavy and only this path needs it
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
         from matplotlib.patches import Circle, Polygon
@@ -169,7 +179,7 @@ class NavResult:
 def overlay(rgb: np.ndarray, ground: np.ndarray, selection, checker) -> np.ndarray:
     """The camera image with the non-traversable part tinted red and the arcs drawn (chosen: green,
     free parts of the others: yellow, blocked parts: red)."""
-    import cv2
+    import cv2  # lazy: OpenCV is heavy and only this path needs it
     img = rgb.copy()
     img[~ground] = (0.5 * img[~ground] + [127, 0, 0]).astype(np.uint8)
     for i, a in enumerate(selection.arcs):
@@ -191,13 +201,6 @@ def overlay(rgb: np.ndarray, ground: np.ndarray, selection, checker) -> np.ndarr
 
 class NavRun:
     def __init__(self, spec: NavRunSpec):
-        from snake_autonomy import _core
-        from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
-        from snake_autonomy.paths import robot_yaml
-        from snake_autonomy.planning.rectilinear.config import NavConfig, head_width_m, nav_config_path
-        from snake_autonomy.planning.rectilinear.follower import RecedingHorizonFollower
-        from snake_autonomy.planning.rectilinear.planner import NavPlanner
-        from snake_autonomy.planning.rectilinear.route import grid_shape
         self.spec = spec
         if not (isinstance(spec.time_limit_s, (int, float)) and math.isfinite(spec.time_limit_s)
                 and spec.time_limit_s > 0):
@@ -225,24 +228,19 @@ class NavRun:
                                   self.cfg.map)
         self.rollover_deg = sim_cfg.monitor.rollover_tilt_deg
         if self.cfg.map.source == "truth":          # the diagnostic: the planner knows every obstacle
-            from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
             self.planner.obstacle_map = ObstacleMap.from_world(spec.world.obstacles)
         if spec.gait_source not in ("driver", "reference"):
             raise ValueError(f"gait_source: expected driver or reference, got {spec.gait_source!r}")
         self.drive = None
         if spec.gait_source == "driver":
-            from snake_autonomy.runs.gait_driver import PlantGaitDriver
             self.drive = PlantGaitDriver(self.robot, self.plant)
         self.flat_belly_fraction = belly
         if spec.perception == "depth":
-            from snake_autonomy.perception.depth_traversability import DepthTraversability
-            from snake_autonomy.planning.rectilinear.config import T_ground_camera
             self._depth = DepthTraversability(self.cfg.intrinsics,
                                               T_ground_camera(self.cfg.mount, self.robot.link_radius_m),
                                               self.cfg.depth, seed=spec.seed)
             self.perceive = lambda f: self._depth(f.depth_m)
         elif spec.perception == "mono":
-            from snake_autonomy.perception.block_classifier import BlockClassifier
             if not spec.classifier:
                 raise ValueError("perception mono needs a classifier model (snake_autonomy nav "
                                  "train-classifier --out FILE; then --classifier FILE)")
@@ -252,7 +250,6 @@ class NavRun:
         elif spec.perception == "truth":
             # a perfect classifier (round 8): the segmentation render through the classifier's
             # blocks and cells (nav.yaml classifier: block_px, stride_px): what mono could reach
-            from snake_autonomy.perception.block_classifier import truth_traversable
             c = self.cfg.classifier
             self.perceive = lambda f: truth_traversable(f.ground_truth_ground(), c.block_px, c.stride_px,
                                                         c.ground_fraction)
@@ -260,8 +257,6 @@ class NavRun:
             raise ValueError(f"perception: expected depth, mono or truth, got {spec.perception!r}")
 
     def run(self) -> NavResult:
-        from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
-        from snake_autonomy.planning.rectilinear.planner import T_world_ground, ground_frame
         spec, plant, gait, world = self.spec, self.plant, self.cfg.gait, self.spec.world
         dt = spec.control_period_s
         t, kappa = 0.0, 0.0
@@ -274,7 +269,6 @@ class NavRun:
         reverse = dataclasses.replace(gait, direction=-gait.direction)
         ftl, next_bias = None, 0.0
         if self.cfg.gaits.steering == "follow_the_leader":
-            from snake_autonomy.planning.rectilinear.follow_the_leader import FollowTheLeader
             ftl = FollowTheLeader.of_robot(self.robot)
         while t < spec.time_limit_s:
             T_wb = plant.frame_transform("base_link")

@@ -12,12 +12,15 @@ A random corridor (random_corridor(k), a pure function of k): 1-3 cylinders betw
 and the goal, pairwise gaps >= 2 x the body width, one on the straight line.
 """
 import math
+import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
 from snake_autonomy.planning.rectilinear.follower import MODES
+from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
 from snake_autonomy.sim.world_file import World
 
 
@@ -96,8 +99,6 @@ def experiment_tasks(worlds: Sequence[World], seeds: Sequence[int], perceptions:
 
 def run_nav_task(task: NavTask) -> Dict:
     """One closed-loop run; its metrics (module-level: process-based engines import it)."""
-    import time
-    from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
     world = World.from_dict(task.world, task.world.get("name", "world"))
     t0 = time.perf_counter()
     spec = NavRunSpec(world, robot=task.robot, perception=task.perception, seed=task.seed,
@@ -105,7 +106,6 @@ def run_nav_task(task: NavTask) -> Dict:
                       nav_config=task.nav_config, keep_frames=task.out_dir is not None)
     result = NavRun(spec).run()
     if task.out_dir:
-        from pathlib import Path
         result.write(Path(task.out_dir) / f"{world.name}_{task.perception}_s{task.seed}")
     return {**result.metrics, "world": world.name, "time_limit_s": task.time_limit_s,
             "wall_s": round(time.perf_counter() - t0, 1)}

@@ -1,7 +1,7 @@
 """The figures of a run (matplotlib, Agg backend: no display needed)."""
 import math
 from pathlib import Path
-from typing import Dict
+from typing import Dict, List, Mapping
 
 import numpy as np
 
@@ -9,20 +9,45 @@ DEG = 180.0 / math.pi
 
 
 def _pyplot():
-    import matplotlib
+    import matplotlib  # lazy: matplotlib is heavy and only drawing needs it
     matplotlib.use("Agg", force=True)
     import matplotlib.pyplot as plt
     return plt
 
 
+def segments(decisions: Mapping[str, np.ndarray]) -> List[Dict[str, float]]:
+    """Time spans during which each waypoint was the target: [{index, t_start, t_end}]."""
+    d = decisions
+    out: List[Dict[str, float]] = []
+    for t, k in zip(d["t"], d["target_index"]):
+        if out and out[-1]["index"] == k:
+            out[-1]["t_end"] = float(t)
+        else:
+            if out:
+                out[-1]["t_end"] = float(t)
+            out.append({"index": int(k), "t_start": float(t), "t_end": float(t)})
+    return out
+
+
 def _shade_segments(ax, dec, t0):
-    from snake_autonomy.runs.results import segments
     colours = ["#dbe9f6", "#fde5cc"]
     for n, seg in enumerate(segments(dec)):
         a, b = seg["t_start"] - t0, seg["t_end"] - t0
         ax.axvspan(a, b if b > a else a + 0.5, color=colours[n % 2], alpha=0.8, lw=0, zorder=0)
         ax.text((a + b) / 2, 1.0, f"WP{seg['index']}", transform=ax.get_xaxis_transform(), ha="center",
                 va="bottom", fontsize=7)
+
+
+def _save_over_time(plt, fig, ax, ylabel: str, title: str, path: Path) -> Path:
+    """Labels, grid and legend of a plot over time; saves it to PATH and closes it."""
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, pad=14)
+    ax.grid(True, lw=0.3)
+    ax.legend(loc="upper right", fontsize=8)
+    fig.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return path
 
 
 def plot_all(out: Path, waypoints, traj, dec, t0: float, d_th: float, psi_wp: float, psi_turn: float,
@@ -62,14 +87,8 @@ def plot_all(out: Path, waypoints, traj, dec, t0: float, d_th: float, psi_wp: fl
     _shade_segments(ax, dec, t0)
     ax.plot(t, dec["distance"], "-o", ms=2, color="tab:blue", label="distance error")
     ax.axhline(d_th, ls="--", color="grey", lw=0.8, label=f"d_th = {d_th:.2f} m")
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("distance to waypoint (m)")
-    ax.set_title("Distance error" + suffix, pad=14)
-    ax.grid(True, lw=0.3)
-    ax.legend(loc="upper right", fontsize=8)
-    paths["distance_png"] = out / "distance_error.png"
-    fig.savefig(paths["distance_png"], dpi=120, bbox_inches="tight")
-    plt.close(fig)
+    paths["distance_png"] = _save_over_time(plt, fig, ax, "distance to waypoint (m)", "Distance error" + suffix,
+                                            out / "distance_error.png")
 
     # yaw errors over time
     fig, ax = plt.subplots(figsize=(8, 3.5))
@@ -80,14 +99,8 @@ def plot_all(out: Path, waypoints, traj, dec, t0: float, d_th: float, psi_wp: fl
     for v, name in ((psi_wp, "psi_wp"), (psi_turn, "psi_turn")):
         ax.axhline(v * DEG, ls=":", color="grey", lw=0.8)
         ax.axhline(-v * DEG, ls=":", color="grey", lw=0.8)
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("yaw error (deg)")
-    ax.set_title("Yaw errors" + suffix, pad=14)
-    ax.grid(True, lw=0.3)
-    ax.legend(loc="upper right", fontsize=8)
-    paths["yaw_png"] = out / "yaw_errors.png"
-    fig.savefig(paths["yaw_png"], dpi=120, bbox_inches="tight")
-    plt.close(fig)
+    paths["yaw_png"] = _save_over_time(plt, fig, ax, "yaw error (deg)", "Yaw errors" + suffix,
+                                       out / "yaw_errors.png")
 
     # combined yaw error against distance (thesis figs. 4.16-4.20)
     fig, ax = plt.subplots(figsize=(6.5, 4.5))

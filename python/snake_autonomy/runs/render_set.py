@@ -12,6 +12,7 @@ import numpy as np
 
 from snake_autonomy.perception.camera_model import CameraFrame, CameraIntrinsics, CameraMount
 from snake_autonomy.sim.camera import HeadCamera
+from snake_autonomy.sim.plant import Plant
 from snake_autonomy.sim.scene import Appearance, build_scene, random_appearance
 from snake_autonomy.sim.world_file import World
 
@@ -39,7 +40,6 @@ def render_scenes(robot, params, n: int, seed: int, intrinsics: Optional[CameraI
                   plain: bool = False, depth: bool = True) -> Iterator[CameraFrame]:
     """n frames of random scenes (plain: the default appearance instead of a random one; depth:
     render the depth image too)."""
-    from snake_autonomy.sim.plant import Plant
     rng = np.random.default_rng(seed)
     mount = mount or CameraMount()
     for _ in range(n):

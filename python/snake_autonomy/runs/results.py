@@ -30,9 +30,11 @@ import math
 import os
 import tempfile
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, Optional, Sequence
+from typing import Any, Dict, Mapping, Optional, Sequence
 
 import numpy as np
+
+from snake_autonomy.runs import plots as plotting
 
 REQUIRED_DECISION_KEYS = ("t", "waypoint_index", "distance", "yaw_error_abs", "yaw_error_rel", "yaw_error")
 REQUIRED_TRAJECTORY_KEYS = ("t", "x", "y")
@@ -76,20 +78,6 @@ def normalise_decisions(decisions: Mapping[str, Any]) -> Dict[str, np.ndarray]:
     d["waypoint_index"] = idx
     d["target_index"] = d["target_index"].astype(int)
     return d
-
-
-def segments(decisions: Mapping[str, np.ndarray]) -> List[Dict[str, float]]:
-    """Time spans during which each waypoint was the target: [{index, t_start, t_end}]."""
-    d = decisions
-    out: List[Dict[str, float]] = []
-    for t, k in zip(d["t"], d["target_index"]):
-        if out and out[-1]["index"] == k:
-            out[-1]["t_end"] = float(t)
-        else:
-            if out:
-                out[-1]["t_end"] = float(t)
-            out.append({"index": int(k), "t_start": float(t), "t_end": float(t)})
-    return out
 
 
 #: Path length counts a move once the centre of mass is this far from the last counted point. The
@@ -246,7 +234,6 @@ def write_results(out_dir, waypoints, trajectory: Mapping[str, Any], decisions: 
     paths["trajectory_csv"] = out / "trajectory.csv"
     _write_csv(paths["trajectory_csv"], {k: (v - t0 if k == "t" and t0 is not None else v) for k, v in traj.items()})
     if plots:
-        from snake_autonomy.runs import plots as plotting
         paths.update(plotting.plot_all(out, waypoints, traj, dec, t0 or 0.0, d_th, psi_wp, psi_turn,
                                        title or (meta or {}).get("mission", "")))
     return paths

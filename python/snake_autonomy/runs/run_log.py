@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence
 
-from snake_autonomy.runs.bag_io import RUN_TOPIC
+from snake_autonomy.runs.bag_io import RUN_TOPIC, report_from_bag
 from snake_autonomy.runs.results import PathLength, compute_metrics, write_json_atomic
 
 BAG_NAME = "run.bag"
@@ -26,7 +26,7 @@ LIVE_NOTE = ("written while the run was live; if the process died this is where 
 
 
 def _to_time(t_s: float):
-    import genpy
+    import genpy  # lazy: ROS only on this path; the module is imported without ROS too
     return genpy.Time.from_sec(t_s)
 
 
@@ -34,7 +34,7 @@ class RunLog:
     def __init__(self, run_dir, mission_name: str, waypoints: Sequence[Sequence[float]], t_start_s: float,
                  mission_yaml: str = "", tracker: Optional[Dict[str, Any]] = None,
                  extra: Optional[Dict[str, Any]] = None):
-        import rosbag
+        import rosbag  # lazy: ROS only on this path; the module is imported without ROS too
         from std_msgs.msg import String
         self._String = String
         self.run_dir = Path(run_dir)
@@ -131,5 +131,4 @@ class RunLog:
             bag, self._bag = self._bag, None
             bag.close()
         self._write_metrics(outcome)          # never lost, whatever happens below
-        from snake_autonomy.runs.bag_io import report_from_bag
         return report_from_bag(self.bag_path, self.run_dir, plots=plots)

@@ -30,12 +30,17 @@ from typing import Callable, Optional
 import mujoco
 import numpy as np
 
-from snake_autonomy.sim.config import SimConfig
-from snake_autonomy.sim.plant import Plant
+from snake_autonomy import _core
+from snake_autonomy.paths import config_path
 from snake_autonomy.planning.fbsr.pipe_scene import pipe_mjcf
 from snake_autonomy.planning.fbsr.plan_io import stage_samples
 from snake_autonomy.planning.fbsr.planner import Plan
 from snake_autonomy.planning.fbsr.support import Support
+from snake_autonomy.planning.fbsr.trajectory import plan_points
+from snake_autonomy.runs.batch import LockStepDriver, load_driver_config
+from snake_autonomy.runs.scout_executor import DriverTrajectoryExecutor
+from snake_autonomy.sim.config import SimConfig
+from snake_autonomy.sim.plant import Plant
 
 DRIVER_PERIOD_S = 0.01
 SETTLE_S = 1.0
@@ -51,12 +56,7 @@ def send_through_driver(plant: Plant, plan: Plan, sample_period_s: float,
     """The plan executed by the driver's trajectory execution on `plant`; on_step(t) after each
     10 ms step until the driver reports the trajectory done. ValueError with the driver's reasons
     when it refuses or aborts the trajectory."""
-    from snake_autonomy import _core
-    from snake_autonomy.paths import config_path
 
-    from snake_autonomy.runs.batch import LockStepDriver, load_driver_config
-    from snake_autonomy.runs.scout_executor import DriverTrajectoryExecutor
-    from snake_autonomy.planning.fbsr.trajectory import plan_points
 
     robot = plant.robot
     driver = LockStepDriver(robot, _core.GaitLibrary.from_yaml(str(config_path("gaits.yaml"))), plant,

@@ -15,6 +15,8 @@ import concurrent.futures as cf
 import contextlib
 from typing import Callable, Iterable, List, Optional
 
+from tqdm import tqdm
+
 ENGINES = ("dask", "threads", "serial")
 
 
@@ -47,7 +49,7 @@ def open_executor(engine: str = "dask", scheduler: Optional[str] = None, n_worke
         with cf.ThreadPoolExecutor(max_workers=n_workers) as ex:
             yield ex
         return
-    from distributed import Client, LocalCluster
+    from distributed import Client, LocalCluster  # lazy: Dask is heavy and only this path needs it
     if scheduler:
         with Client(scheduler) as client:
             yield client.get_executor(pure=False)
@@ -66,7 +68,6 @@ def run_tasks(executor: cf.Executor, fn: Callable, tasks: Iterable, desc: str = 
     results: List = [None] * len(tasks)
     bar = None
     if progress:
-        from tqdm import tqdm
         bar = tqdm(total=len(tasks), desc=desc, unit="run", leave=True)
     try:
         for f in cf.as_completed(futures):

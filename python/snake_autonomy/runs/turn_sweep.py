@@ -15,7 +15,15 @@ from typing import Tuple
 import numpy as np
 from shapely.geometry import LineString, Point
 
-from snake_autonomy.planning.rectilinear.config import STEERING_LAWS as STEERING, NavConfig, nav_config_path
+from snake_autonomy import _core
+from snake_autonomy.paths import config_path, robot_yaml
+from snake_autonomy.planning.rectilinear.config import STEERING_LAWS as STEERING
+from snake_autonomy.planning.rectilinear.config import NavConfig, nav_config_path
+from snake_autonomy.planning.rectilinear.follow_the_leader import FollowTheLeader
+from snake_autonomy.planning.rectilinear.planner import ground_frame
+from snake_autonomy.runs.gait_driver import PlantGaitDriver
+from snake_autonomy.sim.config import SimConfig
+from snake_autonomy.sim.scales import ScaledPlant
 
 
 @dataclass
@@ -29,11 +37,6 @@ class TurnSweep:
 
 def _open_floor(robot_name: str, seed: int):
     """(robot model, its nav config, a plant on open floor with nav runs' flat belly) at the origin."""
-    from snake_autonomy import _core
-    from snake_autonomy.paths import config_path
-    from snake_autonomy.paths import robot_yaml
-    from snake_autonomy.sim.config import SimConfig
-    from snake_autonomy.sim.scales import ScaledPlant
     robot = _core.RobotModel.from_yaml(str(robot_yaml(robot_name)))
     nav = NavConfig.from_yaml(nav_config_path(robot_name))       # the robot's gaits and plant options
     sim = SimConfig.from_yaml(str(config_path("sim.yaml"))).with_flat_belly(nav.plant.flat_belly_fraction)
@@ -43,8 +46,6 @@ def _open_floor(robot_name: str, seed: int):
 def turn_sweep(steering: str, kappa_per_m: float = 1.5, turn_s: float = 90.0, robot_name: str = "cobra",
                seed: int = 0, gait_source: str = "driver", start_s: float = 30.0,
                kappa_slew_per_m_s: float = 1.0) -> TurnSweep:
-    from snake_autonomy.planning.rectilinear.follow_the_leader import FollowTheLeader
-    from snake_autonomy.planning.rectilinear.planner import ground_frame
     if steering not in STEERING:
         raise ValueError(f"steering: expected one of {', '.join(STEERING)}, got {steering!r}")
     if gait_source not in ("driver", "reference"):
@@ -53,7 +54,6 @@ def turn_sweep(steering: str, kappa_per_m: float = 1.5, turn_s: float = 90.0, ro
     ftl = FollowTheLeader.of_robot(robot) if steering == "follow_the_leader" else None
     drive = None
     if gait_source == "driver":
-        from snake_autonomy.runs.gait_driver import PlantGaitDriver
         drive = PlantGaitDriver(robot, plant)
     t, dt, t_end, ramp_s = 0.0, 0.01, start_s + turn_s + 60.0, 2.0
     kappa, head, bodies = 0.0, [], []
@@ -103,8 +103,6 @@ def reshape_step(kappa_per_m: float, robot_name: str = "cobra", seed: int = 0, s
     """Uniform curvature through the C++ driver on open floor: straight for settle_s, then kappa_per_m
     (slewed as nav runs); the frames' sideways moves from the step to 2.5 s after kappa is reached (the
     crawl in that time is along the body, mostly forward)."""
-    from snake_autonomy.planning.rectilinear.planner import ground_frame
-    from snake_autonomy.runs.gait_driver import PlantGaitDriver
     robot, nav, plant = _open_floor(robot_name, seed)
     drive = PlantGaitDriver(robot, plant)
     t, dt, kappa = 0.0, 0.01, 0.0

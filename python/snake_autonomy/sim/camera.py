@@ -15,9 +15,8 @@ from typing import Optional
 
 import numpy as np
 
-from ..perception.camera_model import (GROUND_GEOMS, LABEL_BACKGROUND, LABEL_GROUND, LABEL_OBSTACLE,
-                                      LABEL_ROBOT, OBSTACLE_PREFIX, CameraFrame, CameraIntrinsics,
-                                      CameraMount)
+from ..perception.camera_model import (GROUND_GEOMS, LABEL_BACKGROUND, LABEL_GROUND, LABEL_OBSTACLE, LABEL_ROBOT,
+                                       OBSTACLE_PREFIX, CameraFrame, CameraIntrinsics, CameraMount)
 
 NEAR_CLIP_M = 0.01                  # the head camera's near clip (rendering)
 
@@ -27,7 +26,7 @@ class HeadCamera:
 
     def __init__(self, model, intrinsics: Optional[CameraIntrinsics] = None,
                  mount: Optional[CameraMount] = None, max_depth_m: float = 10.0):
-        import mujoco
+        import mujoco  # lazy: MuJoCo is heavy and only this path needs it
         self._mujoco = mujoco
         self.model = model
         self.intrinsics = intrinsics or CameraIntrinsics.d435i_like()

@@ -19,6 +19,7 @@ from typing import Optional
 import numpy as np
 
 from ..perception.camera_model import CameraIntrinsics, CameraMount
+from .camera import HeadCamera
 
 
 @dataclass
@@ -31,9 +32,8 @@ class RenderedFrame:
 
 
 def _child(conn, mjcf: str, intrinsics: CameraIntrinsics, mount: CameraMount, colour: bool, depth: bool):
-    import mujoco
+    import mujoco  # lazy: MuJoCo is heavy and only this path needs it
 
-    from .camera import HeadCamera
     model = mujoco.MjModel.from_xml_string(mjcf)
     data = mujoco.MjData(model)
     cam = HeadCamera(model, intrinsics, mount)

@@ -18,6 +18,7 @@ from typing import List, Optional
 
 import numpy as np
 
+from ..missions.mission import MissionError, load_defaults
 from ..paths import config_path
 from ..safe_yaml import load_yaml_file
 
@@ -362,7 +363,6 @@ def _parse_tracker(raw, errors):
     """The tracker: section: overrides of config/tracker.yaml, checked by the mission loader."""
     if raw is None:
         return {}
-    from ..missions.mission import MissionError, load_defaults
     try:
         load_defaults(overrides=raw, overrides_source="tracker")
     except MissionError as exc:

@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict
 
+from snake_autonomy.paths import config_path
+
 from ...safe_yaml import load_yaml_file
 
 
@@ -125,6 +127,4 @@ def _parse(cls, raw, prefix, errors):
 
 
 def default_path() -> Path:
-    from snake_autonomy.paths import config_path
-
     return config_path("scout.yaml")

@@ -13,7 +13,7 @@ def _closed(coords):
 
 
 def write_figures(plan: Plan, out_dir, period_s: float = 0.05, pipe=None) -> list:
-    import matplotlib
+    import matplotlib  # lazy: matplotlib is heavy and only this path needs it
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -75,6 +75,6 @@ def write_figures(plan: Plan, out_dir, period_s: float = 0.05, pipe=None) -> lis
 def _save(fig, path: str) -> str:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: matplotlib is heavy and only this path needs it
     plt.close(fig)
     return path

@@ -17,6 +17,9 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 
+from snake_autonomy.paths import config_path
+from snake_autonomy.safe_yaml import load_yaml_file
+
 from . import spline
 from .planner import Plan
 from .stage import sample_times
@@ -127,8 +130,6 @@ def velocity_problems(traj: JointTrajectoryPoints, max_velocity_rad_s: float,
 
 def driver_velocity_limit(path=None) -> float:
     """config/driver.yaml max_joint_velocity_rad_s (the driver's slew limit)."""
-    from snake_autonomy.paths import config_path
-    from snake_autonomy.safe_yaml import load_yaml_file
 
     path = path or config_path("driver.yaml")
     raw = load_yaml_file(path) or {}

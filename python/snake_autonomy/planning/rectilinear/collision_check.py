@@ -102,7 +102,7 @@ class PerceptionCollisionChecker:
         self.blocked_wins_depth_m = float(blocked_wins_depth_m)
         self.view_obstacle_range_m = float(view_obstacle_range_m)
         self.hidden_obstacles = hidden_obstacles
-        import cv2
+        import cv2  # lazy: OpenCV is heavy and only this path needs it
         self.k = intrinsics
         self.K = intrinsics.K()
         self.dist = np.zeros(5)
