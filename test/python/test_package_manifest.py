@@ -34,6 +34,7 @@ THIRD_PARTY = {
     "rosgraph": ("rosdep", "rosgraph"), "rosnode": ("rosdep", "rosnode"),
     "threadpoolctl": ("pypi", "threadpoolctl"),
     "distributed": ("pypi", "distributed"),
+    "importlinter": ("pypi", "import-linter"),
 }
 # Pinned before their first import, for work under way (none now: shapely is imported by planning/fbsr).
 PLANNED = set()
