@@ -54,8 +54,8 @@ from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m
 from snake_autonomy.planning.rectilinear.nav_loop import NavLoop
+from snake_autonomy.planning.rectilinear.overlay import overlay
 from snake_autonomy.planning.rectilinear.planner import to_world
-from snake_autonomy.runs.nav_batch import overlay
 from snake_autonomy.sim.world_file import load_world
 from snake_autonomy.transforms import pose_to_matrix
 

@@ -57,6 +57,7 @@ from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camer
 from snake_autonomy.planning.rectilinear.follow_the_leader import FollowTheLeader
 from snake_autonomy.planning.rectilinear.follower import BACK_OFF, MODES, RecedingHorizonFollower
 from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
+from snake_autonomy.planning.rectilinear.overlay import overlay
 from snake_autonomy.planning.rectilinear.planner import NavPlanner, T_world_ground, ground_frame
 from snake_autonomy.planning.rectilinear.route import grid_shape
 from snake_autonomy.runs.gait_driver import PlantGaitDriver
@@ -174,29 +175,6 @@ class NavResult:
         ax.set_ylabel("y (m)")
         fig.savefig(path, dpi=110)
         plt.close(fig)
-
-
-def overlay(rgb: np.ndarray, ground: np.ndarray, selection, checker) -> np.ndarray:
-    """The camera image with the non-traversable part tinted red and the arcs drawn (chosen: green,
-    free parts of the others: yellow, blocked parts: red)."""
-    import cv2  # lazy: OpenCV is heavy and only this path needs it
-    img = rgb.copy()
-    img[~ground] = (0.5 * img[~ground] + [127, 0, 0]).astype(np.uint8)
-    for i, a in enumerate(selection.arcs):
-        pts = a.poses[:, :2]
-        flat = np.column_stack([pts, np.zeros(len(pts))])
-        z = flat @ checker._R[2] + checker._t[2]
-        uv, _ = cv2.projectPoints(flat, checker.rvec, checker.tvec, checker.K, checker.dist)
-        uv = uv.reshape(-1, 2)
-        for j in range(len(uv) - 1):
-            if z[j] <= 0.01 or z[j + 1] <= 0.01:
-                continue
-            free = a.s_m[j + 1] <= a.free_m + 1e-9
-            colour = (0, 255, 0) if i == selection.chosen and free else ((255, 255, 0) if free else (255, 0, 0))
-            p0 = tuple(int(v) for v in np.clip(uv[j], -1e4, 1e4))
-            p1 = tuple(int(v) for v in np.clip(uv[j + 1], -1e4, 1e4))
-            cv2.line(img, p0, p1, colour, 2)
-    return img
 
 
 class NavRun:
