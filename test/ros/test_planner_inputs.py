@@ -10,6 +10,7 @@ a stale frame, and move again (rectilinear, curve=true) once good data returns.
 """
 import math
 import threading
+import time
 import unittest
 
 import numpy as np
@@ -93,6 +94,14 @@ class PlannerInputsTest(unittest.TestCase):
             with self.lock:
                 raise AssertionError(f"{exc}; planner diagnostics: {self.planner}") from None
 
+    def refused_after(self, frame, key, count):
+        """Publishes frame every 0.3 s until the planner's diagnostics count key >= count."""
+        def sent_and_counted():
+            self.pub_depth.publish(frame)
+            time.sleep(0.3)
+            return int(self.diag(key)) >= count
+        self.until(sent_and_counted, 15.0, f"{key} >= {count}")
+
     def diag(self, key, default="0"):
         with self.lock:
             return self.planner.get(key, default)
@@ -134,17 +143,17 @@ class PlannerInputsTest(unittest.TestCase):
         # a NaN pose: refused, counted
         type(self).nan_poses = 3
         self.until(lambda: int(self.diag("refused_pose")) >= 3, 10.0, "3 refused poses")
-        # frames the planner cannot use: another size than camera_info, an unknown encoding, too few bytes
+        # frames the planner cannot use: another size than camera_info, an unknown encoding, too few bytes.
+        # Each is sent until its refusal is counted: the depth subscriber keeps only the newest frame, so
+        # one of the stream's good frames may replace it before the planner reads it
         now = rospy.Time.now()
-        self.pub_depth.publish(to_image(np.ones((100, 100), np.float32), "32FC1", now, "cam"))
+        self.refused_after(to_image(np.ones((100, 100), np.float32), "32FC1", now, "cam"), "refused_frame", 1)
         bad = to_image(self.depth, "32FC1", now, "cam")
         bad.encoding = "64FC3"
-        self.pub_depth.publish(bad)
+        self.refused_after(bad, "refused_depth", 1)
         short = to_image(self.depth, "32FC1", now, "cam")
         short.data = short.data[:1000]
-        self.pub_depth.publish(short)
-        self.until(lambda: int(self.diag("refused_frame")) >= 1
-                                 and int(self.diag("refused_depth")) >= 2, 10.0, "refused frames")
+        self.refused_after(short, "refused_depth", 2)
         t1 = rospy.get_time()
         self.until(lambda: self.moving(t1), 10.0, "moving after the bad frames")
         # the camera falls silent: hold within frame_timeout_s (+ a tick), stale on /diagnostics
