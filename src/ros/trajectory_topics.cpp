@@ -47,7 +47,7 @@ TrajectoryTopics::TrajectoryTopics(ros::NodeHandle& nh, core::DriverController& 
 }
 
 void TrajectoryTopics::count_lost(const std::string& publisher, std::uint32_t seq) {
-  if (seq == 0) return;  // not numbered (roscpp leaves header.seq as the sender set it)
+  if (seq == 0) return;  // not numbered by its sender: not tracked
   std::uint32_t gap = 0;
   {
     std::lock_guard<std::mutex> lock(seq_mutex_);

@@ -13,7 +13,7 @@
 // between samples, never a "running" after it.
 // Nothing is dropped silently: the subscriber queue holds kQueueSize messages; beyond that roscpp
 // discards the oldest, which the driver counts from gaps in each publisher's header.seq (rospy numbers
-// its messages; a roscpp sender must fill header.seq for its losses to be seen) and reports in the
+// its messages; a sender that leaves header.seq at 0 is not tracked) and reports in the
 // diagnostics (lost_before_driver) with a warning; final statuses lost to a full queue are counted
 // too (final_statuses_dropped).
 //
