@@ -43,7 +43,7 @@ Cpg::Cpg(const RobotModel& model, double mu, double gamma)
   lower_ = Eigen::Map<const Eigen::VectorXd>(model.joint_lower_rad.data(), n_);
   upper_ = Eigen::Map<const Eigen::VectorXd>(model.joint_upper_rad.data(), n_);
 
-  // A: negative graph Laplacian of the joint chain (ERRATA #1).
+  // A: negative graph Laplacian of the joint chain.
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n_, n_);
   for (int i = 0; i + 1 < n_; ++i) {
     A(i, i) -= 1.0;

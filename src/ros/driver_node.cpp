@@ -244,7 +244,7 @@ class DriverNode {
     set_tf(transforms_[1], s.com, s.com_orientation);
     if (config_.publish_tf) tf_.sendTransform(transforms_);
 
-    // The centre of mass feeds the tracker: published only from a fresh base pose (ERRATA #7).
+    // The centre of mass feeds the tracker: published only from a fresh base pose.
     if (!s.pose_fresh) return;
     com_pose_.header.stamp = stamp;
     com_pose_.pose.position.x = s.com.x();

@@ -1,4 +1,4 @@
-// Loader bounds (issue 10, point 6): sizes refused before anything is allocated, physical ranges,
+// Loader bounds: sizes refused before anything is allocated, physical ranges,
 // files that are not configuration text, and error messages that stay short whatever the node.
 #include <gtest/gtest.h>
 

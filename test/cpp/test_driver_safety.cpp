@@ -1,4 +1,4 @@
-// The driver's safety rules (issue 10) on FakeServoBus: absurd but finite inputs are refused before
+// The driver's safety rules on FakeServoBus: absurd but finite inputs are refused before
 // they reach the loop, nothing in the loop throws, a non-finite CPG state faults with a reason, a
 // running gait without commands stops and holds, base poses are range-checked.
 #include <gtest/gtest.h>
@@ -45,7 +45,7 @@ std::int64_t goal_span(Rig& rig, int id, int cycles) {
 
 }  // namespace
 
-// Issue 10 point 1: phases of ±1e308 were accepted and made the oscillators NaN while the driver
+// Phases of ±1e308 were accepted and made the oscillators NaN while the driver
 // said "running"; then a hold and a new command aborted the driver (Cpg::reset threw in noexcept).
 TEST(DriverSafety, AbsurdPhasesAreRefusedAndTheCpgStaysFinite) {
   Rig rig;

@@ -1,4 +1,4 @@
-// Late replies (issue 10 follow-up). Protocol 2.0 status packets carry nothing that ties them to
+// Late replies. Protocol 2.0 status packets carry nothing that ties them to
 // their request (ID, error, params only): a reply that arrives after its deadline used to be taken
 // as the answer to the next request of the same length (at start-up, the operating mode 3 read as
 // Hardware Error Status: "hardware error (input_voltage, bit 1)"). Protocol2Bus now drains the line

@@ -1,5 +1,5 @@
 // Protocol 2.0 codec: CRC, stuffing both ways, encoding, parsing of every fault, the manual's
-// 21 packets (skipped when ../shared is absent), byte packing and unit conversions.
+// 21 packets (skipped when the shared data directory is absent), byte packing and unit conversions.
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
@@ -277,7 +277,8 @@ TEST(CheckStatus, WrongIdInstructionErrorsAlert) {
 
 // ---------------------------------------------------------------------------------------------
 TEST(ManualVectors, All21Packets) {
-  // ../shared beside the clone, or ../../shared from a worktree in <clone's parent>/wt/NAME;
+  // The shared data directory: "shared" beside the clone, or beside its parent for a worktree in
+  // <clone's parent>/wt/NAME;
   // SNAKE_AUTONOMY_SHARED overrides both (as test/python/conftest.py does).
   const std::filesystem::path root = std::filesystem::canonical(SNAKE_SOURCE_DIR);
   std::vector<std::filesystem::path> candidates = {root.parent_path() / "shared", root.parent_path().parent_path() / "shared"};
@@ -290,7 +291,7 @@ TEST(ManualVectors, All21Packets) {
     }
   }
   const std::filesystem::path path = shared / "data/dynamixel/protocol2_emanual_vectors.json";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is absent: the manual's vectors live in ../shared";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is absent: the manual's vectors live in the shared data directory (SNAKE_AUTONOMY_SHARED)";
   const YAML::Node json = YAML::LoadFile(path.string());  // JSON is YAML
   const YAML::Node vectors = json["vectors"];
   ASSERT_EQ(vectors.size(), 21u);

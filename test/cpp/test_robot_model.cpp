@@ -15,7 +15,7 @@ TEST(RobotModel, LoadsCobraAsTheThesisDescribesIt) {
   EXPECT_DOUBLE_EQ(m.link_length_m, 0.1230);
   double total = 0;
   for (double mass : m.masses_kg) total += mass;
-  EXPECT_NEAR(total, 6.0, 1e-12);  // ERRATA #5
+  EXPECT_NEAR(total, 6.0, 1e-12);  // eq. 3.16's masses, not the 7 kg of section 3.1
   EXPECT_EQ(m.yaw_joints(), (std::vector<int>{1, 3, 5, 7, 9}));
   EXPECT_EQ(m.pitch_joints(), (std::vector<int>{0, 2, 4, 6, 8, 10}));
   EXPECT_EQ(m.frame_names().front(), "base_link");

@@ -79,7 +79,7 @@ class DriverGait(DriverTestCase):
         self.assertLessEqual(h.goal_span(2, 1.0), 0)
 
     def test_5_killed_commander_holds_within_the_command_timeout(self):
-        """Issue 10 point 2: SIGKILL the node that commands the gait; the driver stops and holds
+        """SIGKILL the node that commands the gait; the driver stops and holds
         within command_timeout_s (+ one command period + a diagnostics period), says why, and the
         mock's goals stop changing; the next command resumes."""
         h = self.h

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""rostest: driver_node with ~realtime_priority 50 (issue 39, 6). Where the process is permitted
+"""rostest: driver_node with ~realtime_priority 50. Where the process is permitted
 (root, CAP_SYS_NICE + CAP_IPC_LOCK, or rtprio/memlock limits high enough) its loop thread runs
 SCHED_FIFO at priority 50 and its memory is locked: checked from outside in /proc (a thread with
 policy SCHED_FIFO and rt_priority 50, VmLck > 0), and the "loop" diagnostics report that mode. Where

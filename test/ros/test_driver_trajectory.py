@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
-"""rostest: driver_node on the mocked servo bus executes driver/joint_trajectory (issue 11): a valid
+"""rostest: driver_node on the mocked servo bus executes driver/joint_trajectory: a valid
 trajectory reaches its final posture in joint_states and driver/trajectory_status says done (the
 driver then holds it: HoldReason trajectory done); a refused one leaves the posture where it was,
 and every reason is on the status topic and in /diagnostics; a planned FBSR raise sent by the mission's
 TopicTrajectoryExecutor is followed to its end through the status topic; 20 trajectories sent back to
-back each get exactly one final status (issue 39); one longer than max_trajectory_duration_s is refused.
+back each get exactly one final status; one longer than max_trajectory_duration_s is refused.
 
 Tolerance on the final posture: 2 servo ticks (2 x 0.088 deg = 0.0031 rad). The goal is rounded
 to a whole tick (<= 0.5 tick), the mock's shafts converge on their goals exponentially (a first-order
@@ -126,7 +126,7 @@ class DriverTrajectory(DriverTestCase):
         self.assertIn("points[0].time_from_start: -1 s, must be > 0", executor.aborted)
 
     def test_4_back_to_back_trajectories_each_end_exactly_once(self):
-        """20 trajectories sent back to back: every one gets exactly one final status (issue 39, 2):
+        """20 trajectories sent back to back: every one gets exactly one final status:
         the last is done, each earlier one is superseded and names a later one that replaced it; none is
         lost on the way (the driver's queue, its diagnostics say 0 lost)."""
         h = self.h
@@ -166,7 +166,7 @@ class DriverTrajectory(DriverTestCase):
                     and h.value(TRAJ, "final_statuses_dropped") == "0", 5.0, "nothing lost, in the diagnostics")
 
     def test_5_a_trajectory_longer_than_the_maximum_duration_is_refused(self):
-        """A point at 2^31 s used to be accepted and "run 68 years": refused, with the rule (issue 39, 2)."""
+        """A point at 2^31 s used to be accepted and "run 68 years": refused, with the rule."""
         msg = trajectory("forever", self.positions(), 2.0)
         msg.points[-1].time_from_start = rospy.Duration(2 ** 31 - 1)  # the largest a Duration carries
         self.pub.publish(msg)

@@ -2,7 +2,7 @@
 """rostest: launch/sim.launch with a long mission; once the simulated robot sidewinds, the mission
 node is killed with SIGKILL (no shutdown hook, no final hold). The driver must stop on its own: its
 command lifetime (command_timeout_s) expires, /diagnostics says why, the mocked bus's goals stop
-changing and the robot stops (issue 10 point 2: before, it kept sidewinding, 2.59 m in 10 s)."""
+changing and the robot stops (before, it kept sidewinding, 2.59 m in 10 s)."""
 import math
 import os
 import signal

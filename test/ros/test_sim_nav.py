@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""rostest: navigation through ROS (issue 13). sim.launch world:=test/ros/worlds/sim_nav.yaml.
+"""rostest: navigation through ROS. sim.launch world:=test/ros/worlds/sim_nav.yaml.
 
 Checks: the head camera's frames arrive (colour, depth, camera_info); planner_node publishes a
 non-empty nav/path, candidate arcs (nav/arcs) and the traversability overlay, and gait commands

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""rostest: a mission's scout stop through ROS (issue 14 on the driver's trajectory execution, issue 11).
+"""rostest: a mission's scout stop through ROS (on the driver's trajectory execution).
 
 Checks: the mission ends "done"; its metrics list one scout stop, done, with every phase in order and
 the hold lasting hold_s; while raised, the head (TF world frame -> base_link, the front end of the

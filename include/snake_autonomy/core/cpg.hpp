@@ -1,6 +1,8 @@
 // Central pattern generator: one Hopf-style oscillator per joint, phases coupled along the chain.
 //
-// Thesis eq. 3.21-3.25 with ERRATA #1 and #2:
+// Thesis eq. 3.21-3.25, with A as the negative graph Laplacian of the chain (the printed matrix is
+// garbled) and the amplitude dynamics critically damped as the text intends (as printed, eq. 3.23
+// has damping ratio 0.5 and overshoots about 16 %):
 //   dθ/dt = μ A θ − μ B Δφ + ω          A = −(graph Laplacian of the chain), B[i][i] = 1, B[i+1][i] = −1
 //   d²r/dt² = γ² (a_des − r) − 2 γ dr/dt  critically damped: a step in a_des never overshoots
 //   q = clamp(r ⊙ sin θ + b, joint limits)

@@ -46,7 +46,7 @@ struct DriverConfig {
   // Position readings further than this outside the servo's position limits are implausible
   // (garbage with a valid CRC): treated as a missed reply.
   int plausible_margin_ticks = 1024;
-  // Base pose (ERRATA #7)
+  // Base pose: driving on a made-up pose is unsafe, so a stale or lost pose holds the posture
   double pose_timeout_s = 0.5;        // no pose for this long: stale, locomotion held until fresh poses return
   bool require_pose = true;           // false: gaits run without a base pose (robot on a stand, bench)
   double pose_workspace_m = 1000.0;   // base poses with |x|, |y| or |z| beyond this are refused

@@ -23,7 +23,7 @@ struct SteeringConfig {
 
 struct CpgConfig {
   double mu = 10.0;                  // 1/s, phase coupling strength (eq. 3.21)
-  double gamma = 2.0;                // rad/s, amplitude dynamics (eq. 3.23, ERRATA #2)
+  double gamma = 2.0;                // rad/s, amplitude dynamics (eq. 3.23 as critically damped)
   double amplitude_limit_rad = 0.0;  // |a_des| clamp
 };
 

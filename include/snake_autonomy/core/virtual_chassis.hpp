@@ -14,7 +14,7 @@ namespace snake_autonomy::core {
 // plane; z is the world vertical. Returns false (R untouched) when the mean axis is vertical.
 bool virtual_chassis_mean_axis(const std::vector<Eigen::Matrix3d>& rotations, Eigen::Matrix3d& R) noexcept;
 
-// SVD construction (ERRATA #6; Rollinson & Choset's virtual chassis): principal axis of the frame
+// SVD construction (Rollinson & Choset's virtual chassis; the thesis's "SVD-based" option): principal axis of the frame
 // positions about their centroid (eigenvector of the largest eigenvalue of their scatter matrix,
 // i.e. the first left singular vector of the centred positions), projected on the horizontal plane
 // and signed to point from the tail towards the head. Returns false (R untouched) when degenerate.

@@ -10,7 +10,7 @@
 //   update()    loop, while active:
 //               - command lifetime: the last command older than command_timeout_s -> kHold
 //                 (HoldReason::kCommandTimeout) until the next command;
-//               - stale-pose gating (ERRATA #7): with require_pose and no fresh base pose the CPG
+//               - stale-pose gating: with require_pose and no fresh base pose the CPG
 //                 amplitudes go to zero (the waves decay, critically damped; posture held) and the
 //                 commanded gait resumes with fresh poses;
 //               - one CPG step; the CPG state is checked: not finite -> kFault with the reason

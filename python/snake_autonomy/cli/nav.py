@@ -1,4 +1,4 @@
-"""`snake_autonomy nav ...`: the navigation system of issue 13 (Chang et al.).
+"""`snake_autonomy nav ...`: navigation among obstacles (Chang et al.).
 
     snake_autonomy nav check-world FILE...          validate world files (every problem listed)
     snake_autonomy nav train-classifier --out FILE  render a labelled training set, train the

@@ -1,4 +1,4 @@
-"""`snake_autonomy scout`: the FBSR head-raising planner (issue 14).
+"""`snake_autonomy scout`: the FBSR head-raising planner.
 
     snake_autonomy scout plan --robot ROBOT [--height-m H] [--max-active N] [--pipe X,Y,R] [--seed S] --out DIR
     snake_autonomy scout run  --robot ROBOT [same options] --out DIR

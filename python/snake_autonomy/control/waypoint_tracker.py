@@ -230,7 +230,7 @@ class WaypointTracker:
                 self._delta = p.delta0 + clamp(p.kp * e, -p.delta_lim, p.delta_lim)  # line 19
                 self._gait = SIDEWIND                                    # lines 20-21
                 return "sidewind with steering correction"
-            # ERRATA #11: lines 22 and 25 run only when |psi_e| > psi_turn, where line 19 did not run
+            # lines 22 and 25 run only when |psi_e| > psi_turn, where line 19 did not run
             # in this step, so self._delta here is the delta of the PREVIOUS control step. That is
             # implemented literally: a previous delta > +20 deg turns left even when psi_e < -psi_turn.
             if e > p.psi_turn or self._delta > p.delta_turn:             # line 22

@@ -4,8 +4,8 @@ The mission node wires it to topics; the simulator can drive it directly. Safety
 
 - locomotion runs only while the mission is running and the pose is fresh: a pose older than
   ``pose_timeout_s``, a pose source reporting lost tracking, or a non-finite pose all hold the
-  robot (the tracker is not stepped, ERRATA #7) and say so; tracking resumes when fresh poses have
-  refilled the yaw filter;
+  robot (the tracker is not stepped: driving on a made-up pose is unsafe) and say so; tracking
+  resumes when fresh poses have refilled the yaw filter;
 - the mission ends (hold) when the last waypoint is reached, on abort and on its time limit;
 - a waypoint with a scout stop (missions/scout.py): once reached, locomotion holds while the stop
   plans (a worker thread), raises, holds and lowers; `Decision.trajectory_active` then tells the

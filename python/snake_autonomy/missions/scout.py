@@ -1,4 +1,4 @@
-"""The mission action `scout` (issue 14), ROS-free: at a waypoint, raise the head, hold, lower, resume.
+"""The mission action `scout`, ROS-free: at a waypoint, raise the head, hold, lower, resume.
 
 In a mission file a waypoint may be a mapping with a scout stop::
 

@@ -1,4 +1,4 @@
-"""planner_node: navigation among obstacles with the rectilinear gait (issue 13, Chang et al.).
+"""planner_node: navigation among obstacles with the rectilinear gait (Chang et al.).
 Wiring only: the logic is planning.rectilinear.nav_loop.NavLoop (perception -> perception-space
 arcs -> receding-horizon follower), the same classes the batch run (runs/nav_batch.py) uses.
 

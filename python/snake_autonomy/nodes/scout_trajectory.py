@@ -3,7 +3,7 @@
 `to_msg` turns planning/fbsr/trajectory.py's points into a trajectory_msgs/JointTrajectory (joint_1 ..
 joint_N, radians, time_from_start; header.stamp zero: start on receipt). `TopicTrajectoryExecutor`
 is missions/scout.py's TrajectoryExecutor for the mission node: it publishes on
-`driver/joint_trajectory` (the driver's TrajectorySource, issue 11) with a header.frame_id of its own
+`driver/joint_trajectory` (the driver's TrajectorySource) with a header.frame_id of its own
 (the driver's id for it) and counts it finished when `driver/trajectory_status` says so for that id:
 done (the last point held), aborted or refused (`aborted` keeps why). Pure wiring: no node, no master
 needed to build a message.

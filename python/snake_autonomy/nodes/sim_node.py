@@ -24,7 +24,7 @@ Subscribes  sim/disturbance (geometry_msgs/WrenchStamped: header.frame_id = the 
 Params      ~feedback (mocap|vio), ~seed, ~start ("x,y,heading_deg" of the centre of mass), ~port,
             ~sim_config, ~robot_config, ~tracker_config, ~mission (for its disturbances), ~world_frame
             (odom), ~camera_frame (camera), ~rate_hz (physics and sensor poll, 200), ~disturbance_duration_s.
-With a world (issue 13: ~world, a nav world file; empty: none, everything above unchanged): the
+With a world (~world, a nav world file; empty: none, everything above unchanged): the
 world's obstacles and floor in the plant, base_link at its start (~start ignored), the plant option
 of ~nav_config (config/nav.yaml plant:), and the head camera (nav.yaml camera: intrinsics and
 mount) rendered in a child process (sim.camera_process) at ~camera_rate_hz (0.5: a colour + depth

@@ -7,7 +7,7 @@ and texture; 3 k^2 values (108 for k = 6). The SVM (RBF kernel, scikit-learn) si
 standard scaler. A block is labelled ground for training when at least half its pixels are ground
 in the segmentation render (nav.yaml classifier.ground_fraction, kept in the model file).
 
-Stride (round 8, ground_region.py): each cell of stride_px pixels is judged by the block centred on
+Stride (ground_region.py): each cell of stride_px pixels is judged by the block centred on
 it; stride_px = block_px is the paper's tiling. Training uses the blocks of the same grid.
 
 The model is a file written by `snake_autonomy nav train-classifier --out FILE` (joblib), never a
@@ -122,6 +122,6 @@ class BlockClassifier:
                              f"{d.get('format') if isinstance(d, dict) else type(d).__name__!r}, "
                              f"expected {MODEL_FORMAT!r}); make one with `snake_autonomy nav "
                              f"train-classifier --out FILE`")
-        stride = d.get("stride_px")                   # absent in models made before round 8: tiles
+        stride = d.get("stride_px")                   # absent in older model files: tiles
         return cls(d["model"], int(d["block_px"]), int(d["k"]), None if stride is None else int(stride),
-                   float(d.get("ground_fraction", GROUND_FRACTION)))   # absent before round 14: 0.5
+                   float(d.get("ground_fraction", GROUND_FRACTION)))   # absent in older model files: 0.5

@@ -2,7 +2,7 @@
 
 1. The depth image's points (optical frame, subsampled) are fitted with a plane by RANSAC, seeded
    with the points of the image's lower part, where the floor is expected; the plane is refined by
-   least squares on its inliers, then (refine_iterations, round 25) refitted to the points within
+   least squares on its inliers, then (refine_iterations) refitted to the points within
    three robust sigmas of its own residuals: an obstacle's foot lies within RANSAC's 3 mm band too,
    and the floor seen spans 0.1-0.2 m, so its points tilted the plane enough to fail the floor far
    off. A plane that is not roughly where the mount puts the floor (its height from the camera, its
@@ -33,7 +33,7 @@ class DepthTraversabilityParams:
     min_fraction: float = 0.5
     max_plane_tilt_deg: float = 20.0   # fitted normal vs the mount's expected normal
     max_height_error_m: float = 0.05   # fitted camera height vs the mount's
-    refine_iterations: int = 0         # round 25: > 0: refit the plane this many times to the points within
+    refine_iterations: int = 0         # > 0: refit the plane this many times to the points within
                                        # a band of 3 robust sigmas of its residuals (at least refine_floor_m,
                                        # at most inlier_m); 0: one least-squares fit to RANSAC's inliers
     refine_floor_m: float = 0.0005     # the narrowest band (below it: the sensor's noise, not the plane)
@@ -81,7 +81,7 @@ def fit_ground_plane(points: np.ndarray, params: DepthTraversabilityParams,
     inl = points[np.abs(points @ n + d) < params.inlier_m]
     n, d = _least_squares_plane(inl)
     for _ in range(params.refine_iterations):
-        # round 25: the points of an obstacle's foot lie within inlier_m of the floor too; the floor
+        # the points of an obstacle's foot lie within inlier_m of the floor too; the floor
         # the camera sees in its lower part spans 0.1-0.2 m, so a few hundred of them (1-4 mm up a
         # cylinder COBRA faces) tilted the plane 0.2-0.7 deg, and the floor 0.5-0.9 m away met it
         # 3-6 % off (depth_tolerance 5 %): not ground, and the map took its edge for an obstacle's

@@ -5,12 +5,12 @@ meeting obstacles first: per column of cells (blocks of block_px x block_px pixe
 region runs from the bottom row up to the first cell that is not ground. Everything above is not
 traversable, whatever it looks like (floor seen beyond an obstacle is not reachable straight on).
 
-Cells and windows (round 8): a block of block_px x block_px pixels is judged as a whole (the
+Cells and windows: a block of block_px x block_px pixels is judged as a whole (the
 classifier's DCT features, or its ground fraction); the image is divided into cells of stride_px,
 each judged by the block centred on it (shifted inside the image at the borders). stride_px =
 block_px is the paper's tiling; a smaller stride keeps the block's features but places the region's
 edges stride_px apart. With 40 px tiles COBRA's mono runs failed where the segmentation render
-itself, put through the same tiles, fails (round 8: 2 of 10 runs; 9 of 10 at a 20 px stride).
+itself, put through the same tiles, fails (2 of 10 runs; 9 of 10 at a 20 px stride).
 """
 import numpy as np
 

@@ -1,2 +1,2 @@
 """Motion planners (ROS-free): rectilinear/ is perception-space navigation with the rectilinear gait
-(Chang et al., issue 13); fbsr/ is the FBSR head-raising "scout" planner (Cappel & Choset, issue 14)."""
+(Chang et al.); fbsr/ is the FBSR head-raising "scout" planner (Cappel & Choset)."""

@@ -1,4 +1,4 @@
-"""A gait of config/gaits.yaml driven through the C++ driver on a plant, in lock-step (issue 13):
+"""A gait of config/gaits.yaml driven through the C++ driver on a plant, in lock-step:
 the batch simulator's LockStepDriver (the DriverController driver_node runs) with the base pose
 from the plant's ground truth, for runs that command one gait with a steering value and no mission.
 

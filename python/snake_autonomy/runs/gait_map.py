@@ -1,4 +1,4 @@
-"""Gait maps (Chang et al. fig. 2, issue 13): sweeps of the plant over the gait's amplitude A and
+"""Gait maps (Chang et al. fig. 2): sweeps of the plant over the gait's amplitude A and
 the body curvature kappa (COBRA's sidewinding: amplitude and the steering delta) giving the steady
 body velocity xi = (xi_x, xi_y, xi_w); a linear fit omega(kappa) (its inverse is the follower's
 kappa(omega)) and the forward speed, written to YAML that config/nav.yaml's follower reads

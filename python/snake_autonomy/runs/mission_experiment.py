@@ -11,7 +11,7 @@
 
 Each run is a BatchRun (sim.batch) writing its own results folder OUT/<feedback>/seed<N>[_start<k>]/;
 the experiment adds OUT/<feedback>/summary.json, summary.md (the table) and summary.png (every run's
-ground-truth path over the waypoints, and the time each waypoint took). Acceptance (issue 5): every
+ground-truth path over the waypoints, and the time each waypoint took). Acceptance: every
 waypoint reached (within d_th and psi_wp: the tracker's own test) in every run, no roll-over, no
 joint goal beyond a limit, and in the disturbance experiment recovery after every push and twist.
 """

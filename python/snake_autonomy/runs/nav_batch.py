@@ -1,4 +1,4 @@
-"""The navigation experiment in batch (issue 13), ROS-free: a world file, the plant with its
+"""The navigation experiment in batch, ROS-free: a world file, the plant with its
 obstacles, the head camera, traversability (depth or the monocular classifier), the perception-space
 planner and the receding-horizon follower, closed through the rectilinear gait's Python reference.
 
@@ -31,7 +31,7 @@ writes the Python reference's gait.joint_angles(t, kappa) (config/nav.yaml gait:
 plant every control period, ramped in over ramp_s. The driver's gaits are the nav config's `gaits:`
 (forward, reverse); without a nav config named, the robot's own (config.nav_config_path: config/
 nav_chang_rectilinear.yaml names rectilinear_chang, derived for its 0.07 m links) or nav.yaml's.
-With the nav config's gaits.steering follow_the_leader (round 9) kappa is laid along the head's path as
+With the nav config's gaits.steering follow_the_leader kappa is laid along the head's path as
 it crawls (planning/rectilinear/follow_the_leader.py, the crawl measured on base_link's ground truth)
 and each yaw joint gets its own curvature: through the driver as explicit per-joint biases of the gait
 command (GaitCommand bias, every command_period_s), with the reference as its yaw angles.
@@ -226,7 +226,7 @@ class NavRun:
             margin = self.cfg.classifier.ground_margin
             self.perceive = lambda f: clf.traversable(f.rgb, margin)
         elif spec.perception == "truth":
-            # a perfect classifier (round 8): the segmentation render through the classifier's
+            # a perfect classifier: the segmentation render through the classifier's
             # blocks and cells (nav.yaml classifier: block_px, stride_px): what mono could reach
             c = self.cfg.classifier
             self.perceive = lambda f: truth_traversable(f.ground_truth_ground(), c.block_px, c.stride_px,

@@ -1,4 +1,4 @@
-"""The navigation experiment over random worlds (issue 13): random solvable corridors, the closed
+"""The navigation experiment over random worlds: random solvable corridors, the closed
 loop (runs/nav_batch.py) per world x seed x perception through the sweep runner (Dask by default),
 success rate, collisions and time in a table.
 
@@ -63,11 +63,11 @@ TIME_FACTOR = 3.0
 
 
 def time_limit_s(world: World, speed_m_s: float, factor: float = TIME_FACTOR) -> float:
-    """The experiment's time limit for one world (issue 13 round 10): `factor` times the time the
+    """The experiment's time limit for one world: `factor` times the time the
     robot needs, at its follower's speed (the gait map's), to crawl the straight line from its start
     to the goal's disc. The robots differ twice in speed (COBRA 6.35 mm/s, the 12-link 11.2 mm/s):
     a fixed 300 s gave COBRA 1.6 times its straight-line time and the 12-link 2.8 times, and most of
-    COBRA's runs that ended at 300 s reached the goal by 420 s (README round 10)."""
+    COBRA's runs that ended at 300 s reached the goal by 420 s."""
     if not speed_m_s > 0 or not factor > 0:
         raise ValueError(f"time limit: speed_m_s and factor must be > 0, got {speed_m_s}, {factor}")
     straight = max(0.0, math.hypot(world.goal[0] - world.start[0], world.goal[1] - world.start[1])

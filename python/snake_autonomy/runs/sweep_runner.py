@@ -1,4 +1,4 @@
-"""Sweeps and experiments on an existing distributed engine (issue 13): Dask.distributed, written
+"""Sweeps and experiments on an existing distributed engine: Dask.distributed, written
 against concurrent.futures so that the local path stays a plain executor.
 
     with open_executor("dask", n_workers=2) as ex:          # a LocalCluster (processes)

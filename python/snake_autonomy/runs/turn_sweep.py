@@ -1,6 +1,6 @@
 """One turn of the rectilinear gait on open floor, and how far the body strays from the head's track
-(issue 13 round 9; bench/nav_follow_the_leader prints it, test_nav_round9 checks it). reshape_step
-(round 20): where each frame of the body goes when the curvature steps (test_nav_round20 checks it).
+(bench/nav_follow_the_leader prints it, test_nav_follow_the_leader checks it). reshape_step:
+where each frame of the body goes when the curvature steps (test_nav_body_model checks it).
 
 The run: straight for start_s, kappa for turn_s, straight for 60 s; the plant with nav runs' flat
 belly (the robot's nav config plant:), the gait through the C++ driver (its gaits.forward, e.g.

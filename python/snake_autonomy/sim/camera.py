@@ -39,7 +39,7 @@ class HeadCamera:
             model.vis.global_.offheight = max(model.vis.global_.offheight, k.height)
         # MuJoCo's near clip is vis.map.znear x the model's extent: 0.064 m in the 6.4 m corridor
         # world, beyond the floor at the image's bottom (0.056 m with the head pitched): the bottom
-        # rows had no depth and the region grown from the bottom was empty (issue 13 round 4)
+        # rows had no depth and the region grown from the bottom was empty
         model.vis.map.znear = min(float(model.vis.map.znear), NEAR_CLIP_M / max(1e-9, float(model.stat.extent)))
         self._renderer = mujoco.Renderer(model, k.height, k.width)
         self._free = mujoco.MjvCamera()

@@ -1,4 +1,4 @@
-"""The head camera rendered in a child process (issue 13, sim_node with a world): MuJoCo's offscreen
+"""The head camera rendered in a child process (sim_node with a world): MuJoCo's offscreen
 render takes 0.1-0.3 s per pass on these machines, and in the simulator's process it would hold
 the interpreter while the mocked servo bus must answer the driver within milliseconds. The child
 builds its own model from the plant's MJCF, takes a snapshot of the state (qpos and base_link's

@@ -10,7 +10,7 @@ RTAB-Map through the pose remapper (thesis eq. 3.1 and its lost-tracking gate).
 thesis's experiments. `vio`: its simulated RTAB-Map sample (camera odometry, 30 Hz, noise, drift,
 tracking losses) -> TrackingGate (lost, stale, jumps: config/camera.yaml lost_tracking) ->
 PoseRemapper (eq. 3.1, camera_in_head of config/camera.yaml, H of the robot YAML): the classes
-pose_remap_node wraps, so a lost or stale odometry holds the robot (ERRATA #7) exactly as on the
+pose_remap_node wraps, so a lost or stale odometry holds the robot exactly as on the
 ROS path. `sensor`: the world sensor each needs (WorldSpec.sensors).
 
 VioFeedback records what it measured, for the evaluation after a run (`samples`).

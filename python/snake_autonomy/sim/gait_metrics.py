@@ -1,7 +1,7 @@
 """Open-loop locomotion figures of the plant: speed, sideways speed, turn rate.
 
 Heading is the principal axis of the link positions in the ground plane (the virtual chassis of
-Rollinson & Choset, ERRATA #6), pointing from tail to head, sampled once per gait cycle at the
+Rollinson & Choset), pointing from tail to head, sampled once per gait cycle at the
 same phase so the body's oscillation cancels; speeds come from the centre of mass over whole
 cycles after settling cycles (from a straight body, the first two cycles of sidewinding are up to
 60 % faster than the steady state).

@@ -6,7 +6,8 @@ with one amplitude per axis, phi_i = i * lag + (offset for pitch joints), i = 0 
 are the steady states the CPG converges to (thesis 3.5.2): yaw amplitude about 45 deg, pitch about
 15 deg, the vertical wave 90 deg from the horizontal one. Steering modulates the yaw amplitudes
 with the robot's steering weights (thesis eq. 3.26, Algorithm 1's MODIFYAMPLITUDES):
-a_yaw_k += w_k * delta, clamped to +-amplitude_limit (ERRATA #3).
+a_yaw_k += w_k * delta, clamped to +-amplitude_limit
+(Algorithm 1's clamp, as ran on the robot, not section 3.6.3's clip).
 
 The values here are this module's own choices for the open-loop check (see SIDEWINDING and
 TURN_IN_PLACE); the gait library (config/gaits.yaml, _core.GaitLibrary) is the reference once

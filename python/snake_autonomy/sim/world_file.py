@@ -1,4 +1,4 @@
-"""World files of the navigation experiment (issue 13): loading and validation, ROS-free.
+"""World files of the navigation experiment: loading and validation, ROS-free.
 
 A world is a YAML file::
 

@@ -1,10 +1,10 @@
-"""The FBSR head-raising planner (Cappel & Choset, ../shared/papers/fbsr_head_raising_planner.txt).
+"""The FBSR head-raising planner (Cappel & Choset).
 
 config.py     config/scout.yaml: planner parameters and each robot's lying posture, validated
 chain.py      kinematics with the world fixed at the tail, the lying posture, ground contacts
 batch_kinematics.py  the same FK with numpy on a batch of postures (the cost and its gradient)
 support.py    support polygons, the ZMP's distance to their edges (shapely)
-spline.py     the one-parameter cubic of eq. 3-8 (ERRATA #10)
+spline.py     the one-parameter cubic of eq. 3-8
 cost.py       C = K1 Cd + K2 Cs + K3 Cp (+ torque, ground and clearance terms), eq. 9-15
 stage.py      one optimised stage (scipy) with its global checks and random restarts
 planner.py    the loop of section II / III.E, dynamic weighting of K1, lowering

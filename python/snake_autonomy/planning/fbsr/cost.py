@@ -9,8 +9,8 @@ no module below the floor, no module through another.
   same expression; its atan part then *falls* with l, which pushes a ZMP just outside further
   out, against the text's intent ("the added l^2 term ... provides a gradient leading back
   inside"). Here outside is pi/2 + K_out l^2: continuous at the edge and rising outward.
-- Cp, the pipe potential (eq. 15 with ERRATA #9): the integral of the squared horizontal distance
-  of every active module to the pipe axis, sum_i (x_i - qx)^2 + (y_i - qy)^2.
+- Cp, the pipe potential (eq. 15, with + where the text prints a minus): the integral of the squared
+  horizontal distance of every active module to the pipe axis, sum_i (x_i - qx)^2 + (y_i - qy)^2.
 - Ct: the integral of sum_j (tau_j / tau_limit)^2 over the active joints (quasi-static gravity).
 - With a pipe, its wall: frames at the mouth's height or above stay out of it (in the bore or
   outside the pipe).
@@ -81,7 +81,7 @@ def stability_cost(l, ks_per_m2: float, k_out_per_m2: float) -> np.ndarray:
 
 
 def pipe_cost(positions_xy, pipe: Pipe) -> float:
-    """The integrand of eq. 15 (ERRATA #9: a sum of squares) for the given active modules."""
+    """The integrand of eq. 15 (a sum of squares) for the given active modules."""
     d = np.asarray(positions_xy, float) - (pipe.x_m, pipe.y_m)
     return float(np.sum(d[:, 0] ** 2 + d[:, 1] ** 2))
 

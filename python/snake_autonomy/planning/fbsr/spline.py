@@ -1,4 +1,5 @@
-"""The one-parameter cubic of each active joint (paper eq. 3-8, with ERRATA #10).
+"""The one-parameter cubic of each active joint (paper eq. 3-8; eq. 8 as
+a = -2b / (3 t_end): one free parameter b per joint).
 
     theta(t) = a t^3 + b t^2 + theta0,  a = -2 b / (3 t_end)       (c = 0, d = theta0)
 

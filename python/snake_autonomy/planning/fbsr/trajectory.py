@@ -1,6 +1,6 @@
 """A plan as the driver's joint trajectory, ROS-free: the points of a trajectory_msgs/JointTrajectory.
 
-The driver's contract (driver/joint_trajectory, issue 11's TrajectorySource): joint names joint_1 ..
+The driver's contract (driver/joint_trajectory, the driver's TrajectorySource): joint names joint_1 ..
 joint_N, positions in radians, time_from_start strictly increasing; the driver interpolates cubically
 between the points, refuses a trajectory whole (with its reasons) and holds the last point. It also
 slew-limits every goal to config/driver.yaml max_joint_velocity_rad_s, so a trajectory that asks for

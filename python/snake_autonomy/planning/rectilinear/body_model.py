@@ -1,9 +1,9 @@
-"""Where the whole body goes on an arc (issue 13 round 5): the rectilinear body as a curve.
+"""Where the whole body goes on an arc: the rectilinear body as a curve.
 
 The rectilinear gait bends the body to one curvature kappa (the lateral joints' bias, the
 `curvature` steering law) and moves it along its own tangent: at a constant kappa every point of
 the body follows the same circle, the tail in the head's track. When kappa changes the body
-reshapes about its middle (measured in round 4, bench/nav_body_sweep: the head swings
+reshapes about its middle (measured with bench/nav_body_sweep: the head swings
 (L^2 / 8) dkappa = 0.28 m per 1/m to the inside on COBRA, L 1.51 m, and its heading turns by
 (L / 2) dkappa = 0.75 rad per 1/m at once; that swing is what drove COBRA's head and tail into
 obstacles beside a head-only arc). So the unicycle of Chang et al. is the body's MIDDLE here:
@@ -20,12 +20,12 @@ obstacles beside a head-only arc). So the unicycle of Chang et al. is the body's
 The paper's robot (12 links, 51 mm head) is short enough for the head-only model; the model here
 reduces to it for a body of length 0 (half_length_m 0).
 
-Round 20 (test_nav_round20.py, measured with the gait map): on COBRA the first premise does not hold
-at small curvatures. Below about 0.35-0.4 /m the body does not turn at all (omega 0.0002 rad/s at
+Measured with the gait map (test/python/test_nav_body_model.py): on COBRA the first premise does
+not hold at small curvatures. Below about 0.35-0.4 /m the body does not turn at all (omega 0.0002 rad/s at
 0.35 /m against the line's 0.0032); it translates along its middle's tangent, kappa L/2 off the
 head's heading, so the head and the body side-step instead of following the circle (the crawl
 guard, planner._crawl_bounds, predicts that). And reshaping keeps the body's centroid, not its
-middle: body_poses(keep_centroid=True), sampler.reshape_keeps_centroid (on for COBRA since round 21,
+middle: body_poses(keep_centroid=True), sampler.reshape_keeps_centroid (on for COBRA in
 config/nav.yaml; the 12-link robot keeps the middle).
 Poses are (x_m, y_m, theta_rad) on the floor; arc lengths s in metres along the arc.
 """

@@ -12,14 +12,14 @@ A point the current image shows is judged by it, however near. A point the image
 (below the bottom row, beside or beyond the field of view) is looked up in the earlier views given
 with add_view (the last few replans' images, each with its camera pose in the current ground frame;
 images, not a map: nothing is fused): free when one of them shows it as ground, or, with
-blocked_wins (round 10, config/nav.yaml), when some show it as ground and none as an obstacle (the
+blocked_wins (config/nav.yaml), when some show it as ground and none as an obstacle (the
 monocular classifier misses a cylinder in one view and not in the next: the miss must not free
-it); with blocked_wins_depth_m (round 19) only an obstacle's face wins so, not the shadow behind
+it); with blocked_wins_depth_m only an obstacle's face wins so, not the shadow behind
 it (an old view's shadow blocked the floor beside the head that every later view showed). Seen in
 none, it counts as free when nearer (ahead of the camera, along its heading on the floor) than
 near_field_m, the distance at which the view becomes as wide as the footprint (or the
 bottom row's, if further): the robot is there or came from there; anywhere else it is not known to
-be free. Without the earlier views a passed obstacle beside the body is free (round 3: the head slid
+be free. Without the earlier views a passed obstacle beside the body is free (the head slid
 along the cylinder it had passed).
 """
 import math
@@ -87,17 +87,17 @@ class PerceptionCollisionChecker:
         others show (False: ground in any of them frees it). hidden_obstacles: None, or a callable
         (M, 2) ground-frame points -> (M,) bool: a point the current image does not show is blocked
         where it says so, whatever the earlier views show (obstacle_map.py). near_field_max_m: caps
-        the near field (sampler.near_field_max_m). blocked_wins_depth_m (round 19): with
+        the near field (sampler.near_field_max_m). blocked_wins_depth_m: with
         blocked_wins, only non-ground within this of a view's ground edge (the obstacle's face) wins
         over ground other views show; further (the shadow behind the face, up to the view's
         obstacle_depth_m) is freed by a view showing ground there (inf: every obstacle wins).
-        view_obstacle_range_m (round 22): an earlier view's non-ground further than this from its
+        view_obstacle_range_m: an earlier view's non-ground further than this from its
         camera (depth along its optical axis) is not shown (not known to be an obstacle): far away it
         is mostly an obstacle's upper part hiding the floor behind it, as the map knows (it takes
-        faces within 0.8 m only, config/nav.yaml map max_range_m). COBRA depth w19 s5 and w9 s5: the
-        floor beside the head, 0.8-1.0 m from the view that marked it, passing beside a cylinder,
-        blocked every arc in open floor for the rest of the run (an option, measured at 0.8 m and not
-        set: README round 22)."""
+        faces within 0.8 m only, config/nav.yaml map max_range_m). On COBRA with depth the floor
+        beside the head, 0.8-1.0 m from the view that marked it while passing a cylinder, could block
+        every arc in open floor for the rest of a run (an option, measured at 0.8 m and
+        not set)."""
         self.blocked_wins = bool(blocked_wins)
         self.blocked_wins_depth_m = float(blocked_wins_depth_m)
         self.view_obstacle_range_m = float(view_obstacle_range_m)
@@ -225,7 +225,7 @@ def near_field(intrinsics, T_ground_camera: np.ndarray, fwd: np.ndarray, half_wi
     A view that never gets that wide (the camera pitched down steeply and low: its top row meets
     the floor nearer than the footprint's reach) gives the distance of the furthest floor it shows,
     not infinity: an infinite near field counted every point no view showed as free, beside the
-    camera at any distance (round 18: the 12-link robot's turns in place, mono world 16 seed 8)."""
+    camera at any distance (a turn in place could then sweep into an obstacle no view showed)."""
     T = np.asarray(T_ground_camera, float)
     k = intrinsics
     v = np.arange(k.height - 1, -1, -1, dtype=float)

@@ -33,11 +33,11 @@ class ClassifierParams:
     block_px: int = 40
     dct_coefficients: int = 4
     svm_c: float = 10.0
-    stride_px: int = 20       # each 20 px cell judged by the 40 px block centred on it (round 8)
-    ground_margin: float = 0.0   # round 13: a block is ground when the SVM's decision value exceeds this
+    stride_px: int = 20       # each 20 px cell judged by the 40 px block centred on it
+    ground_margin: float = 0.0   # a block is ground when the SVM's decision value exceeds this
                                  # (0: the SVM's own class; > 0: fewer obstacles taken for floor, more
                                  # floor for obstacles); applied when classifying, not stored in the model
-    ground_fraction: float = 0.5  # round 14: a block's training label (and perception truth's cell) is
+    ground_fraction: float = 0.5  # a block's training label (and perception truth's cell) is
                                   # ground when at least this fraction of it is; stored in the model
 
     def validate(self) -> List[str]:
@@ -73,7 +73,7 @@ class NavGaits:
     reverse: str = "rectilinear_reverse"     # tail first (follower back_off)
     steering: str = "uniform"                # uniform: every yaw joint at kappa (the driver's curvature
                                              # law); follow_the_leader: kappa laid along the head's path
-                                             # (follow_the_leader.py; the batch simulator only, round 9)
+                                             # (follow_the_leader.py; the batch simulator only)
 
     @classmethod
     def from_dict(cls, d, problems: List[str]) -> "NavGaits":

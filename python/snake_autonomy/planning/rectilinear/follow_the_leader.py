@@ -1,9 +1,9 @@
-"""Follow-the-leader curvature for the rectilinear gait (issue 13 round 9, a prototype on the Python
+"""Follow-the-leader curvature for the rectilinear gait (a prototype on the Python
 reference gait; the driver's steering laws do not have it yet).
 
 The `curvature` steering law bends every lateral joint to the commanded kappa at once: the body
 reshapes about its middle and its ends swing (L^2/8) dkappa sideways (0.28 m per 1/m on COBRA), the
-touches that round 8 traced to turning past an obstacle. Here the commanded kappa is the curvature
+touches seen when turning past an obstacle. Here the commanded kappa is the curvature
 of the HEAD's path where the head is now; it is laid down along the path as the head crawls, and
 each yaw joint bends to the mean curvature of the path under the span it covers (spacing_m, ending
 at the joint's own place on the path). The body then lies on the head's path like a train on its
@@ -17,7 +17,7 @@ the path behind them again, so the body retraces its track exactly.
 Used by nav runs when the nav config says `gaits.steering: follow_the_leader`
 (config/nav_follow_the_leader.yaml; through the driver as per-joint gait-command biases). Not the
 default: COBRA mono 20 x 5 with it, 65 % (9 runs touching, 24 time limits) against 75 % uniform (16
-touching, 4 time limits), README round 9.
+touching, 4 time limits).
 
 Arc positions: s_head is the head's distance crawled along its path (from the start, forward
 positive); the body behind the start lies straight (curvature 0).

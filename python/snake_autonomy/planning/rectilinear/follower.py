@@ -18,7 +18,7 @@ guard, planner.py): the commanded kappa is clipped to the bounds before the rate
 No free arc: the follower stops forward motion and turns in place (mode TURN_IN_PLACE, towards
 `turn_direction`), or with `back_off` it backs off tail first (mode BACK_OFF: the caller runs the
 gait backwards) with the body's curvature held, so the body retraces its own track, which it has
-just crawled over (issue 13 round 5: turning with kappa_turn_per_m crawls on forward at 5 mm/s on
+just crawled over (turning with kappa_turn_per_m crawls on forward at 5 mm/s on
 a tight curve and swings the head (L^2/8) kappa = 0.42 m into what stopped it). Either way the
 command's reason says so.
 """

@@ -1,4 +1,4 @@
-"""The planner node's logic, ROS-free (issue 13): camera frames and base poses in, gait commands and
+"""The planner node's logic, ROS-free: camera frames and base poses in, gait commands and
 what to show out. planner_node (nodes/planner_node.py) only converts messages and calls this.
 
     loop = NavLoop(NavConfig.from_yaml(), head_width_m=0.09, perception=DepthTraversability(...),

@@ -1,8 +1,8 @@
-"""A world-frame map of the obstacles the views showed (issue 13 round 15), ROS-free.
+"""A world-frame map of the obstacles the views showed, ROS-free.
 
 The checks judge a point the current image shows by the image (the paper's perception space). A
 point it does not show (beside the body, behind the camera) was until now looked up in the earlier
-views only, and a side of an obstacle no view had shown counted as floor (round 14: the side of a
+views only, and a side of an obstacle no view had shown counted as floor (the side of a
 cylinder link 2 touched had been shown by none of the 30 views). An ObstacleMap answers for those
 hidden points (collision_check.py hidden_obstacles), and the route (route.py) plans on it.
 
@@ -11,9 +11,9 @@ Sources (config/nav.yaml map.source):
   within max_range_m, each grown into a disc of prior_radius_m behind it along the view's ray (a
   prior on the unseen extent: a cylinder's face tells where its near side is, not how far it reaches
   to the sides); the floor a later view shows clears the map there first (view_on_floor,
-  add_view), so a far edge the depth test once marked unsure does not stay an obstacle. Round 23
-  (prior_normal_window_m > 0): the disc lies behind the face along the surface's normal fitted to
-  the view's neighbouring faces (face_normals), not along the ray. Round 24 (prior_shape shadow):
+  add_view), so a far edge the depth test once marked unsure does not stay an obstacle. With
+  prior_normal_window_m > 0 the disc lies behind the face along the surface's normal fitted to
+  the view's neighbouring faces (face_normals), not along the ray. With prior_shape shadow
   the prior is the floor behind each run of faces, between the run's outermost rays (face_shadows),
   not a disc per face: a disc behind a face where the ray grazes the obstacle's side reached its
   radius beside the obstacle, onto floor where COBRA's body later passed;
@@ -47,7 +47,7 @@ class MapParams:
                                   # 1 m (1.3 cm at 0.6 m), and the cells' edges were 0.1-0.3 m off there
     edge_px: int = 6              # a face is placed this many rows below the ground region's top edge
                                   # (nearer): a cell at the edge is ground when half of it is (README
-                                  # round 15: depth's faces lay a median 2-7 cm behind the obstacle's
+                                  # depth's faces lay a median 2-7 cm behind the obstacle's
                                   # surface at 0, 1-3 cm in front at 4-8; mono's 20 px cells alike)
     column_step_px: int = 4       # faces: every 4th image column
     route: bool = False           # the goal bias steers by the route's cost to go (route.py)
@@ -58,13 +58,13 @@ class MapParams:
     route_max_cells: int = 1_000_000   # route grid: at most this many cells (about 250 bytes and 0.8 us
                                   # a cell per replan: 1e6 = 40 m x 40 m at 4 cm, 250 MB); a larger
                                   # start-goal box is refused naming its extent (route.grid_shape)
-    priors_off_own_floor: bool = False   # round 18: a view's prior discs are not laid on the floor
+    priors_off_own_floor: bool = False   # a view's prior discs are not laid on the floor
                                   # the same view shows (ObstacleMap.add_view)
-    prior_normal_window_m: float = 0.0   # round 23: > 0: each disc lies behind its face along the
+    prior_normal_window_m: float = 0.0   # > 0: each disc lies behind its face along the
                                   # surface's normal, fitted to the view's faces within this distance
                                   # (face_normals), not along the view's ray; 0: along the ray
-                                  # (measured, not set: README round 23)
-    prior_shape: str = "disc"     # round 24: disc (each face's disc of prior_radius_m, as before) | shadow
+                                  # (measured on COBRA, not set: face_normals)
+    prior_shape: str = "disc"     # disc (each face's disc of prior_radius_m, as before) | shadow
                                   # (the floor behind each run of faces, between its outermost rays, 2
                                   # prior_radius_m deep: face_shadows)
     prior_pad_m: float = 0.01     # shadow: grown by this (the silhouette lies up to a column step beyond
@@ -135,11 +135,11 @@ def view_on_floor(ground: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray,
 
 def face_shadows(faces_xy: np.ndarray, dirs: np.ndarray, runs: np.ndarray, at_side: np.ndarray,
                  depth_m: float, pad_m: float, side_disc_m: float):
-    """Round 24 (map.prior_shape shadow): the prior on an obstacle's unseen extent as the floor behind a
+    """map.prior_shape shadow: the prior on an obstacle's unseen extent as the floor behind a
     run of faces, between the run's outermost rays, depth_m deep along each ray, grown by pad_m. A convex
     obstacle lies between the rays that graze its silhouette, so the shadow covers it (to depth_m) and
     reaches no further beside it than pad_m; a disc behind the outermost face reached its radius beyond
-    the silhouette, onto floor where COBRA's body later passed (README round 24). A face in the image's
+    the silhouette, onto floor where COBRA's body later passed. A face in the image's
     first or last column (at_side) may belong to an obstacle that goes on beyond the image: it also gets
     the disc of radius side_disc_m behind it (the disc prior). -> a shapely geometry (empty without
     faces)."""
@@ -164,24 +164,24 @@ def face_shadows(faces_xy: np.ndarray, dirs: np.ndarray, runs: np.ndarray, at_si
 
 
 def face_discs(faces_xy: np.ndarray, dirs: np.ndarray, radius_m: float):
-    """The disc prior (round 15): each face grown into the disc of radius_m behind it along its direction
-    (the ray, or round 23's normal); their union."""
+    """The disc prior: each face grown into the disc of radius_m behind it along its direction
+    (the ray, or the surface's normal from face_normals); their union."""
     centres = np.asarray(faces_xy, float).reshape(-1, 2) + radius_m * np.asarray(dirs, float).reshape(-1, 2)
     return shapely.union_all(shapely.buffer(shapely.points(centres), radius_m, quad_segs=4))
 
 
 def face_normals(faces_xy: np.ndarray, dirs: np.ndarray, window_m: float,
                  max_angle_deg: float = 60.0) -> np.ndarray:
-    """Round 23 (map.prior_normal_window_m): one view's faces (view_on_floor) -> (M, 2) unit directions
+    """map.prior_normal_window_m: one view's faces (view_on_floor) -> (M, 2) unit directions
     from each face into its obstacle: the normal of the line fitted (principal axis) to the view's
     faces within window_m of it, on the far side from the camera (dirs: the rays), turned towards the
     ray to at most max_angle_deg from it (where the ray grazes the surface, the fitted line cannot
     tell the obstacle's side); a face with fewer than 3 faces within window_m keeps its ray.
     Along the ray, the disc behind a face at the end of a cylinder's row of faces (its side at the
-    image's edge, or its silhouette) lies 0.1 m beyond the cylinder's side: COBRA depth world 6 seed 7
-    stopped with every arc blocked at its start by such a disc, 9 cm off the real surface. Measured
-    on COBRA and not set (README round 23: depth seeds 0-4 lost as many runs as 5-9 gained; mono's
-    staircase of faces fits poorer normals)."""
+    image's edge, or its silhouette) lies 0.1 m beyond the cylinder's side, and such a disc can block
+    every arc at a stop's start about 9 cm off the real surface. Measured on COBRA and not set (with
+    depth it lost as many runs on one set of seeds as it gained on another; mono's staircase of faces
+    fits poorer normals)."""
     faces = np.asarray(faces_xy, float).reshape(-1, 2)
     rays = np.asarray(dirs, float).reshape(-1, 2)
     out = rays.copy()
@@ -228,10 +228,10 @@ class ObstacleMap:
         """One view (view_on_floor): the floor it shows clears what the map held there (an older view's
         face behind which this one sees floor: a cylinder's prior where its side is not, a far edge
         the depth test marked unsure), then each face point is grown into the disc of
-        prior_radius_m behind it along its ray. priors_off_own_floor (round 18, MapParams): the discs
+        prior_radius_m behind it along its ray. priors_off_own_floor (MapParams): the discs
         are not laid on floor this same view shows: a disc behind a cylinder's outermost face
         reaches prior_radius_m beyond the cylinder's side, onto floor the view shows beside it.
-        prior (round 24, map.prior_shape shadow): the view's prior as a geometry (face_shadows) instead
+        prior (map.prior_shape shadow): the view's prior as a geometry (face_shadows) instead
         of the discs."""
         seen = floor is not None and not floor.is_empty
         geom = self._geom.difference(floor) if seen else self._geom

@@ -2,30 +2,30 @@
 image, the camera's pose in the ground frame and the robot's pose -> the chosen arc as a world path,
 handed to the receding-horizon follower (or stop and turn in place when no arc is free).
 
-No free arc (round 5): with follower.back_off the robot first backs off tail first along its own
+No free arc: with follower.back_off the robot first backs off tail first along its own
 track for back_off_replans replans (the reverse gait; the body retraces ground it has crawled
 over), then turns in place with a turn whose reshaping sweep (body_model.body_poses: both ends swing
 (L^2/8) kappa to the inside) the current and earlier images show free, the turning side first,
-kappa_turn_per_m then half of it; with no such turn it backs off again. Round 12 (sampler.turn_free_m):
+kappa_turn_per_m then half of it; with no such turn it backs off again. sampler.turn_free_m:
 the gait crawls on while the body turns, so a turn also needs the tightest arc on its side free for
-turn_free_m. A replan after a stop needs sampler.resume_free_m of free arc to go on. Round 16
-(sampler.turn_keeps_side): the turn keeps the side the stop chose first; when that side cannot be
+turn_free_m. A replan after a stop needs sampler.resume_free_m of free arc to go on.
+sampler.turn_keeps_side: the turn keeps the side the stop chose first; when that side cannot be
 swept the robot backs off rather than turn the other way (turns to alternate sides swung the head
-both ways beside a cylinder). Round 19 (sampler.back_off_check_m): backing off needs the tail's
+both ways beside a cylinder). sampler.back_off_check_m: backing off needs the tail's
 track clear (_back_off_clear: the views and the obstacle map); when it is not, the robot turns in
 place instead (the turning side, then either side), and says why.
 
-Swing guard (round 11, sampler.swing_guard_m): following an arc, the follower bends the body only
+Swing guard (sampler.swing_guard_m): following an arc, the follower bends the body only
 within curvature bounds this replan sets (_swing_bounds): the uniform-curvature body reshapes about
 its middle, and turning towards an obstacle the head has just passed swung link 1 into it (five of
-round 10's thirteen runs with a contact). Round 20-21 (COBRA's config/nav.yaml): the body reshapes
+thirteen runs with a contact, before the guard). With COBRA's config/nav.yaml the body reshapes
 about its centroid (sampler.reshape_keeps_centroid), so the guard also keeps the stations between its
 front and its tail off the obstacle map (sampler.swing_guard_body), and the crawl guard
 (_crawl_bounds, sampler.crawl_guard_m) predicts the side-step of the measured crawl; when the crawl
 of the current or every allowed curvature runs into the map the robot backs off
 (sampler.crawl_blocked_backs_off, crawl_guard_forces false).
 
-Obstacle map and route (round 15, config/nav.yaml map:): each replan adds its view to a world-frame
+Obstacle map and route (config/nav.yaml map:): each replan adds its view to a world-frame
 map (obstacle_map.py: the floor it shows clears the map, its faces are grown into prior discs); the
 checks ask the map about points no image shows, and the goal bias steers by the cost to go of a route
 on the map (route.py), so the robot goes round clusters whose gaps are narrower than its footprint.
@@ -158,10 +158,10 @@ class NavPlanner:
                 ground_image, self.intrinsics.K(), T_world_camera, mp.max_range_m, mp.column_step_px, mp.edge_px,
                 with_runs=True)
             prior = None
-            if mp.prior_shape == "shadow":                # round 24: the floor behind each run of faces
+            if mp.prior_shape == "shadow":                # the floor behind each run of faces
                 prior = face_shadows(faces, dirs, runs, at_side, 2.0 * mp.prior_radius_m, mp.prior_pad_m,
                                      mp.prior_radius_m)
-            if mp.prior_normal_window_m > 0:            # round 23: the discs along the surface's normal
+            if mp.prior_normal_window_m > 0:            # the discs along the surface's normal
                 dirs = face_normals(faces, dirs, mp.prior_normal_window_m)
             self.obstacle_map.add_view(faces, dirs, floor, mp.prior_radius_m, mp.priors_off_own_floor, prior)
         sampler = TrajectorySampler(checker, self.sampler_params, self._width_with_margins(None))
@@ -227,7 +227,7 @@ class NavPlanner:
                 crawl = self._crawl_bounds(bounds, T_world_g, toward)
                 if crawl is None and sp.crawl_blocked_backs_off and self.follower.params.back_off and \
                         self._back_off_clear(ground_image, swing_checker, T_ground_camera, T_g_world):
-                    # round 21: every curvature the swing guard allows crawls the body into the map
+                    # every curvature the swing guard allows crawls the body into the map
                     self.follower.back_off_now()
                     return Replan(t_s, tuple(pose), sel, None,
                                   f"{reason}, kappa {bounds[0]:+.2f}..{bounds[1]:+.2f} /m (swing guard) all crawl "
@@ -264,15 +264,15 @@ class NavPlanner:
         return checker
 
     def _back_off_clear(self, ground, swing_checker, T_ground_camera, T_g_world) -> bool:
-        """Round 19 (sampler.back_off_check_m): may the robot back off? Backing off tail first at a
+        """sampler.back_off_check_m: may the robot back off? Backing off tail first at a
         constant kappa moves every point of the body along the body's own circle into the place of
         the point behind it (body_model.py); only the tail enters new ground: the body's circle
         continued back_off_check_m behind the tail, with the body's footprint (its width + the
         lateral margins). Clear unless the current image, an earlier view (their obstacles
         swing_obstacle_depth_m deep, as the swing guard's) or the obstacle map shows an obstacle
         there; floor none shows counts free (the body came that way). Unchecked (True) without the
-        body's geometry or with back_off_check_m 0. Round 18: three of the 12-link robot's four new
-        contact runs were the tail backing off into a cylinder the map held. swing_checker: the
+        body's geometry or with back_off_check_m 0. Unchecked, backing off drove the tail into
+        cylinders the map held. swing_checker: the
         replan's swing-guard checker (the same views, depth and map), None: one is built."""
         sp, g = self.sampler_params, self.geometry
         if g is None or sp.back_off_check_m <= 0:
@@ -296,19 +296,19 @@ class NavPlanner:
         an obstacle in the current image or an earlier view (`checker`: its obstacles are
         swing_obstacle_depth_m deep; unknown floor counts free: the body lies where the camera
         was). Stepped step_per_m out from the current kappa to each side, up to the gait's range.
-        Only the front: further back the model's swing overstates the body's (round 11: guarding
+        Only the front: further back the model's swing overstates the body's (guarding
         the whole body held kappa for minutes after a cylinder was passed, 60 % of COBRA's depth
-        runs against 93 %). Round 19 (swing_guard_tail_m > 0): the stations within it of the tail are
+        runs against 93 %). swing_guard_tail_m > 0: the stations within it of the tail are
         kept off what the obstacle map holds (the map only: the views saw that floor long ago).
-        Round 20 (sampler.reshape_keeps_centroid): the shapes keep the body's centroid, so the middle
+        sampler.reshape_keeps_centroid: the shapes keep the body's centroid, so the middle
         moves too (to the outside of the bend): swing_guard_tail_m 1.5 m guards all of COBRA's body
-        behind the front against the map (measured, not kept: README round 20). Round 21
-        (sampler.swing_guard_body, needs T_world_g, the ground frame in the world): the stations
+        behind the front against the map (measured, not kept).
+        sampler.swing_guard_body (needs T_world_g, the ground frame in the world): the stations
         between the front and the tail's guard may not come nearer the map's obstacles than the
         crawl guard's clearance (half the body's width + crawl_margin_m), or than they already are
         when they are nearer: moving away from an obstacle the body lies close to is allowed.
-        (The lead's reach, half the width + lateral_margin_m, pinned kappa: depth w16 s1 held -2 /m
-        for 260 s beside the goal.)"""
+        (The lead's reach, half the width + lateral_margin_m, pinned kappa: the robot could hold a
+        tight turn for minutes beside the goal.)"""
         fp, g, sp = self.follower.params, self.geometry, self.sampler_params
         kappa_now = self.follower.kappa_per_m
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
@@ -317,11 +317,11 @@ class NavPlanner:
                          sp.reshape_keeps_centroid)[-1][:, :2]
         from_head = _from_head(now)
         front = from_head <= sp.swing_guard_m + 1e-9
-        # round 19 (swing_guard_tail_m): the tail's last metres swing as far as the head; against the
+        # the tail's last metres swing as far as the head; against the
         # obstacle map only (the views show the floor beside the tail long ago, with their shadows)
         back = (from_head[0] - from_head <= sp.swing_guard_tail_m + 1e-9) & ~front
         back &= sp.swing_guard_tail_m > 0 and checker.hidden_obstacles is not None
-        # round 21 (swing_guard_body): the stations between, against the map's distances
+        # the stations between, against the map's distances
         omap = self.obstacle_map
         body = ~front & ~back
         body &= sp.swing_guard_body and T_world_g is not None and omap is not None
@@ -356,25 +356,25 @@ class NavPlanner:
 
     def _crawl_bounds(self, bounds: Tuple[float, float], T_world_g: np.ndarray, toward: Optional[float] = None,
                       step_per_m: float = 0.25) -> Optional[Tuple[float, float]]:
-        """Round 20 (sampler.crawl_guard_m): the swing guard's bounds narrowed to the curvatures whose
-        crawl keeps the body off the obstacle map. Measured (test_nav_round20.py): COBRA's bent body
-        does not crawl along its own circle; it moves with its middle along the middle's tangent
-        (kappa L/2 off the head's heading) and turns only beyond about 0.35 /m. So each curvature
+        """sampler.crawl_guard_m: the swing guard's bounds narrowed to the curvatures whose
+        crawl keeps the body off the obstacle map. Measured (test/python/test_nav_body_model.py):
+        COBRA's bent body does not crawl along its own circle; it moves with its middle along the
+        middle's tangent (kappa L/2 off the head's heading) and turns only beyond about 0.35 /m. So each curvature
         (the swing guard's steps, within its bounds) is predicted: the body in its new shape (about
         the middle, body_model.body_poses) carried rigidly with the middle along crawl_guard_m of the
         middle's path (curvature omega(kappa) / speed, omega 0 within crawl_dead_band_per_m). A
         station (beyond the swing guard's front swing_guard_m, whose way the arcs check) may not come
         nearer the map's obstacles than half the body's width + crawl_margin_m, or than it already is
         when it is nearer. If the current kappa fails, the nearest that passes is forced (the bounds
-        close round it and its passing neighbours); if none passes, None (round 21: the replan backs off
+        close round it and its passing neighbours); if none passes, None (the replan backs off
         with sampler.crawl_blocked_backs_off, else the swing guard's bounds stand). With
-        crawl_guard_forces false the current kappa failing is as none passing, except (round 22,
+        crawl_guard_forces false the current kappa failing is as none passing, except (with
         sampler.crawl_forces_toward_arc; toward: the chosen arc's feed-forward kappa) when a kappa on
         `toward`'s side of the current one passes: the nearest of those is forced (the follower bends
-        that way anyway; forcing against the arc circled COBRA off the goal, round 21 w1 s0). COBRA
-        depth w9 s5 at 162 s: a station 0.156 m off the map would have come to 0.064 m (0.065 needed)
-        at the current kappa while the arc turned right and -0.20 and -0.45 /m passed; it backed off,
-        and backed off again beside the same obstacle (w16 s5 likewise: 44 stops to the time limit)."""
+        that way anyway; forcing against the arc can circle the robot off the goal). Without it a
+        station that misses the clearance by a millimetre at the current kappa, while kappas on the
+        arc's side pass, makes the robot back off, and back off again beside the same obstacle, until
+        the time limit."""
         sp, g, fp = self.sampler_params, self.geometry, self.follower.params
         omap = self.obstacle_map
         if omap is None or omap.geometry().is_empty:
@@ -428,15 +428,15 @@ class NavPlanner:
         margins; points no view shows count free within the near field, beside and behind the
         camera, as for the arcs), and (crawl_m > 0: sampler.turn_free_m) the tightest candidate arc
         on that side free for crawl_m: the gait crawls on while the body turns, and turning on
-        into a cylinder right ahead of the head was COBRA's last contact with depth (round 12,
-        world 6 seed 2: every arc 0.00 m free, kappa +1.5 held for 30 s). None if none is.
-        Bending to kappa swings both ends (L^2/8) kappa to the inside (round 4): turning blindly
+        into a cylinder right ahead of the head was a contact with depth (every arc
+        0 m free while the tightest kappa was held). None if none is.
+        Bending to kappa swings both ends (L^2/8) kappa to the inside: turning blindly
         coiled COBRA's head and tail into what had stopped it."""
         fp, g = self.follower.params, self.geometry
         kappa_now = self.follower.kappa_per_m
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
         scale = checker.width_scale(self._width_with_margins(g))
-        keep = self.sampler_params.turn_keeps_side and not both_sides   # round 16: that side or back off
+        keep = self.sampler_params.turn_keeps_side and not both_sides   # that side or back off
         sides = (self._turning,) if keep else (self._turning, -self._turning)
         for side in sides:
             if crawl_m > 0:

@@ -1,10 +1,10 @@
-"""A coarse route to the goal on the obstacle map (issue 13 round 15), ROS-free: the cost to go the
+"""A coarse route to the goal on the obstacle map, ROS-free: the cost to go the
 perception-space planner's goal bias steers by, instead of the distance to the goal.
 
 The paper's planner is local: its arcs see 1.2 m, and the goal bias (sampler.goal_tie_m) pulled them
 straight at the goal. Where obstacles stand closer together than the checked footprint (2 x
 sampler.body_clearance_m) the robot drove into the funnel between them, found no free arc, and
-touched while backing off and turning in place (round 15: world 6, even with every obstacle known).
+touched while backing off and turning in place (world 6, even with every obstacle known).
 A route on a grid over the map (scipy.sparse.csgraph.dijkstra from the goal, 8-connected) keeps the
 robot out of such funnels from the moment the views show them: the goal bias takes the arc whose
 free prefix reaches the least cost to go (sampler.py). Cells within inflation_m of an obstacle (the

@@ -11,12 +11,12 @@ Optional goal bias (not in the paper, off by default): arcs whose free length is
 goal_tie_m of the longest count as equally long, and among them the one whose free prefix passes
 closest to the goal (to 1 cm) is taken, then the one whose prefix ends closest to it (a goal
 behind the robot: every prefix passes closest at its start), before curvature decides; an arc free beyond the goal's
-distance counts as long enough (the far floor is often marked unsure at the horizon) (round 1 compared the heading at
-the prefix's end: with the goal nearer than the horizon every prefix ends past it and COBRA drove
-by the goal at 0.28 m). lateral_margin_m widens the checked footprint on each side (the body
-slips sideways and bends inside a turn: round 2's run touched the obstacle with its middle).
+distance counts as long enough (the far floor is often marked unsure at the horizon). Comparing the heading at
+the prefix's end instead fails with the goal nearer than the horizon: every prefix ends past it and
+the robot drives by the goal. lateral_margin_m widens the checked footprint on each side (the body
+slips sideways and bends inside a turn, and its middle can touch an obstacle the head cleared).
 
-Round 5 (issue 13): known_free_m: only an arc's first known_free_m must be seen free; beyond it only
+known_free_m: only an arc's first known_free_m must be seen free; beyond it only
 a point some view shows as not ground ends the free prefix (the paper's rule cut every curved arc
 where COBRA's 0.5 m footprint leaves the 55 deg view, so the straight arc always won).
 footprint_taper_m: the footprint grows from the head's (start_width_m) to the full width over the
@@ -25,12 +25,12 @@ body and blocked every arc, those leaving it too). resume_free_m: after a stop, 
 to resume. body_model (off; body_model.py): arcs of the body's middle with the body's sweep
 checked, candidates within curvature_step_per_m of the current curvature, switch_cost_m.
 
-Round 16 (goal_disc): the goal bias aims at the goal's disc, not its centre: a free prefix that
+goal_disc: the goal bias aims at the goal's disc, not its centre: a free prefix that
 enters the disc costs 0 (whatever the route says there); among those, the one passing nearest the
-centre wins (round 17: the robot turns less tightly than the tightest arcs, and one grazing the disc
+centre wins (the robot turns less tightly than the tightest arcs, and one grazing the disc
 missed it). A phantom on the disc's edge had sent the route round it, and COBRA circled the goal.
-An arc free as far as the goal's centre is long enough, not as far as the disc's edge (round 16
-measured that too: it let a 0.58 m arc into a gap narrower than the body, depth world 0 seed 0).
+An arc free as far as the goal's centre is long enough, not as far as the disc's edge (that
+lets a short arc into a gap narrower than the body).
 """
 import math
 from dataclasses import dataclass, field
@@ -61,7 +61,7 @@ class SamplerParams:
     earlier_views: int = 0                # views of earlier replans kept for hidden points
     obstacle_depth_m: float = math.inf    # in those: non-ground this far beyond the ground's edge
                                           # counts as blocked, further is hidden behind it
-    blocked_wins: bool = False            # round 10: a hidden point one earlier view shows as an
+    blocked_wins: bool = False            # a hidden point one earlier view shows as an
                                           # obstacle is blocked, whatever the others show (False:
                                           # ground in any view frees it; collision_check.py)
     body_model: bool = False              # arcs of the body's middle, the whole body checked
@@ -80,61 +80,61 @@ class SamplerParams:
     switch_cost_m: float = 0.0            # body model's goal bias: metres of closest approach a change
                                           # of 1/m of curvature from the current one costs (keeps the
                                           # side round an obstacle from one replan to the next)
-    swing_guard_m: float = 0.0            # round 11: > 0: while following an arc, the body's curvature
+    swing_guard_m: float = 0.0            # > 0: while following an arc, the body's curvature
                                           # changes only as far as reshaping keeps the body's first
                                           # swing_guard_m (from the head) off obstacles the views
                                           # show (planner.py _swing_bounds); 0: off
-    swing_guard_tail_m: float = 0.0       # round 19: > 0: the guard also keeps the body's last metres (from
+    swing_guard_tail_m: float = 0.0       # > 0: the guard also keeps the body's last metres (from
                                           # the tail) off what the obstacle map holds (not the views)
     swing_obstacle_depth_m: float = 0.1   # the swing guard's obstacles: non-ground up to this beyond a
                                           # view's ground edge (the obstacle's face), not obstacle_depth_m
-    turn_free_m: float = 0.0              # round 12: > 0: a turn in place needs the tightest arc on its
+    turn_free_m: float = 0.0              # > 0: a turn in place needs the tightest arc on its
                                           # side free for this much (after margin_m): the gait crawls on
                                           # while it turns (COBRA at kappa 1.5 /m: 4-5 mm/s, so 4-5 cm a
                                           # replan); else it backs off. 0: off
-    turn_keeps_side: bool = False         # round 16: a turn in place only to the side chosen at the
+    turn_keeps_side: bool = False         # a turn in place only to the side chosen at the
                                           # stop's first replan (planner._turning); that side not free:
-                                          # back off. False: the other side is tried next (round 5)
-    near_field_max_m: float = math.inf    # round 17: caps the near field (collision_check.py: unseen
+                                          # back off. False: the other side is tried next
+    near_field_max_m: float = math.inf    # caps the near field (collision_check.py: unseen
                                           # points nearer than it ahead of the camera count as free;
                                           # for the full 0.5 m footprint that is 0.5 m, sideways too)
-    goal_disc: bool = False               # round 16: the goal bias aims at the goal's disc (the caller's
+    goal_disc: bool = False               # the goal bias aims at the goal's disc (the caller's
                                           # goal_radius_m), not its centre: a free prefix that enters the
                                           # disc reaches the goal (goal_err 0). False: the centre (radius 0)
-    blocked_wins_depth_m: float = math.inf  # round 19: with blocked_wins, only non-ground within this of an
+    blocked_wins_depth_m: float = math.inf  # with blocked_wins, only non-ground within this of an
                                           # earlier view's ground edge (the face) wins over ground another
                                           # view shows; the shadow behind it (to obstacle_depth_m) does not
-    back_off_check_m: float = 0.0         # round 19: > 0: backing off needs the tail's track continued this
+    back_off_check_m: float = 0.0         # > 0: backing off needs the tail's track continued this
                                           # far backwards clear of what the views and the obstacle map show
                                           # (planner._back_off_clear); else a turn in place. 0: unchecked
-    crawl_guard_m: float = 0.0            # round 20: > 0: the swing guard also predicts the crawl: the body
+    crawl_guard_m: float = 0.0            # > 0: the swing guard also predicts the crawl: the body
                                           # in its new shape moves rigidly with its middle, which goes along
                                           # its own tangent this far turning at the measured rate (none
                                           # within crawl_dead_band_per_m); a curvature that crawls the body
                                           # into what the obstacle map holds is not allowed, and when the
                                           # current one does, the nearest that does not is forced
                                           # (planner._crawl_bounds). 0: off
-    crawl_dead_band_per_m: float = 0.0    # round 20: the body turns only beyond this curvature (COBRA: not
-                                          # below about 0.35-0.4 /m, test_nav_round20.py); beyond it, at
+    crawl_dead_band_per_m: float = 0.0    # the body turns only beyond this curvature (COBRA: not
+                                          # below about 0.35-0.4 /m, test_nav_body_model.py); beyond it, at
                                           # follower omega_per_kappa per 1/m above it
-    crawl_margin_m: float = 0.02          # round 20: the crawl guard's clearance beyond half the body's width
-    reshape_keeps_centroid: bool = False  # round 20: the body reshapes about its centroid (measured on COBRA),
+    crawl_margin_m: float = 0.02          # the crawl guard's clearance beyond half the body's width
+    reshape_keeps_centroid: bool = False  # the body reshapes about its centroid (measured on COBRA),
                                           # not its middle (body_model.body_poses): the swing guard, the
                                           # crawl guard and the turn in place. False: about the middle
-    crawl_blocked_backs_off: bool = False  # round 21: when no curvature the swing guard allows crawls clear
+    crawl_blocked_backs_off: bool = False  # when no curvature the swing guard allows crawls clear
                                           # (crawl guard on), back off along the track if its tail's track is
                                           # clear; False: follow within the swing guard's bounds
-    crawl_guard_forces: bool = True       # round 21: the crawl guard forces the nearest passing kappa when the
+    crawl_guard_forces: bool = True       # the crawl guard forces the nearest passing kappa when the
                                           # current one fails; False: the current one failing is as none passing
-    swing_guard_body: bool = False        # round 21: the swing guard also keeps the stations between its front
+    swing_guard_body: bool = False        # the swing guard also keeps the stations between its front
                                           # and its tail off the obstacle map: none may come nearer the map's
                                           # obstacles than half the body's width + crawl_margin_m, or than
                                           # it already is when it is nearer (planner._swing_bounds)
-    crawl_forces_toward_arc: bool = False  # round 22: with crawl_guard_forces false, the current kappa failing
+    crawl_forces_toward_arc: bool = False  # with crawl_guard_forces false, the current kappa failing
                                           # forces the nearest passing kappa on the chosen arc's side of it
                                           # (towards its feed-forward kappa) when one passes there; else back off.
                                           # False: back off whenever the current one fails
-    view_obstacle_range_m: float = math.inf  # round 22: an earlier view's non-ground further than this from its
+    view_obstacle_range_m: float = math.inf  # an earlier view's non-ground further than this from its
                                           # camera (depth along its axis) is not known to be an obstacle (far
                                           # off it is mostly a cylinder's upper part hiding the floor behind
                                           # it; collision_check.py). inf: all of it is
@@ -232,7 +232,7 @@ class TrajectorySampler:
         callable (M, 2) ground-frame points -> (M,) the route's cost to the goal (route.py): the goal
         bias then takes the arc whose free prefix reaches the least cost, not the least distance.
         goal_radius_m: the goal's radius; with params.goal_disc the goal is that disc (points in it
-        cost 0, round 16), else its centre."""
+        cost 0), else its centre."""
         p = self.params
         goal_radius_m = goal_radius_m if p.goal_disc else 0.0
         kappa_now = 0.0
@@ -250,8 +250,8 @@ class TrajectorySampler:
         enough = longest - tie
         if goal_in_ground is not None and p.goal_tie_m > 0:
             # an arc free as far as the goal is long enough (the far floor is often unsure); as far as
-            # the goal's centre, not its disc's edge, even with goal_disc (round 16: the disc's edge let
-            # a 0.58 m arc into a gap narrower than the body, depth world 0 seed 0)
+            # the goal's centre, not its disc's edge, even with goal_disc (the disc's edge
+            # lets a short arc into a gap narrower than the body)
             enough = min(enough, math.hypot(goal_in_ground[0], goal_in_ground[1]))
         best = [i for i in cands if arcs[i].free_m >= enough]
 
@@ -266,7 +266,7 @@ class TrajectorySampler:
                 if goal_radius_m > 0 and np.min(dist) <= goal_radius_m:
                     # in the goal's disc: there. Among the arcs that enter it, the one passing nearest
                     # the centre: the robot turns less tightly than the tightest arcs, and an arc
-                    # grazing the disc on paper missed it (round 17: 12-link depth world 9 seed 5)
+                    # grazing the disc on paper misses it
                     d = np.where(dist <= goal_radius_m, 0.0, d)
                     depth_err = float(np.min(dist))
                 goal_err, end_err = float(np.min(d)), float(d[-1])
