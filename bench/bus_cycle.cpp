@@ -90,12 +90,14 @@ int main(int argc, char** argv) {
     bus.reset_counters();
     const double c0 = cpu_s(), w0 = wall_s();
     for (int c = 0; c < cycles; ++c) {
-      const dx::Status s =
-          fast ? bus.fast_sync_read(dx::kFeedbackAddress, dx::kFeedbackBytes, ids.data(), n, feedback.data(), replies.data())
-               : bus.sync_read(dx::kFeedbackAddress, dx::kFeedbackBytes, ids.data(), n, feedback.data(), replies.data());
+      const dx::Status s = fast ? bus.fast_sync_read(dx::kFeedbackAddress, dx::kFeedbackBytes, ids.data(), n,
+                                                     feedback.data(), replies.data())
+                                : bus.sync_read(dx::kFeedbackAddress, dx::kFeedbackBytes, ids.data(), n,
+                                                feedback.data(), replies.data());
       if (s != dx::Status::kOk) ++r.failed_cycles;
       double sum_rad = 0;  // what a loop does with the feedback
-      for (std::size_t i = 0; i < n; ++i) sum_rad += dx::decode_feedback(&feedback[i * dx::kFeedbackBytes]).position_rad;
+      for (std::size_t i = 0; i < n; ++i)
+        sum_rad += dx::decode_feedback(&feedback[i * dx::kFeedbackBytes]).position_rad;
       if (!std::isfinite(sum_rad)) ++r.failed_cycles;
       bus.sync_write(dx::kGoalPositionAddress, dx::kGoalPositionBytes, ids.data(), n, goals.data());
     }
@@ -114,11 +116,16 @@ int main(int argc, char** argv) {
   const Result sync = run(false);
   const Result fast = run(true);
   std::printf("servos=%zu cycles=%d baud=%d port=%s\n", n, cycles, baud, port.c_str());
-  std::printf("cpp sync_read+sync_write:      bytes/cycle %.1f (minimum %.0f), cpu %.4f ms/cycle, wall %.3f ms/cycle, "
-              "failed cycles %d\n", sync.bytes, sync_min, sync.cpu_ms, sync.wall_ms, sync.failed_cycles);
-  std::printf("cpp fast_sync_read+sync_write: bytes/cycle %.1f (minimum %.0f), cpu %.4f ms/cycle, wall %.3f ms/cycle, "
-              "failed cycles %d\n", fast.bytes, fast_min, fast.cpu_ms, fast.wall_ms, fast.failed_cycles);
-  std::printf("wire time at %d baud: sync %.3f ms, fast %.3f ms per cycle\n", baud, dx::wire_time_s(static_cast<std::size_t>(sync_min), baud) * 1e3,
+  std::printf(
+      "cpp sync_read+sync_write:      bytes/cycle %.1f (minimum %.0f), cpu %.4f ms/cycle, wall %.3f ms/cycle, "
+      "failed cycles %d\n",
+      sync.bytes, sync_min, sync.cpu_ms, sync.wall_ms, sync.failed_cycles);
+  std::printf(
+      "cpp fast_sync_read+sync_write: bytes/cycle %.1f (minimum %.0f), cpu %.4f ms/cycle, wall %.3f ms/cycle, "
+      "failed cycles %d\n",
+      fast.bytes, fast_min, fast.cpu_ms, fast.wall_ms, fast.failed_cycles);
+  std::printf("wire time at %d baud: sync %.3f ms, fast %.3f ms per cycle\n", baud,
+              dx::wire_time_s(static_cast<std::size_t>(sync_min), baud) * 1e3,
               dx::wire_time_s(static_cast<std::size_t>(fast_min), baud) * 1e3);
   return sync.failed_cycles + fast.failed_cycles > 0 ? 1 : 0;
 }

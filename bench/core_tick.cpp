@@ -38,8 +38,8 @@ int main(int argc, char** argv) {
     }
     std::sort(ns.begin(), ns.end());
     std::printf("cpp %s ticks=%d median_us=%.3f p99_us=%.3f max_us=%.3f checksum=%.6f\n", to_string(method).c_str(),
-                ticks, ns[ticks / 2] / 1000.0, ns[static_cast<std::size_t>(ticks * 0.99)] / 1000.0,
-                ns.back() / 1000.0, checksum);
+                ticks, ns[ticks / 2] / 1000.0, ns[static_cast<std::size_t>(ticks * 0.99)] / 1000.0, ns.back() / 1000.0,
+                checksum);
   }
   return 0;
 }

@@ -72,7 +72,8 @@ int main(int argc, char** argv) {
   for (std::size_t k = 0; k < n; ++k) {
     const auto wake = timer.wait();
     const double c0 = thread_cpu_s();
-    if (!ctl.update(std::chrono::duration<double>(wake - epoch).count(), std::chrono::duration<double>(wake - prev).count()))
+    if (!ctl.update(std::chrono::duration<double>(wake - epoch).count(),
+                    std::chrono::duration<double>(wake - prev).count()))
       ++failed;
     const double c1 = thread_cpu_s();
     const auto end = Clock::now();
@@ -89,11 +90,12 @@ int main(int argc, char** argv) {
   for (double p : period_ms) mean_p += p;
   mean_p /= period_ms.size();
   for (double p : period_ms) sq += (p - mean_p) * (p - mean_p);
-  std::printf("driver_loop port=%s target_hz=%.0f %s cycles=%zu rate_hz=%.1f overruns=%lu skipped=%lu failed_cycles=%lu "
-              "state=%s\n",
-              port.c_str(), rate_hz, fast ? "fast_sync_read" : "sync_read", n, (n - 1) / elapsed,
-              static_cast<unsigned long>(st.overruns), static_cast<unsigned long>(st.skipped_deadlines),
-              static_cast<unsigned long>(failed), core::to_string(ctl.state()));
+  std::printf(
+      "driver_loop port=%s target_hz=%.0f %s cycles=%zu rate_hz=%.1f overruns=%lu skipped=%lu failed_cycles=%lu "
+      "state=%s\n",
+      port.c_str(), rate_hz, fast ? "fast_sync_read" : "sync_read", n, (n - 1) / elapsed,
+      static_cast<unsigned long>(st.overruns), static_cast<unsigned long>(st.skipped_deadlines),
+      static_cast<unsigned long>(failed), core::to_string(ctl.state()));
   std::printf("  period_ms mean=%.3f std=%.3f p99=%.3f max=%.3f\n", mean_p, std::sqrt(sq / period_ms.size()),
               pct(period_ms, 0.99), pct(period_ms, 1.0));
   std::printf("  wall_per_cycle_ms median=%.3f p99=%.3f max=%.3f (bus round trips to the Python mock included)\n",

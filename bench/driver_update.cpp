@@ -42,7 +42,6 @@ int main(int argc, char** argv) {
   }
   std::sort(us.begin(), us.end());
   std::printf("driver_update cycles=%d median_us=%.2f p10_us=%.2f p99_us=%.2f max_us=%.2f state=%s\n", n,
-              us[us.size() / 2], us[us.size() / 10], us[us.size() * 99 / 100], us.back(),
-              core::to_string(ctl.state()));
+              us[us.size() / 2], us[us.size() / 10], us[us.size() * 99 / 100], us.back(), core::to_string(ctl.state()));
   return ctl.state() == core::DriverState::kRunning ? 0 : 1;
 }

@@ -38,8 +38,7 @@ int main(int argc, char** argv) {
   }
   constexpr int kChunkings[] = {0, 1, 2, -1};
   fz::CorpusGenerator gen(seed);
-  std::size_t inputs = 0, bytes = 0, expected = 0, recovered = 0, lost = 0, collisions = 0, refused = 0,
-              damaged = 0;
+  std::size_t inputs = 0, bytes = 0, expected = 0, recovered = 0, lost = 0, collisions = 0, refused = 0, damaged = 0;
   std::string first_loss;
   const auto t0 = std::chrono::steady_clock::now();
   for (long i = 0; i < streams; ++i) {
@@ -57,8 +56,8 @@ int main(int argc, char** argv) {
       collisions += v.collisions;
       refused += rx.counts.bad_crc + rx.counts.malformed;
       if (v.lost && first_loss.empty()) {
-        first_loss = "stream " + std::to_string(i) + " chunking " + std::to_string(chunking) + ": " +
-                     fz::hex(stream, 200);
+        first_loss =
+            "stream " + std::to_string(i) + " chunking " + std::to_string(chunking) + ": " + fz::hex(stream, 200);
       }
     }
   }

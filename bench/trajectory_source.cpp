@@ -64,12 +64,12 @@ int main(int argc, char** argv) {
     checksum += goal[0];
   }
   std::sort(ns.begin(), ns.end());
-  std::printf("trajectory_source points=%d joints=%d storage_mb=%.1f construct_ms=%.2f check_ms=%.2f submit_ms=%.2f "
-              "take_us=%.2f\n",
-              points, n, 2.0 * points * (2.0 * n + 1) * 8 / 1e6, construct_us / 1e3, check_us / 1e3, submit_us / 1e3,
-              take_us);
-  std::printf("  update (100 Hz over %.0f s) calls=%zu median_us=%.3f p99_us=%.3f max_us=%.3f checksum=%.6f\n", duration,
-              ns.size(), ns[ns.size() / 2] / 1e3, ns[static_cast<std::size_t>(ns.size() * 0.99)] / 1e3, ns.back() / 1e3,
-              checksum);
+  std::printf(
+      "trajectory_source points=%d joints=%d storage_mb=%.1f construct_ms=%.2f check_ms=%.2f submit_ms=%.2f "
+      "take_us=%.2f\n",
+      points, n, 2.0 * points * (2.0 * n + 1) * 8 / 1e6, construct_us / 1e3, check_us / 1e3, submit_us / 1e3, take_us);
+  std::printf("  update (100 Hz over %.0f s) calls=%zu median_us=%.3f p99_us=%.3f max_us=%.3f checksum=%.6f\n",
+              duration, ns.size(), ns[ns.size() / 2] / 1e3, ns[static_cast<std::size_t>(ns.size() * 0.99)] / 1e3,
+              ns.back() / 1e3, checksum);
   return 0;
 }

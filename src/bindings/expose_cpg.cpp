@@ -42,8 +42,9 @@ void expose_cpg(py::module_& m) {
           py::arg("phase") = py::none(), py::arg("bias") = py::none(),
           "New targets (radians, rad/s, one value per joint); omitted ones are kept. All or nothing: "
           "ValueError on a wrong length or a non-finite value, and nothing changes.")
-      .def("apply", [](Cpg& cpg, const GaitParameters& p) { cpg.set_parameters(p); }, py::arg("parameters"),
-           "Sets all targets from a GaitParameters (ValueError, and nothing changes, when invalid).")
+      .def(
+          "apply", [](Cpg& cpg, const GaitParameters& p) { cpg.set_parameters(p); }, py::arg("parameters"),
+          "Sets all targets from a GaitParameters (ValueError, and nothing changes, when invalid).")
       .def_property_readonly("targets", &Cpg::targets)
       .def(
           "reset",
@@ -63,12 +64,15 @@ void expose_cpg(py::module_& m) {
             return Eigen::VectorXd(cpg.step(dt_s));
           },
           py::arg("dt_s"), "Advances the oscillators by dt_s seconds; returns the joint angles (rad).")
-      .def_property_readonly("phases", [](const Cpg& c) { return Eigen::VectorXd(c.phases()); }, "θ (rad)")
-      .def_property_readonly("amplitudes", [](const Cpg& c) { return Eigen::VectorXd(c.amplitudes()); }, "r (rad)")
+      .def_property_readonly(
+          "phases", [](const Cpg& c) { return Eigen::VectorXd(c.phases()); }, "θ (rad)")
+      .def_property_readonly(
+          "amplitudes", [](const Cpg& c) { return Eigen::VectorXd(c.amplitudes()); }, "r (rad)")
       .def_property_readonly("amplitude_rates", [](const Cpg& c) { return Eigen::VectorXd(c.amplitude_rates()); })
       .def_property_readonly("biases", [](const Cpg& c) { return Eigen::VectorXd(c.biases()); })
-      .def_property_readonly("output", [](const Cpg& c) { return Eigen::VectorXd(c.output()); },
-                             "last joint angles, clamped to the joint limits")
+      .def_property_readonly(
+          "output", [](const Cpg& c) { return Eigen::VectorXd(c.output()); },
+          "last joint angles, clamped to the joint limits")
       .def_property_readonly("unclamped_output", [](const Cpg& c) { return Eigen::VectorXd(c.unclamped_output()); });
 }
 

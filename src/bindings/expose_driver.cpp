@@ -50,7 +50,8 @@ std::string join_keys() {
 }  // namespace
 
 void expose_driver(py::module_& m) {
-  py::class_<DriverConfig>(m, "DriverConfig", "Configuration of DriverController (config/driver.yaml documents every key).")
+  py::class_<DriverConfig>(m, "DriverConfig",
+                           "Configuration of DriverController (config/driver.yaml documents every key).")
       .def(py::init([](const py::kwargs& kwargs) {
              // The keyword arguments as a YAML mapping, read by the one loader (DriverConfig::apply_yaml).
              YAML::Node doc(YAML::NodeType::Map);
@@ -61,14 +62,10 @@ void expose_driver(py::module_& m) {
                const py::handle v = item.second;
                if (std::find(known.begin(), known.end(), key) == known.end())
                  errors.push_back(key + ": unknown key (known: " + join_keys() + ")");
-               else if (py::isinstance<py::bool_>(v))
-                 doc[key] = v.cast<bool>();
-               else if (py::isinstance<py::int_>(v))
-                 doc[key] = v.cast<long long>();
-               else if (py::isinstance<py::float_>(v))
-                 doc[key] = v.cast<double>();
-               else
-                 doc[key] = std::string(py::str(v));
+               else if (py::isinstance<py::bool_>(v)) doc[key] = v.cast<bool>();
+               else if (py::isinstance<py::int_>(v)) doc[key] = v.cast<long long>();
+               else if (py::isinstance<py::float_>(v)) doc[key] = v.cast<double>();
+               else doc[key] = std::string(py::str(v));
              }
              DriverConfig c;
              c.apply_yaml(doc, &errors);
@@ -81,20 +78,21 @@ void expose_driver(py::module_& m) {
       .def_static("from_yaml", &DriverConfig::from_yaml_file, py::arg("path"),
                   "The controller's keys of a driver YAML (config/driver.yaml), the node's own ignored; "
                   "ConfigError lists every problem.")
-      .def_static("from_yaml_string", &DriverConfig::from_yaml_string, py::arg("text"),
-                  py::arg("source") = "<string>", "Same as from_yaml, from YAML text.")
-      .def_property_readonly_static("keys", [](const py::object&) { return DriverConfig::keys(); },
-                                    "the YAML keys, the field names")
+      .def_static("from_yaml_string", &DriverConfig::from_yaml_string, py::arg("text"), py::arg("source") = "<string>",
+                  "Same as from_yaml, from YAML text.")
+      .def_property_readonly_static(
+          "keys", [](const py::object&) { return DriverConfig::keys(); }, "the YAML keys, the field names")
       .def("validate", &DriverConfig::validate, "Every problem, naming key and value (empty when usable).")
       .def_readwrite("fast_sync_read", &DriverConfig::fast_sync_read)
       .def_readwrite("max_failed_cycles", &DriverConfig::max_failed_cycles)
       .def_readwrite("status_every_cycles", &DriverConfig::status_every_cycles)
       .def_readwrite("return_delay_time_us", &DriverConfig::return_delay_time_us)
-      .def_property_readonly("fault_action", [](const DriverConfig& c) { return std::string(to_string(c.fault_action)); },
-                             "'hold' or 'torque_off'")
-      .def_property_readonly("shutdown_action",
-                             [](const DriverConfig& c) { return std::string(to_string(c.shutdown_action)); },
-                             "'hold' or 'torque_off'")
+      .def_property_readonly(
+          "fault_action", [](const DriverConfig& c) { return std::string(to_string(c.fault_action)); },
+          "'hold' or 'torque_off'")
+      .def_property_readonly(
+          "shutdown_action", [](const DriverConfig& c) { return std::string(to_string(c.shutdown_action)); },
+          "'hold' or 'torque_off'")
       .def_readwrite("torque_on_start", &DriverConfig::torque_on_start)
       .def_readwrite("max_joint_velocity_rad_s", &DriverConfig::max_joint_velocity_rad_s)
       .def_readwrite("max_frequency_hz", &DriverConfig::max_frequency_hz)
@@ -113,7 +111,8 @@ void expose_driver(py::module_& m) {
       "The driver's control loop (src/core/driver_controller.cpp), the one driver_node runs: gait commands, CPG + "
       "steering, stale-pose gating, slew limit, joint limits, faults, kinematics. Call start(), then update() at "
       "the loop's rate; everything from one thread.")
-      .def(py::init<const RobotModel&, const GaitLibrary&, const dx::ControlTable&, dx::ServoBus&, const DriverConfig&>(),
+      .def(py::init<const RobotModel&, const GaitLibrary&, const dx::ControlTable&, dx::ServoBus&,
+                    const DriverConfig&>(),
            py::arg("model"), py::arg("gaits"), py::arg("table"), py::arg("bus"), py::arg("config"),
            py::keep_alive<1, 5>(),
            "Checks everything (ConfigError lists every problem); keeps the bus alive as long as the controller.")
@@ -122,7 +121,8 @@ void expose_driver(py::module_& m) {
            "(torque_on_start) or stopped; ConfigError lists every servo that fails.")
       .def("update", &DriverController::update, py::arg("t_s"), py::arg("dt_s"),
            "One cycle: read the servos, gait, CPG, goals, write, kinematics. False when the cycle failed.")
-      .def("shutdown", &DriverController::shutdown, "Leaves the servos as shutdown_action says; False when the bus failed.")
+      .def("shutdown", &DriverController::shutdown,
+           "Leaves the servos as shutdown_action says; False when the bus failed.")
       .def(
           "command_gait",
           [](DriverController& d, const std::string& gait, const std::vector<double>& amplitude,
@@ -161,8 +161,9 @@ void expose_driver(py::module_& m) {
             if (positions_rad.rows() != static_cast<Eigen::Index>(times_s.size()) ||
                 (velocities_rad_s && (velocities_rad_s->rows() != positions_rad.rows() ||
                                       velocities_rad_s->cols() != positions_rad.cols())))
-              throw py::value_error("command_trajectory: positions_rad must be (len(times_s), joints) and "
-                                    "velocities_rad_s the same shape");
+              throw py::value_error(
+                  "command_trajectory: positions_rad must be (len(times_s), joints) and "
+                  "velocities_rad_s the same shape");
             driver::JointTrajectoryRequest r;
             r.id = id;
             r.joint_names = joint_names;
@@ -178,8 +179,8 @@ void expose_driver(py::module_& m) {
             }
             return d.command_trajectory(r);
           },
-          py::arg("joint_names"), py::arg("times_s"), py::arg("positions_rad"), py::arg("velocities_rad_s") = py::none(),
-          py::arg("id") = "",
+          py::arg("joint_names"), py::arg("times_s"), py::arg("positions_rad"),
+          py::arg("velocities_rad_s") = py::none(), py::arg("id") = "",
           "A joint trajectory (driver/joint_trajectory): names joint_1 .. joint_N in any order, times_s (P,) "
           "time_from_start, positions_rad (P, len(joint_names)), velocities_rad_s the same shape or None "
           "(estimated). Taken at the next update(); '' when accepted, else every reason.")
@@ -203,38 +204,48 @@ void expose_driver(py::module_& m) {
       .def_property_readonly("trajectories_refused", &DriverController::trajectories_refused)
       .def_property_readonly("last_trajectory_refusal", &DriverController::last_trajectory_refusal,
                              "why the last refused trajectory was refused")
-      .def_property_readonly("state", [](const DriverController& d) { return std::string(to_string(d.state())); },
-                             "'stopped', 'holding', 'running' or 'fault'")
-      .def_property_readonly("fault_reason", [](const DriverController& d) { return std::string(d.fault_reason()); },
-                             "the active fault ('' when none)")
-      .def_property_readonly("commanded_gait", &DriverController::commanded_gait, "the gait of the last accepted command")
-      .def_property_readonly("hold_reason",
-                             [](const DriverController& d) {
-                               return std::string(d.state() == DriverState::kHolding ? to_string(d.hold_reason()) : "");
-                             },
-                             "why the driver holds ('' unless holding), e.g. the command lifetime expired")
-      .def_property_readonly("last_refusal", &DriverController::last_refusal, "why the last refused command was refused")
+      .def_property_readonly(
+          "state", [](const DriverController& d) { return std::string(to_string(d.state())); },
+          "'stopped', 'holding', 'running' or 'fault'")
+      .def_property_readonly(
+          "fault_reason", [](const DriverController& d) { return std::string(d.fault_reason()); },
+          "the active fault ('' when none)")
+      .def_property_readonly("commanded_gait", &DriverController::commanded_gait,
+                             "the gait of the last accepted command")
+      .def_property_readonly(
+          "hold_reason",
+          [](const DriverController& d) {
+            return std::string(d.state() == DriverState::kHolding ? to_string(d.hold_reason()) : "");
+          },
+          "why the driver holds ('' unless holding), e.g. the command lifetime expired")
+      .def_property_readonly("last_refusal", &DriverController::last_refusal,
+                             "why the last refused command was refused")
       .def_property_readonly("commands_accepted", &DriverController::commands_accepted)
       .def_property_readonly("commands_refused", &DriverController::commands_refused)
       .def_property_readonly("ids", &DriverController::ids, "servo IDs in joint order")
-      .def_property_readonly("position_rad", [](const DriverController& d) { return Eigen::VectorXd(d.position_rad()); },
-                             "measured joint angles")
-      .def_property_readonly("goal_rad", [](const DriverController& d) { return Eigen::VectorXd(d.goal_rad()); },
-                             "joint goals of the last cycle (before rounding to ticks)")
-      .def_property_readonly("pose_fresh", &DriverController::pose_fresh, "the base pose is younger than pose_timeout_s")
+      .def_property_readonly(
+          "position_rad", [](const DriverController& d) { return Eigen::VectorXd(d.position_rad()); },
+          "measured joint angles")
+      .def_property_readonly(
+          "goal_rad", [](const DriverController& d) { return Eigen::VectorXd(d.goal_rad()); },
+          "joint goals of the last cycle (before rounding to ticks)")
+      .def_property_readonly("pose_fresh", &DriverController::pose_fresh,
+                             "the base pose is younger than pose_timeout_s")
       .def_property_readonly("locomotion_gated", &DriverController::locomotion_gated,
                              "running, but held for a stale base pose")
       .def_property_readonly("cpg", &DriverController::cpg, py::return_value_policy::reference_internal,
                              "the loop's CPG (read only)")
       .def_property_readonly("kinematics", &DriverController::kinematics, py::return_value_policy::reference_internal,
                              "KinematicState of the last cycle (base pose of the latest sample, measured joints)")
-      .def_property_readonly("com", [](const DriverController& d) { return Eigen::Vector3d(d.kinematics().com); },
-                             "(3,) centre of mass of the last cycle, world frame")
-      .def_property_readonly("vc_rotation",
-                             [](const DriverController& d) { return Eigen::Matrix3d(d.kinematics().vc_rotation); },
-                             "(3, 3) virtual chassis of the last cycle")
-      .def_property_readonly("com_yaw", [](const DriverController& d) { return yaw_of(d.kinematics().vc_rotation); },
-                             "yaw of the virtual chassis (rad), as com_pose carries it")
+      .def_property_readonly(
+          "com", [](const DriverController& d) { return Eigen::Vector3d(d.kinematics().com); },
+          "(3,) centre of mass of the last cycle, world frame")
+      .def_property_readonly(
+          "vc_rotation", [](const DriverController& d) { return Eigen::Matrix3d(d.kinematics().vc_rotation); },
+          "(3, 3) virtual chassis of the last cycle")
+      .def_property_readonly(
+          "com_yaw", [](const DriverController& d) { return yaw_of(d.kinematics().vc_rotation); },
+          "yaw of the virtual chassis (rad), as com_pose carries it")
       .def("ticks_to_joint_rad", &DriverController::ticks_to_joint_rad, py::arg("joint"), py::arg("ticks"),
            "Servo ticks -> joint angle (direction, zero offset).")
       .def(

@@ -36,7 +36,9 @@ void expose_gaits(py::module_& m) {
           py::arg("name"))
       .def(
           "steering",
-          [](const GaitLibrary& lib, const std::string& name) { return std::string(to_string(lib.spec(name).steering)); },
+          [](const GaitLibrary& lib, const std::string& name) {
+            return std::string(to_string(lib.spec(name).steering));
+          },
           py::arg("name"), "'amplitude_modulation', 'curvature' or 'none'")
       .def(
           "description", [](const GaitLibrary& lib, const std::string& name) { return lib.spec(name).description; },

@@ -12,15 +12,16 @@ namespace dx = snake_autonomy::dynamixel;
 
 void expose_kinematics(py::module_& m) {
   py::class_<KinematicState>(m, "KinematicState", "Result of Kinematics.compute (world frame, metres).")
-      .def_property_readonly("link_positions", [](const KinematicState& s) { return stack_vectors(s.link_positions); },
-                             "(F, 3) frame origins in chain order: base, head, link_1..link_N")
-      .def_property_readonly("link_rotations", [](const KinematicState& s) { return stack_matrices(s.link_rotations); },
-                             "(F, 3, 3)")
-      .def_property_readonly("parent_positions",
-                             [](const KinematicState& s) { return stack_vectors(s.parent_positions); },
-                             "(F, 3) relative to the previous frame (eq. 3.9)")
-      .def_property_readonly("parent_rotations",
-                             [](const KinematicState& s) { return stack_matrices(s.parent_rotations); }, "(F, 3, 3)")
+      .def_property_readonly(
+          "link_positions", [](const KinematicState& s) { return stack_vectors(s.link_positions); },
+          "(F, 3) frame origins in chain order: base, head, link_1..link_N")
+      .def_property_readonly(
+          "link_rotations", [](const KinematicState& s) { return stack_matrices(s.link_rotations); }, "(F, 3, 3)")
+      .def_property_readonly(
+          "parent_positions", [](const KinematicState& s) { return stack_vectors(s.parent_positions); },
+          "(F, 3) relative to the previous frame (eq. 3.9)")
+      .def_property_readonly(
+          "parent_rotations", [](const KinematicState& s) { return stack_matrices(s.parent_rotations); }, "(F, 3, 3)")
       .def_readonly("com", &KinematicState::com, "(3,) centre of mass, eq. 3.15")
       .def_readonly("vc_rotation", &KinematicState::vc_rotation, "(3, 3) virtual chassis, eq. 3.14 or SVD")
       .def_readonly("bbox_span", &KinematicState::bbox_span, "(3,) bounding box spans, padding included, eq. 3.20")

@@ -12,8 +12,8 @@ void expose_robot_model(py::module_& m) {
   py::class_<RobotModel>(m, "RobotModel", "Robot description loaded from config/robots/<name>.yaml.")
       .def_static("from_yaml", &RobotModel::from_yaml_file, py::arg("path"),
                   "Load and validate a robot description; ValueError lists every problem.")
-      .def_static("from_yaml_string", &RobotModel::from_yaml_string, py::arg("text"),
-                  py::arg("source") = "<string>", "Same as from_yaml, from YAML text.")
+      .def_static("from_yaml_string", &RobotModel::from_yaml_string, py::arg("text"), py::arg("source") = "<string>",
+                  "Same as from_yaml, from YAML text.")
       .def("validate", &RobotModel::validate, "Every problem of the description (empty when valid).")
       .def_readonly("name", &RobotModel::name)
       .def_readonly("num_joints", &RobotModel::num_joints)
@@ -33,14 +33,16 @@ void expose_robot_model(py::module_& m) {
       .def_readonly("head_length_m", &RobotModel::head_length_m)
       .def_readonly("link_length_m", &RobotModel::link_length_m)
       .def_readonly("link_radius_m", &RobotModel::link_radius_m)
-      .def_property_readonly("masses_kg", [](const RobotModel& r) { return to_vector(r.masses_kg); },
-                             "per frame: base, head, link_1..link_N")
+      .def_property_readonly(
+          "masses_kg", [](const RobotModel& r) { return to_vector(r.masses_kg); },
+          "per frame: base, head, link_1..link_N")
       .def_property_readonly("joint_lower_rad", [](const RobotModel& r) { return to_vector(r.joint_lower_rad); })
       .def_property_readonly("joint_upper_rad", [](const RobotModel& r) { return to_vector(r.joint_upper_rad); })
       .def_property_readonly("servo_model", [](const RobotModel& r) { return r.servos.model; })
       .def_property_readonly("servo_ids", [](const RobotModel& r) { return r.servos.ids; })
       .def_property_readonly("servo_directions", [](const RobotModel& r) { return r.servos.directions; })
-      .def_property_readonly("servo_zero_offsets_ticks", [](const RobotModel& r) { return r.servos.zero_offsets_ticks; })
+      .def_property_readonly("servo_zero_offsets_ticks",
+                             [](const RobotModel& r) { return r.servos.zero_offsets_ticks; })
       .def_property_readonly("mu", [](const RobotModel& r) { return r.cpg.mu; })
       .def_property_readonly("gamma", [](const RobotModel& r) { return r.cpg.gamma; })
       .def_property_readonly("amplitude_limit_rad", [](const RobotModel& r) { return r.cpg.amplitude_limit_rad; })

@@ -26,10 +26,18 @@ class PyShaftHooks : public dx::ShaftHooks {
         before_read_(target_.attr("before_read")),
         on_goal_(target_.attr("on_goal")),
         on_torque_(target_.attr("on_torque")) {}
-  void before_write(dx::SimulatedServos&) noexcept override { call("before_write", [&] { before_write_(); }); }
-  void before_read(dx::SimulatedServos&) noexcept override { call("before_read", [&] { before_read_(); }); }
-  void on_goal(std::uint8_t id, std::int32_t ticks) noexcept override { call("on_goal", [&] { on_goal_(id, ticks); }); }
-  void on_torque(std::uint8_t id, bool on) noexcept override { call("on_torque", [&] { on_torque_(id, on); }); }
+  void before_write(dx::SimulatedServos&) noexcept override {
+    call("before_write", [&] { before_write_(); });
+  }
+  void before_read(dx::SimulatedServos&) noexcept override {
+    call("before_read", [&] { before_read_(); });
+  }
+  void on_goal(std::uint8_t id, std::int32_t ticks) noexcept override {
+    call("on_goal", [&] { on_goal_(id, ticks); });
+  }
+  void on_torque(std::uint8_t id, bool on) noexcept override {
+    call("on_torque", [&] { on_torque_(id, on); });
+  }
   std::uint64_t errors() const noexcept { return errors_; }
   const std::string& last_error() const noexcept { return last_error_; }
 
@@ -129,10 +137,12 @@ void expose_servo_model(py::module_& top) {
           py::arg("data"), py::arg("latest_only") = false,
           "Feeds received bytes (any chunking); returns the bytes the servos send back. latest_only: only the "
           "last packet of this read is answered (the earlier ones act and count as superseded).")
-      .def("clear_input", [](S& s) { s.model.clear_input(); }, "Forgets a partly received packet.")
-      .def("pending_input",
-           [](const S& s) { return py::bytes(reinterpret_cast<const char*>(s.model.input()), s.model.input_size()); },
-           "The received bytes not decided yet (a packet still arriving).")
+      .def(
+          "clear_input", [](S& s) { s.model.clear_input(); }, "Forgets a partly received packet.")
+      .def(
+          "pending_input",
+          [](const S& s) { return py::bytes(reinterpret_cast<const char*>(s.model.input()), s.model.input_size()); },
+          "The received bytes not decided yet (a packet still arriving).")
       .def(
           "inject",
           [](S& s, const std::string& kind, py::object ids, py::object count) {
@@ -160,14 +170,19 @@ void expose_servo_model(py::module_& top) {
           py::arg("kind"), py::arg("ids") = py::none(), py::arg("count") = py::none(),
           "Damages the next `count` replies (None: until cleared) of `ids` (None: every servo); kind is one of "
           "REPLY_FAULTS.")
-      .def("set_silent", [](S& s, std::uint8_t id, bool silent) { s.model.set_silent(id, silent); }, py::arg("id"),
-           py::arg("silent") = true, "The servo answers nothing (it still obeys what it hears).")
-      .def("silent", [](const S& s, std::uint8_t id) { return s.model.silent(id); }, py::arg("id"))
-      .def("set_hardware_error", [](S& s, std::uint8_t id, std::uint8_t bits) { s.model.set_hardware_error(id, bits); },
-           py::arg("id"), py::arg("bits"), "Hardware Error Status bits: alert bit in every reply, torque off.")
-      .def("clear_faults", [](S& s) { s.model.clear_faults(); }, "Removes every fault, silence and hardware error.")
-      .def("set_follow_goal", [](S& s, bool f) { s.model.set_follow_goal(f); }, py::arg("follow"),
-           "True: an accepted goal becomes the present position at once (no hooks needed).")
+      .def(
+          "set_silent", [](S& s, std::uint8_t id, bool silent) { s.model.set_silent(id, silent); }, py::arg("id"),
+          py::arg("silent") = true, "The servo answers nothing (it still obeys what it hears).")
+      .def(
+          "silent", [](const S& s, std::uint8_t id) { return s.model.silent(id); }, py::arg("id"))
+      .def(
+          "set_hardware_error", [](S& s, std::uint8_t id, std::uint8_t bits) { s.model.set_hardware_error(id, bits); },
+          py::arg("id"), py::arg("bits"), "Hardware Error Status bits: alert bit in every reply, torque off.")
+      .def(
+          "clear_faults", [](S& s) { s.model.clear_faults(); }, "Removes every fault, silence and hardware error.")
+      .def(
+          "set_follow_goal", [](S& s, bool f) { s.model.set_follow_goal(f); }, py::arg("follow"),
+          "True: an accepted goal becomes the present position at once (no hooks needed).")
       .def(
           "set_hooks",
           [](S& s, py::object target) {
@@ -183,34 +198,41 @@ void expose_servo_model(py::module_& top) {
           py::arg("hooks"),
           "An object with before_write(), before_read(), on_goal(id, ticks), on_torque(id, enabled): what "
           "moves the shafts; None removes it.")
-      .def_property_readonly("hook_errors", [](const S& s) { return s.hooks ? s.hooks->errors() : 0; },
-                             "Exceptions raised by the hooks (each cost that call only).")
+      .def_property_readonly(
+          "hook_errors", [](const S& s) { return s.hooks ? s.hooks->errors() : 0; },
+          "Exceptions raised by the hooks (each cost that call only).")
       .def_property_readonly("last_hook_error", [](const S& s) { return s.hooks ? s.hooks->last_error() : ""; })
       .def_property_readonly("ids", [](const S& s) { return s.model.ids(); })
-      .def("has", [](const S& s, std::uint8_t id) { return s.model.has(id); }, py::arg("id"))
-      .def("get", [](const S& s, std::uint8_t id, const std::string& e) { return s.model.get(id, e); }, py::arg("id"),
-           py::arg("entry"), "Value of a control-table entry; ConfigError for an unknown ID or entry.")
-      .def("set", [](S& s, std::uint8_t id, const std::string& e, std::int64_t v) { s.model.set(id, e, v); },
-           py::arg("id"), py::arg("entry"), py::arg("value"), "Writes an entry's memory, no checks.")
+      .def(
+          "has", [](const S& s, std::uint8_t id) { return s.model.has(id); }, py::arg("id"))
+      .def(
+          "get", [](const S& s, std::uint8_t id, const std::string& e) { return s.model.get(id, e); }, py::arg("id"),
+          py::arg("entry"), "Value of a control-table entry; ConfigError for an unknown ID or entry.")
+      .def(
+          "set", [](S& s, std::uint8_t id, const std::string& e, std::int64_t v) { s.model.set(id, e, v); },
+          py::arg("id"), py::arg("entry"), py::arg("value"), "Writes an entry's memory, no checks.")
       .def(
           "set_present",
           [](S& s, std::uint8_t id, std::int64_t pos, std::int64_t vel, std::int64_t cur, std::int64_t volt,
              std::int64_t temp) { s.model.set_present(id, pos, vel, cur, volt, temp); },
           py::arg("id"), py::arg("position"), py::arg("velocity"), py::arg("current"), py::arg("input_voltage"),
           py::arg("temperature"), "Present values in raw table units (saturated to each entry's range).")
-      .def("goal_writes", [](const S& s, std::uint8_t id) { return s.model.goal_writes(id); }, py::arg("id"),
-           "Goal positions the servo accepted.")
-      .def("stats", [](const S& s) { return stats_dict(s.model); }, "Counts of what the servos received and sent.")
+      .def(
+          "goal_writes", [](const S& s, std::uint8_t id) { return s.model.goal_writes(id); }, py::arg("id"),
+          "Goal positions the servo accepted.")
+      .def(
+          "stats", [](const S& s) { return stats_dict(s.model); }, "Counts of what the servos received and sent.")
       .def("reset_stats", [](S& s) { s.model.reset_stats(); }, "Zero the counts and goal writes.");
 
   py::class_<dx::SimulatedServos>(m, "SimulatedServosView",
                                   "The servos of a FakeServoBus (memory, faults, stats); owned by the bus.")
-      .def("inject",
-           [](dx::SimulatedServos& s, const std::string& kind, const std::vector<std::uint8_t>& ids, int count) {
-             s.inject(fault_kind(kind), ids, count);
-           },
-           py::arg("kind"), py::arg("ids") = std::vector<std::uint8_t>{}, py::arg("count") = -1,
-           "As SimulatedServos.inject; count < 0: until cleared.")
+      .def(
+          "inject",
+          [](dx::SimulatedServos& s, const std::string& kind, const std::vector<std::uint8_t>& ids, int count) {
+            s.inject(fault_kind(kind), ids, count);
+          },
+          py::arg("kind"), py::arg("ids") = std::vector<std::uint8_t>{}, py::arg("count") = -1,
+          "As SimulatedServos.inject; count < 0: until cleared.")
       .def("set_silent", &dx::SimulatedServos::set_silent, py::arg("id"), py::arg("silent") = true)
       .def("set_hardware_error", &dx::SimulatedServos::set_hardware_error, py::arg("id"), py::arg("bits"))
       .def("clear_faults", &dx::SimulatedServos::clear_faults)
@@ -221,7 +243,6 @@ void expose_servo_model(py::module_& top) {
       .def("goal_writes", &dx::SimulatedServos::goal_writes, py::arg("id"))
       .def("stats", [](const dx::SimulatedServos& s) { return stats_dict(s); })
       .def("reset_stats", &dx::SimulatedServos::reset_stats);
-
 }
 
 }  // namespace snake_autonomy::bindings

@@ -20,9 +20,9 @@ Eigen::VectorXd checked_vector(const py::handle& obj, Eigen::Index n, const char
   }
   if (!arr) throw py::value_error(std::string(name) + ": expected an array of numbers");
   if (arr.ndim() != 1 || arr.shape(0) != n)
-    throw py::value_error(std::string(name) + ": expected shape (" + std::to_string(n) + ",), got " +
-                          std::string(py::str(py::tuple(py::cast(std::vector<py::ssize_t>(
-                              arr.shape(), arr.shape() + arr.ndim()))))));
+    throw py::value_error(
+        std::string(name) + ": expected shape (" + std::to_string(n) + ",), got " +
+        std::string(py::str(py::tuple(py::cast(std::vector<py::ssize_t>(arr.shape(), arr.shape() + arr.ndim()))))));
   Eigen::VectorXd v = Eigen::Map<const Eigen::VectorXd>(arr.data(), n);
   for (Eigen::Index i = 0; i < n; ++i)
     if (!std::isfinite(v(i)))

@@ -8,7 +8,9 @@ namespace py = pybind11;
 namespace sb = snake_autonomy::bindings;
 
 PYBIND11_MODULE(_core, m) {
-  m.doc() = "snake_autonomy C++ core: robot model, CPG, gaits, steering, kinematics, Dynamixel Protocol 2.0, the driver's loop";
+  m.doc() =
+      "snake_autonomy C++ core: robot model, CPG, gaits, steering, kinematics, Dynamixel Protocol 2.0, the driver's "
+      "loop";
   py::register_exception<snake_autonomy::core::ConfigError>(m, "ConfigError", PyExc_ValueError);
   sb::expose_robot_model(m);
   sb::expose_cpg(m);

@@ -20,9 +20,7 @@ void dump_bounded(const YAML::Node& n, std::string* out, std::size_t budget, int
     return;
   }
   switch (n.Type()) {
-    case YAML::NodeType::Scalar:
-      *out += n.Scalar().substr(0, budget - out->size());
-      return;
+    case YAML::NodeType::Scalar: *out += n.Scalar().substr(0, budget - out->size()); return;
     case YAML::NodeType::Sequence: {
       *out += "[";
       bool first = true;
@@ -49,11 +47,8 @@ void dump_bounded(const YAML::Node& n, std::string* out, std::size_t budget, int
       *out += "}";
       return;
     }
-    case YAML::NodeType::Null:
-      *out += "~";
-      return;
-    case YAML::NodeType::Undefined:
-      return;
+    case YAML::NodeType::Null: *out += "~"; return;
+    case YAML::NodeType::Undefined: return;
   }
 }
 
@@ -92,8 +87,8 @@ std::string read_config_file(const std::string& path, const std::string& what) {
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) throw ConfigError(path + ": cannot open " + what + " (" + ec.message() + ")");
   if (size > kMaxConfigBytes)
-    throw ConfigError(path + ": larger than " + std::to_string(kMaxConfigBytes) + " bytes (" +
-                      std::to_string(size) + "): not a " + what);
+    throw ConfigError(path + ": larger than " + std::to_string(kMaxConfigBytes) + " bytes (" + std::to_string(size) +
+                      "): not a " + what);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path + ": cannot open " + what);
   std::string text(static_cast<std::size_t>(size), '\0');

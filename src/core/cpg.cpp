@@ -181,8 +181,7 @@ const Eigen::VectorXd& Cpg::step(double dt_s) noexcept {
 
   // Lags: critically damped towards their targets; the phase step uses their mid-step value.
   lag_mid_ = lag_;
-  for (int i = 0; i + 1 < n_; ++i)
-    critically_damped_step(lag_target_(i), gamma_, decay, dt_s, lag_(i), lag_dot_(i));
+  for (int i = 0; i + 1 < n_; ++i) critically_damped_step(lag_target_(i), gamma_, decay, dt_s, lag_(i), lag_dot_(i));
   lag_mid_ = 0.5 * (lag_mid_ + lag_);
   update_drive(lag_mid_);
 

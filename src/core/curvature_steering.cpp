@@ -6,8 +6,7 @@
 
 namespace snake_autonomy::core {
 
-CurvatureSteering::CurvatureSteering(const RobotModel& model)
-    : n_(model.num_joints), yaw_joints_(model.yaw_joints()) {
+CurvatureSteering::CurvatureSteering(const RobotModel& model) : n_(model.num_joints), yaw_joints_(model.yaw_joints()) {
   const std::size_t m = yaw_joints_.size();
   for (std::size_t k = 0; k < m; ++k) {
     int gap = 1;

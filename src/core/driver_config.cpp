@@ -36,7 +36,8 @@ std::vector<std::string> DriverConfig::validate() const {
     s << key << ": " << value << " " << need;
     errors.push_back(s.str());
   };
-  if (max_failed_cycles < 1 || max_failed_cycles > 1000) bad("max_failed_cycles", max_failed_cycles, "is not in 1 .. 1000");
+  if (max_failed_cycles < 1 || max_failed_cycles > 1000)
+    bad("max_failed_cycles", max_failed_cycles, "is not in 1 .. 1000");
   if (return_delay_time_us != -1 &&
       (return_delay_time_us < 0 || return_delay_time_us > 508 || return_delay_time_us % 2 != 0))
     bad("return_delay_time_us", return_delay_time_us, "is not an even number in 0 .. 508 (or -1: leave as found)");
@@ -48,7 +49,8 @@ std::vector<std::string> DriverConfig::validate() const {
   if (!(max_step_s > 0.0) || !std::isfinite(max_step_s) || max_step_s > 1.0)
     bad("max_step_s", max_step_s, "is not in (0, 1] s");
   if (plausible_margin_ticks < 0) bad("plausible_margin_ticks", plausible_margin_ticks, "is negative");
-  if (!(pose_timeout_s > 0.0) || !std::isfinite(pose_timeout_s)) bad("pose_timeout_s", pose_timeout_s, "is not a positive number");
+  if (!(pose_timeout_s > 0.0) || !std::isfinite(pose_timeout_s))
+    bad("pose_timeout_s", pose_timeout_s, "is not a positive number");
   if (!(command_timeout_s >= 0.0) || !std::isfinite(command_timeout_s) || command_timeout_s > 3600.0)
     bad("command_timeout_s", command_timeout_s, "is not in [0, 3600] s (0: no command lifetime)");
   if (!(pose_workspace_m > 0.0) || !std::isfinite(pose_workspace_m) || pose_workspace_m > 1e6)
@@ -102,7 +104,8 @@ const std::vector<std::string>& DriverConfig::keys() {
 void DriverConfig::apply_yaml(const YAML::Node& doc, std::vector<std::string>* errors, const std::string& prefix) {
   ConfigReader r(errors);
   if (!doc.IsMap()) {
-    if (doc && !doc.IsNull()) r.error(prefix + ": expected a mapping of driver keys, got '" + ConfigReader::dump(doc) + "'");
+    if (doc && !doc.IsNull())
+      r.error(prefix + ": expected a mapping of driver keys, got '" + ConfigReader::dump(doc) + "'");
     return;
   }
   for_each_field(*this, [&](const char* key, auto& field) {
@@ -123,7 +126,8 @@ void DriverConfig::apply_yaml(const YAML::Node& doc, std::vector<std::string>* e
 DriverConfig DriverConfig::from_yaml_string(const std::string& text, const std::string& source) {
   DriverConfig c;
   std::vector<std::string> errors;
-  const YAML::Node doc = text.find_first_not_of(" \t\r\n") == std::string::npos ? YAML::Node() : load_config_yaml(text, source);
+  const YAML::Node doc =
+      text.find_first_not_of(" \t\r\n") == std::string::npos ? YAML::Node() : load_config_yaml(text, source);
   c.apply_yaml(doc, &errors);
   for (const auto& e : c.validate()) errors.push_back(e);
   throw_if_errors(errors, source, "driver configuration");

@@ -114,8 +114,8 @@ std::string DriverController::command_gait(const GaitCommandRequest& command) {
 bool DriverController::set_base_pose(double t_s, const Eigen::Vector3d& position,
                                      const Eigen::Quaterniond& orientation) noexcept {
   Eigen::Quaterniond unit = Eigen::Quaterniond::Identity();
-  const PoseRefusal why = check_base_pose(t_s, position, orientation, config_.pose_workspace_m,
-                                          config_.quaternion_norm_tolerance, &unit);
+  const PoseRefusal why =
+      check_base_pose(t_s, position, orientation, config_.pose_workspace_m, config_.quaternion_norm_tolerance, &unit);
   std::lock_guard<std::mutex> lock(pose_mutex_);
   if (why != PoseRefusal::kNone) {
     ++poses_refused_;

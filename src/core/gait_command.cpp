@@ -30,8 +30,8 @@ void check_vector(const char* field, const std::vector<double>& v, int n, const 
     if (!std::isfinite(v[i])) {
       s << field << "[" << i << "] (joint_" << i + 1 << "): " << v[i] << " is not a finite number";
     } else if (v[i] < lower[i] || v[i] > upper[i]) {
-      s << field << "[" << i << "] (joint_" << i + 1 << "): " << v[i] << " is outside [" << lower[i] << ", "
-        << upper[i] << "] " << what;
+      s << field << "[" << i << "] (joint_" << i + 1 << "): " << v[i] << " is outside [" << lower[i] << ", " << upper[i]
+        << "] " << what;
     } else {
       continue;
     }
@@ -53,8 +53,13 @@ void assign(const std::vector<double>& v, Eigen::VectorXd& out) {
 
 GaitCommandResolver::GaitCommandResolver(const RobotModel& model, const GaitLibrary& gaits, double max_frequency_hz,
                                          const std::string& initial_gait)
-    : model_(model), gaits_(gaits), steering_(model), curvature_(model), max_omega_rad_s_(2.0 * M_PI * max_frequency_hz) {
-  if (!gaits_.contains(initial_gait)) throw ConfigError("initial gait '" + initial_gait + "' is not in the gait library");
+    : model_(model),
+      gaits_(gaits),
+      steering_(model),
+      curvature_(model),
+      max_omega_rad_s_(2.0 * M_PI * max_frequency_hz) {
+  if (!gaits_.contains(initial_gait))
+    throw ConfigError("initial gait '" + initial_gait + "' is not in the gait library");
   name_ = base_name_ = initial_gait;
   nominal_ = gaits_.parameters(initial_gait, model_);
 }
@@ -104,8 +109,8 @@ std::string GaitCommandResolver::resolve(const GaitCommandRequest& command, Gait
     }
     const std::string& base = named ? command.gait : base_name_;
     if (gaits_.contains(base) && gaits_.spec(base).steering != SteeringLaw::kCurvature)
-      errors.push_back("kappa: gait '" + base + "' does not steer by curvature (steering: " +
-                       to_string(gaits_.spec(base).steering) + ")");
+      errors.push_back("kappa: gait '" + base +
+                       "' does not steer by curvature (steering: " + to_string(gaits_.spec(base).steering) + ")");
   }
   if (!errors.empty()) {
     std::string what;

@@ -44,9 +44,9 @@ Kinematics::Kinematics(const RobotModel& model) : model_(model) {
   model_.validate_or_throw();
   const std::vector<std::string> names = model_.frame_names();
   // Base -> head: fixed.
-  chain_.addSegment(KDL::Segment(names[1], KDL::Joint("head_fixed", KDL::Joint::None),
-                                 KDL::Frame(KDL::Rotation::RotX(head_twist_rad(model_)),
-                                            KDL::Vector(-model_.head_length_m, 0.0, 0.0))));
+  chain_.addSegment(KDL::Segment(
+      names[1], KDL::Joint("head_fixed", KDL::Joint::None),
+      KDL::Frame(KDL::Rotation::RotX(head_twist_rad(model_)), KDL::Vector(-model_.head_length_m, 0.0, 0.0))));
   // Joint i: Rz(−q_i) (a RotZ joint with scale −1), then Trans(−L, 0, 0) · Rx(τ_i).
   for (int i = 0; i < model_.num_joints; ++i) {
     chain_.addSegment(KDL::Segment(
@@ -69,9 +69,9 @@ bool Kinematics::compute(const Eigen::Vector3d& base_position, const Eigen::Quat
 
   const Eigen::Quaterniond qb = base_orientation.normalized();
   const Eigen::Matrix3d Rb = qb.toRotationMatrix();
-  KDL::Frame world(KDL::Rotation(Rb(0, 0), Rb(0, 1), Rb(0, 2), Rb(1, 0), Rb(1, 1), Rb(1, 2), Rb(2, 0), Rb(2, 1),
-                                 Rb(2, 2)),
-                   KDL::Vector(base_position.x(), base_position.y(), base_position.z()));
+  KDL::Frame world(
+      KDL::Rotation(Rb(0, 0), Rb(0, 1), Rb(0, 2), Rb(1, 0), Rb(1, 1), Rb(1, 2), Rb(2, 0), Rb(2, 1), Rb(2, 2)),
+      KDL::Vector(base_position.x(), base_position.y(), base_position.z()));
   to_eigen(world, out.link_positions[0], out.link_rotations[0]);
   out.parent_positions[0] = out.link_positions[0];
   out.parent_rotations[0] = out.link_rotations[0];

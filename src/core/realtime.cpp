@@ -17,9 +17,7 @@ __attribute__((noinline)) void prefault_stack() noexcept {
   for (std::size_t i = 0; i < sizeof stack; i += 4096) stack[i] = 0;
 }
 
-std::string describe(int error) {
-  return std::string(errno_name(error)) + ": " + std::strerror(error);
-}
+std::string describe(int error) { return std::string(errno_name(error)) + ": " + std::strerror(error); }
 
 }  // namespace
 
@@ -62,7 +60,8 @@ std::string RealtimeReport::mode() const {
   const std::string p = std::to_string(requested_priority);
   std::string out = fifo ? "SCHED_FIFO priority " + p
                          : "normal scheduling (SCHED_FIFO " + p + " refused: " + errno_name(fifo_errno) + ")";
-  out += memory_locked ? ", memory locked" : std::string(", memory not locked (mlockall refused: ") + errno_name(lock_errno) + ")";
+  out += memory_locked ? ", memory locked"
+                       : std::string(", memory not locked (mlockall refused: ") + errno_name(lock_errno) + ")";
   return out;
 }
 
@@ -77,9 +76,10 @@ std::string RealtimeReport::warning() const {
     out += " mlockall(MCL_CURRENT|MCL_FUTURE) refused (" + describe(lock_errno) +
            "): memory is not locked, a page fault can stall a cycle;";
   }
-  out += " the driver carries on. To grant it: run with CAP_SYS_NICE and CAP_IPC_LOCK (setcap "
-         "cap_sys_nice,cap_ipc_lock+ep on driver_node), or raise the limits for the user (limits.conf: "
-         "'<user> - rtprio 99' and '<user> - memlock unlimited'; ulimit -r / ulimit -l)";
+  out +=
+      " the driver carries on. To grant it: run with CAP_SYS_NICE and CAP_IPC_LOCK (setcap "
+      "cap_sys_nice,cap_ipc_lock+ep on driver_node), or raise the limits for the user (limits.conf: "
+      "'<user> - rtprio 99' and '<user> - memlock unlimited'; ulimit -r / ulimit -l)";
   return out;
 }
 

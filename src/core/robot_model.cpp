@@ -21,9 +21,7 @@ std::string fmt(double v) {
 
 std::string to_string(JointAxis axis) { return axis == JointAxis::kPitch ? "pitch" : "yaw"; }
 
-std::string to_string(ChassisMethod method) {
-  return method == ChassisMethod::kMeanAxis ? "mean_axis" : "svd";
-}
+std::string to_string(ChassisMethod method) { return method == ChassisMethod::kMeanAxis ? "mean_axis" : "svd"; }
 
 std::vector<std::string> RobotModel::frame_names() const {
   std::vector<std::string> out{"base_link", "head_link"};
@@ -55,18 +53,15 @@ std::vector<std::string> RobotModel::validate() const {
   std::vector<std::string> e;
   // a physical range (lo, hi]: positive and at most hi (e.g. no mass of 1e308 kg)
   auto positive_upto = [&](const std::string& key, double v, double hi, const char* unit) {
-    if (!(v > 0.0) || !std::isfinite(v))
-      e.push_back(key + ": must be a positive number, got " + fmt(v));
-    else if (v > hi)
-      e.push_back(key + ": must be at most " + fmt(hi) + " " + unit + ", got " + fmt(v));
+    if (!(v > 0.0) || !std::isfinite(v)) e.push_back(key + ": must be a positive number, got " + fmt(v));
+    else if (v > hi) e.push_back(key + ": must be at most " + fmt(hi) + " " + unit + ", got " + fmt(v));
   };
   auto within = [&](const std::string& key, double v, double bound, const char* unit) {
     if (!std::isfinite(v) || std::abs(v) > bound)
       e.push_back(key + ": must be within +-" + fmt(bound) + " " + unit + ", got " + fmt(v));
   };
   auto length = [&](const std::string& key, std::size_t got, std::size_t want) {
-    if (got != want)
-      e.push_back(key + ": expected " + std::to_string(want) + " values, got " + std::to_string(got));
+    if (got != want) e.push_back(key + ": expected " + std::to_string(want) + " values, got " + std::to_string(got));
     return got == want;
   };
   if (num_joints < 2 || num_joints > kMaxJoints) {
@@ -99,8 +94,7 @@ std::vector<std::string> RobotModel::validate() const {
   if (length("servos.ids", servos.ids.size(), n)) {
     for (std::size_t i = 0; i < n; ++i) {
       if (servos.ids[i] < 0 || servos.ids[i] > 252)
-        e.push_back("servos.ids[" + std::to_string(i) + "]: must be 0-252, got " +
-                    std::to_string(servos.ids[i]));
+        e.push_back("servos.ids[" + std::to_string(i) + "]: must be 0-252, got " + std::to_string(servos.ids[i]));
       for (std::size_t j = 0; j < i; ++j)
         if (servos.ids[j] == servos.ids[i])
           e.push_back("servos.ids[" + std::to_string(i) + "]: duplicate id " + std::to_string(servos.ids[i]));
@@ -201,8 +195,7 @@ RobotModel RobotModel::from_yaml_string(const std::string& text, const std::stri
   r.scalar(r.child(cpg, "mu", "cpg.mu"), "cpg.mu", &m.cpg.mu);
   r.scalar(r.child(cpg, "gamma", "cpg.gamma"), "cpg.gamma", &m.cpg.gamma);
   double amp_limit_deg = 0.0;
-  r.scalar(r.child(cpg, "amplitude_limit_deg", "cpg.amplitude_limit_deg"), "cpg.amplitude_limit_deg",
-           &amp_limit_deg);
+  r.scalar(r.child(cpg, "amplitude_limit_deg", "cpg.amplitude_limit_deg"), "cpg.amplitude_limit_deg", &amp_limit_deg);
   m.cpg.amplitude_limit_rad = amp_limit_deg * kDegToRad;
 
   YAML::Node steer = r.child(root, "steering", "steering");
@@ -211,14 +204,12 @@ RobotModel RobotModel::from_yaml_string(const std::string& text, const std::stri
   if (r.scalar(r.child(steer, "delta_limit_deg", "steering.delta_limit_deg"), "steering.delta_limit_deg", &deg))
     m.steering.delta_limit_rad = deg * kDegToRad;
   deg = 0.0;
-  if (r.scalar(r.child(steer, "delta_offset_deg", "steering.delta_offset_deg", false),
-               "steering.delta_offset_deg", &deg))
+  if (r.scalar(r.child(steer, "delta_offset_deg", "steering.delta_offset_deg", false), "steering.delta_offset_deg",
+               &deg))
     m.steering.delta_offset_rad = deg * kDegToRad;
-  if (r.scalar(r.child(steer, "amplitude_min_deg", "steering.amplitude_min_deg"), "steering.amplitude_min_deg",
-               &deg))
+  if (r.scalar(r.child(steer, "amplitude_min_deg", "steering.amplitude_min_deg"), "steering.amplitude_min_deg", &deg))
     m.steering.amplitude_min_rad = deg * kDegToRad;
-  if (r.scalar(r.child(steer, "amplitude_max_deg", "steering.amplitude_max_deg"), "steering.amplitude_max_deg",
-               &deg))
+  if (r.scalar(r.child(steer, "amplitude_max_deg", "steering.amplitude_max_deg"), "steering.amplitude_max_deg", &deg))
     m.steering.amplitude_max_rad = deg * kDegToRad;
 
   std::string chassis = "mean_axis";

@@ -47,9 +47,7 @@ PoseRefusal check_base_pose(double t_s, const Eigen::Vector3d& position, const E
 void describe_pose_refusal(PoseRefusal refusal, double t_s, const Eigen::Vector3d& p, const Eigen::Quaterniond& q,
                            double workspace_m, double quaternion_norm_tolerance, char* out, std::size_t size) noexcept {
   switch (refusal) {
-    case PoseRefusal::kNone:
-      std::snprintf(out, size, "%s", "");
-      return;
+    case PoseRefusal::kNone: std::snprintf(out, size, "%s", ""); return;
     case PoseRefusal::kOutsideWorkspace:
       std::snprintf(out, size, "%s %g m: position (%g, %g, %g)", to_string(refusal), workspace_m, p.x(), p.y(), p.z());
       return;

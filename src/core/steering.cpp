@@ -21,8 +21,8 @@ bool Steering::modify_amplitudes(const Eigen::VectorXd& nominal, double delta_ra
   const double delta = clip_delta(delta_rad);
   for (std::size_t k = 0; k < yaw_joints_.size(); ++k) {
     const int j = yaw_joints_[k];
-    out(j) = std::clamp(nominal(j) + config_.weights[k] * delta + config_.delta_offset_rad,
-                        config_.amplitude_min_rad, config_.amplitude_max_rad);
+    out(j) = std::clamp(nominal(j) + config_.weights[k] * delta + config_.delta_offset_rad, config_.amplitude_min_rad,
+                        config_.amplitude_max_rad);
   }
   return true;
 }

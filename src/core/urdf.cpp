@@ -51,8 +51,8 @@ void fixed_joint(std::ostringstream& o, const std::string& name, const std::stri
                  const Eigen::Vector3d& xyz, const Eigen::Vector3d& rpy) {
   o << "  <joint name=\"" << name << "\" type=\"fixed\">\n"
     << "    <parent link=\"" << parent << "\"/><child link=\"" << child << "\"/>\n"
-    << "    <origin xyz=\"" << xyz.x() << " " << xyz.y() << " " << xyz.z() << "\" rpy=\"" << rpy.x() << " "
-    << rpy.y() << " " << rpy.z() << "\"/>\n"
+    << "    <origin xyz=\"" << xyz.x() << " " << xyz.y() << " " << xyz.z() << "\" rpy=\"" << rpy.x() << " " << rpy.y()
+    << " " << rpy.z() << "\"/>\n"
     << "  </joint>\n";
 }
 
@@ -72,7 +72,8 @@ void camera_links(std::ostringstream& o, const std::string& head, const CameraMo
     << "  <link name=\"" << optical << "\"/>\n";
   fixed_joint(o, link + "_joint", head, link, camera.camera_in_head.translation(),
               rpy_of(camera.camera_in_head.rotation()));
-  fixed_joint(o, optical + "_joint", link, optical, Eigen::Vector3d::Zero(), Eigen::Vector3d(-M_PI / 2, 0.0, -M_PI / 2));
+  fixed_joint(o, optical + "_joint", link, optical, Eigen::Vector3d::Zero(),
+              Eigen::Vector3d(-M_PI / 2, 0.0, -M_PI / 2));
 }
 
 void transmission(std::ostringstream& o, const std::string& joint, int servo_id, int direction) {

@@ -4,8 +4,7 @@
 
 namespace snake_autonomy::driver {
 
-GaitSource::GaitSource(const core::RobotModel& model, const core::GaitLibrary& gaits,
-                       const core::DriverConfig& config)
+GaitSource::GaitSource(const core::RobotModel& model, const core::GaitLibrary& gaits, const core::DriverConfig& config)
     : cpg_(model),
       zeros_(Eigen::VectorXd::Zero(model.num_joints)),
       require_pose_(config.require_pose),

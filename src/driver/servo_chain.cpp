@@ -170,7 +170,8 @@ ChainStartReport ServoChain::start() {
   bus_.set_return_delay_s(max_delay_us * 1e-6);
   if (problems.empty() && !read()) {
     for (int j = 0; j < n_; ++j) {
-      if (diag_[j].stale) problems.push_back(servo_name(j) + ": no feedback (" + dxl::to_string(replies_[j].status) + ")");
+      if (diag_[j].stale)
+        problems.push_back(servo_name(j) + ": no feedback (" + dxl::to_string(replies_[j].status) + ")");
     }
   }
   return report;
@@ -208,11 +209,11 @@ int ServoChain::settle_return_delay(int j, const std::string& name, ChainStartRe
 // Read
 
 bool ServoChain::read() noexcept {
-  const dxl::Status status =
-      fast_sync_read_ ? bus_.fast_sync_read(dxl::kFeedbackAddress, dxl::kFeedbackBytes, ids_.data(), ids_.size(),
-                                            feedback_.data(), replies_.data())
-                      : bus_.sync_read(dxl::kFeedbackAddress, dxl::kFeedbackBytes, ids_.data(), ids_.size(),
-                                       feedback_.data(), replies_.data());
+  const dxl::Status status = fast_sync_read_
+                                 ? bus_.fast_sync_read(dxl::kFeedbackAddress, dxl::kFeedbackBytes, ids_.data(),
+                                                       ids_.size(), feedback_.data(), replies_.data())
+                                 : bus_.sync_read(dxl::kFeedbackAddress, dxl::kFeedbackBytes, ids_.data(), ids_.size(),
+                                                  feedback_.data(), replies_.data());
   (void)status;  // per-servo replies say everything
   bool all = true;
   for (int j = 0; j < n_; ++j) {
@@ -257,8 +258,8 @@ void ServoChain::read_status() noexcept {
     const dxl::ServoReply& r = status_replies_[j];
     if (!dxl::has_data(r.status)) continue;
     const std::uint8_t* p = &status_[j * status_bytes_];
-    diag_[j].voltage_v =
-        dxl::voltage_to_volts(static_cast<std::uint16_t>(dxl::get_le(p + voltage_offset_, voltage_bytes_, false)), scales_);
+    diag_[j].voltage_v = dxl::voltage_to_volts(
+        static_cast<std::uint16_t>(dxl::get_le(p + voltage_offset_, voltage_bytes_, false)), scales_);
     diag_[j].temperature_c = p[temperature_offset_];
     if (r.status == dxl::Status::kHardwareError || (r.error & dxl::kAlertBit)) diag_[j].hardware_error = true;
   }
@@ -299,12 +300,14 @@ bool ServoChain::all_failed_alike(dxl::Status* status) const noexcept {
 // ---------------------------------------------------------------------------------------------
 // Write
 
-void ServoChain::clamp(Eigen::Ref<Eigen::VectorXd> rad) const noexcept { rad = rad.cwiseMax(lo_rad_).cwiseMin(hi_rad_); }
+void ServoChain::clamp(Eigen::Ref<Eigen::VectorXd> rad) const noexcept {
+  rad = rad.cwiseMax(lo_rad_).cwiseMin(hi_rad_);
+}
 
 bool ServoChain::write(Eigen::Ref<Eigen::VectorXd> goal_rad) noexcept {
   set_goal(goal_rad);
-  return bus_.sync_write(dxl::kGoalPositionAddress, dxl::kGoalPositionBytes, ids_.data(), ids_.size(),
-                         goals_.data()) == dxl::Status::kOk;
+  return bus_.sync_write(dxl::kGoalPositionAddress, dxl::kGoalPositionBytes, ids_.data(), ids_.size(), goals_.data()) ==
+         dxl::Status::kOk;
 }
 
 void ServoChain::set_goal(Eigen::Ref<Eigen::VectorXd> goal_rad) noexcept {

@@ -193,7 +193,8 @@ bool DriverSupervisor::drive(double t_s, double dt_s, bool pose_fresh) noexcept 
     }
     return chain_.write(goal_);
   }
-  if (s == DriverState::kFault) return chain_.write_torque(false);  // repeated: a servo that comes back must not keep torque
+  if (s == DriverState::kFault)
+    return chain_.write_torque(false);  // repeated: a servo that comes back must not keep torque
   return true;
 }
 

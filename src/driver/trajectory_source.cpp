@@ -100,11 +100,14 @@ const char* to_string(TrajectoryAbort reason) noexcept {
 TrajectorySource::TrajectorySource(int num_joints, const TrajectoryLimits& limits) : n_(num_joints), limits_(limits) {
   if (n_ < 1) throw std::invalid_argument("TrajectorySource: num_joints " + std::to_string(n_) + " < 1");
   if (limits.max_points < 1 || limits.max_points > 1000000)
-    throw std::invalid_argument("max_trajectory_points: " + std::to_string(limits.max_points) + " is not in 1 .. 1000000");
+    throw std::invalid_argument("max_trajectory_points: " + std::to_string(limits.max_points) +
+                                " is not in 1 .. 1000000");
   if (!(limits.max_velocity_rad_s > 0.0) || !std::isfinite(limits.max_velocity_rad_s))
-    throw std::invalid_argument("max_joint_velocity_rad_s: " + num(limits.max_velocity_rad_s) + " is not a positive number");
+    throw std::invalid_argument("max_joint_velocity_rad_s: " + num(limits.max_velocity_rad_s) +
+                                " is not a positive number");
   if (!(limits.max_duration_s > 0.0) || !std::isfinite(limits.max_duration_s))
-    throw std::invalid_argument("max_trajectory_duration_s: " + num(limits.max_duration_s) + " is not a positive number");
+    throw std::invalid_argument("max_trajectory_duration_s: " + num(limits.max_duration_s) +
+                                " is not a positive number");
   set_joint_limits(limits.lower_rad, limits.upper_rad);
   const auto points = static_cast<std::size_t>(limits.max_points), values = points * static_cast<std::size_t>(n_);
   for (Buffer* b : {&active_, &pending_}) {
@@ -145,8 +148,8 @@ std::string TrajectorySource::check(const JointTrajectoryRequest& request) const
         name.find_first_not_of("0123456789", 6) == std::string::npos && name[6] != '0')
       j = std::stoi(name.substr(6)) - 1;
     if (j < 0 || j >= n_) {
-      why.add(kNames, "joint_names[" + std::to_string(c) + "]: '" + name + "' is not a joint of this robot (joint_1 .. joint_" +
-                          std::to_string(n_) + ")");
+      why.add(kNames, "joint_names[" + std::to_string(c) + "]: '" + name +
+                          "' is not a joint of this robot (joint_1 .. joint_" + std::to_string(n_) + ")");
     } else if (column_of[j] >= 0) {
       why.add(kNames, "joint_names[" + std::to_string(c) + "]: '" + name + "' repeats joint_names[" +
                           std::to_string(column_of[j]) + "]");
@@ -180,13 +183,16 @@ std::string TrajectorySource::check(const JointTrajectoryRequest& request) const
                           std::to_string(k - 1) + "] at " + num(previous_t) + " s");
     }
     if (k + 1 == count && std::isfinite(p.time_from_start_s) && p.time_from_start_s > limits_.max_duration_s)
-      why.add(kTimes, at + ".time_from_start: " + num(p.time_from_start_s) + " s, the trajectory would last longer than "
-                          "max_trajectory_duration_s " + num(limits_.max_duration_s) + " s");
+      why.add(kTimes, at + ".time_from_start: " + num(p.time_from_start_s) +
+                          " s, the trajectory would last longer than "
+                          "max_trajectory_duration_s " +
+                          num(limits_.max_duration_s) + " s");
     if (std::isfinite(p.time_from_start_s)) previous_t = p.time_from_start_s;
     for (std::size_t c = 0; c < p.positions_rad.size(); ++c) {
       const double x = p.positions_rad[c];
       if (!std::isfinite(x)) {
-        why.add(kFinite, at + ".positions[" + std::to_string(c) + "] (" + joint_name(c) + "): " + num(x) + " is not finite");
+        why.add(kFinite,
+                at + ".positions[" + std::to_string(c) + "] (" + joint_name(c) + "): " + num(x) + " is not finite");
       } else if (c < width && joint_of[c] >= 0) {
         const int j = joint_of[c];
         const double lo = limits_.lower_rad[j] - limits_.limit_tolerance_rad;
@@ -200,7 +206,8 @@ std::string TrajectorySource::check(const JointTrajectoryRequest& request) const
     for (std::size_t c = 0; c < p.velocities_rad_s.size(); ++c) {
       const double x = p.velocities_rad_s[c];
       if (!std::isfinite(x))
-        why.add(kFinite, at + ".velocities[" + std::to_string(c) + "] (" + joint_name(c) + "): " + num(x) + " is not finite");
+        why.add(kFinite,
+                at + ".velocities[" + std::to_string(c) + "] (" + joint_name(c) + "): " + num(x) + " is not finite");
     }
   }
   if (!why.empty()) return why.str();
@@ -275,8 +282,9 @@ std::string TrajectorySource::submit(const JointTrajectoryRequest& request) {
     replaced.duration_s = pending_.t_s[pending_.count - 1];
     std::snprintf(replaced.superseded_by.data(), replaced.superseded_by.size(), "%s", request.id.c_str());
     replaced.superseded_by_sequence = sequence;
-    std::snprintf(replaced.reason.data(), replaced.reason.size(), "superseded by '%s' (sequence %llu) before it started",
-                  replaced.superseded_by.data(), static_cast<unsigned long long>(sequence));
+    std::snprintf(replaced.reason.data(), replaced.reason.size(),
+                  "superseded by '%s' (sequence %llu) before it started", replaced.superseded_by.data(),
+                  static_cast<unsigned long long>(sequence));
     submit_finals_.push(replaced);
   }
   fill(request, joint_of, pending_);  // into the storage reserved at construction: no allocation

@@ -12,17 +12,16 @@
 namespace snake_autonomy::dynamixel {
 
 const char* const kRequiredEntries[] = {
-    "model_number",        "return_delay_time",     "operating_mode",      "torque_enable",
-    "hardware_error_status", "goal_position",       "present_current",     "present_velocity",
-    "present_position",    "present_input_voltage", "present_temperature", "min_position_limit",
-    "max_position_limit",
+    "model_number",        "return_delay_time",  "operating_mode",     "torque_enable",    "hardware_error_status",
+    "goal_position",       "present_current",    "present_velocity",   "present_position", "present_input_voltage",
+    "present_temperature", "min_position_limit", "max_position_limit",
 };
 const std::size_t kNumRequiredEntries = sizeof(kRequiredEntries) / sizeof(kRequiredEntries[0]);
 
 namespace {
 
-const char* const kEntryKeys[] = {"address", "size", "access", "signed", "eeprom", "unit",
-                                  "scale",   "default", "min", "max"};
+const char* const kEntryKeys[] = {"address", "size",  "access",  "signed", "eeprom",
+                                  "unit",    "scale", "default", "min",    "max"};
 
 }  // namespace
 
@@ -51,7 +50,8 @@ std::vector<std::string> ControlTable::validate() const {
     errors.push_back(s.str());
   }
   for (const auto& [name, bit] : hardware_error_bits) {
-    if (bit < 0 || bit > 7) errors.push_back("hardware_error_bits." + name + ": bit " + std::to_string(bit) + " is not in 0..7");
+    if (bit < 0 || bit > 7)
+      errors.push_back("hardware_error_bits." + name + ": bit " + std::to_string(bit) + " is not in 0..7");
   }
   for (const auto& e : entries) {
     const std::string key = "entries." + e.name;
@@ -59,22 +59,26 @@ std::vector<std::string> ControlTable::validate() const {
       errors.push_back(key + ".size: " + std::to_string(e.size) + " is not 1, 2 or 4");
       continue;
     }
-    if (e.address + e.size > 1024) errors.push_back(key + ".address: " + std::to_string(e.address) + " is beyond the table (1024 bytes)");
+    if (e.address + e.size > 1024)
+      errors.push_back(key + ".address: " + std::to_string(e.address) + " is beyond the table (1024 bytes)");
     if (!(e.scale > 0.0) || !std::isfinite(e.scale)) {
       std::ostringstream s;
       s << e.scale;
       errors.push_back(key + ".scale: " + s.str() + " is not a positive number");
     }
     const std::int64_t lo = e.is_signed ? -(std::int64_t{1} << (8 * e.size - 1)) : 0;
-    const std::int64_t hi = e.is_signed ? (std::int64_t{1} << (8 * e.size - 1)) - 1 : (std::int64_t{1} << (8 * e.size)) - 1;
+    const std::int64_t hi =
+        e.is_signed ? (std::int64_t{1} << (8 * e.size - 1)) - 1 : (std::int64_t{1} << (8 * e.size)) - 1;
     if (e.default_value < lo || e.default_value > hi) {
-      errors.push_back(key + ".default: " + std::to_string(e.default_value) + " does not fit " + std::to_string(e.size) +
-                       (e.is_signed ? " signed" : " unsigned") + " byte(s)");
+      errors.push_back(key + ".default: " + std::to_string(e.default_value) + " does not fit " +
+                       std::to_string(e.size) + (e.is_signed ? " signed" : " unsigned") + " byte(s)");
     }
     if (e.has_range) {
       if (!e.writable) errors.push_back(key + ": min/max given for a read-only entry");
       if (e.min > e.max) errors.push_back(key + ": min " + std::to_string(e.min) + " > max " + std::to_string(e.max));
-      if (e.min < lo || e.max > hi) errors.push_back(key + ": range " + std::to_string(e.min) + ".." + std::to_string(e.max) + " does not fit its size");
+      if (e.min < lo || e.max > hi)
+        errors.push_back(key + ": range " + std::to_string(e.min) + ".." + std::to_string(e.max) +
+                         " does not fit its size");
     }
   }
   // No two entries may overlap.
@@ -83,13 +87,14 @@ std::vector<std::string> ControlTable::validate() const {
   std::sort(sorted.begin(), sorted.end(), [](auto* a, auto* b) { return a->address < b->address; });
   for (std::size_t i = 1; i < sorted.size(); ++i) {
     if (sorted[i - 1]->address + sorted[i - 1]->size > sorted[i]->address) {
-      errors.push_back("entries." + sorted[i]->name + ".address: " + std::to_string(sorted[i]->address) + " overlaps entries." +
-                       sorted[i - 1]->name + " (" + std::to_string(sorted[i - 1]->address) + ", " +
-                       std::to_string(sorted[i - 1]->size) + " bytes)");
+      errors.push_back("entries." + sorted[i]->name + ".address: " + std::to_string(sorted[i]->address) +
+                       " overlaps entries." + sorted[i - 1]->name + " (" + std::to_string(sorted[i - 1]->address) +
+                       ", " + std::to_string(sorted[i - 1]->size) + " bytes)");
     }
   }
   for (std::size_t i = 0; i < kNumRequiredEntries; ++i) {
-    if (!find(kRequiredEntries[i])) errors.push_back(std::string("entries.") + kRequiredEntries[i] + ": missing (the driver needs it)");
+    if (!find(kRequiredEntries[i]))
+      errors.push_back(std::string("entries.") + kRequiredEntries[i] + ": missing (the driver needs it)");
   }
   // The 100 Hz loop reads current, velocity and position in one 10-byte block.
   const auto* cur = find("present_current");
@@ -108,8 +113,8 @@ std::vector<std::string> ControlTable::validate() const {
   }
   const auto* goal = find("goal_position");
   if (goal && (goal->address != kGoalPositionAddress || goal->size != kGoalPositionBytes)) {
-    errors.push_back("entries.goal_position: at " + std::to_string(goal->address) + " with " + std::to_string(goal->size) +
-                     " bytes, not 116 with 4 bytes");
+    errors.push_back("entries.goal_position: at " + std::to_string(goal->address) + " with " +
+                     std::to_string(goal->size) + " bytes, not 116 with 4 bytes");
   }
   return errors;
 }
@@ -157,13 +162,15 @@ ControlTable ControlTable::from_yaml_string(const std::string& text, const std::
   ControlTable t;
   r.scalar(r.child(root, "model", "model"), "model", &t.model);
   r.scalar(r.child(root, "model_number", "model_number"), "model_number", &t.model_number);
-  if (root["position_centre_ticks"]) r.scalar(root["position_centre_ticks"], "position_centre_ticks", &t.position_centre_ticks);
+  if (root["position_centre_ticks"])
+    r.scalar(root["position_centre_ticks"], "position_centre_ticks", &t.position_centre_ticks);
   if (root["torque_constant_nm_per_a"]) {
     r.scalar(root["torque_constant_nm_per_a"], "torque_constant_nm_per_a", &t.torque_constant_nm_per_a);
   }
   if (const auto bits = root["hardware_error_bits"]) {
     if (!bits.IsMap()) {
-      errors.push_back("hardware_error_bits: expected a mapping name: bit, got '" + core::ConfigReader::dump(bits) + "'");
+      errors.push_back("hardware_error_bits: expected a mapping name: bit, got '" + core::ConfigReader::dump(bits) +
+                       "'");
     } else {
       for (const auto& kv : bits) {
         const std::string name = kv.first.as<std::string>();
@@ -196,7 +203,8 @@ ControlTable ControlTable::from_yaml_string(const std::string& text, const std::
       r.scalar(r.child(n, "address", key + ".address"), key + ".address", &address);
       r.scalar(r.child(n, "size", key + ".size"), key + ".size", &size);
       if (address < 0 || address > 0xFFFF) {
-        if (n["address"]) errors.push_back(key + ".address: " + core::ConfigReader::dump(n["address"]) + " is not in 0..65535");
+        if (n["address"])
+          errors.push_back(key + ".address: " + core::ConfigReader::dump(n["address"]) + " is not in 0..65535");
       } else {
         e.address = static_cast<std::uint16_t>(address);
       }

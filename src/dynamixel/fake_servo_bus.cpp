@@ -62,8 +62,8 @@ Status FakeServoBus::sync_read(std::uint16_t address, std::uint16_t length, cons
                                std::uint8_t* data, ServoReply* replies) noexcept {
   return bus_.sync_read(address, length, ids, n, data, replies);
 }
-Status FakeServoBus::fast_sync_read(std::uint16_t address, std::uint16_t length, const std::uint8_t* ids,
-                                    std::size_t n, std::uint8_t* data, ServoReply* replies) noexcept {
+Status FakeServoBus::fast_sync_read(std::uint16_t address, std::uint16_t length, const std::uint8_t* ids, std::size_t n,
+                                    std::uint8_t* data, ServoReply* replies) noexcept {
   return bus_.fast_sync_read(address, length, ids, n, data, replies);
 }
 

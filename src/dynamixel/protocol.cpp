@@ -25,9 +25,7 @@ constexpr std::size_t kIdOffset = 4;
 constexpr std::size_t kLengthOffset = 5;
 constexpr std::size_t kInstructionOffset = 7;
 
-bool is_header(const std::uint8_t* p) noexcept {
-  return p[0] == 0xFF && p[1] == 0xFF && p[2] == 0xFD && p[3] == 0x00;
-}
+bool is_header(const std::uint8_t* p) noexcept { return p[0] == 0xFF && p[1] == 0xFF && p[2] == 0xFD && p[3] == 0x00; }
 
 }  // namespace
 
@@ -163,8 +161,8 @@ std::size_t PacketEncoder::finish() noexcept {
   return n_;
 }
 
-std::size_t encode_packet(std::uint8_t id, std::uint8_t instruction, const std::uint8_t* params,
-                          std::size_t n_params, std::uint8_t* out, std::size_t capacity) noexcept {
+std::size_t encode_packet(std::uint8_t id, std::uint8_t instruction, const std::uint8_t* params, std::size_t n_params,
+                          std::uint8_t* out, std::size_t capacity) noexcept {
   PacketEncoder e(out, capacity);
   e.begin(id, instruction);
   e.put(params, n_params);
@@ -191,8 +189,8 @@ const char* to_string(ParseStatus status) noexcept {
   return "?";
 }
 
-ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t* scratch,
-                         std::size_t scratch_capacity, Packet* out, bool input_ended) noexcept {
+ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t* scratch, std::size_t scratch_capacity,
+                         Packet* out, bool input_ended) noexcept {
   ParseResult r;
   // Hunt the header. A trailing FF, FF FF or FF FF FD may be the start of one: keep it.
   std::size_t s = 0;

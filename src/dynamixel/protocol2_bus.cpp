@@ -234,7 +234,8 @@ Status Protocol2Bus::ping(std::uint8_t id, std::uint16_t* model_number, std::uin
 
 Status Protocol2Bus::read(std::uint8_t id, std::uint16_t address, std::uint16_t length, std::uint8_t* data,
                           std::uint8_t* error) noexcept {
-  if (!valid_id(id) || length == 0 || !data || kStatusOverhead + length > kMaxPacketBytes) return Status::kInvalidArgument;
+  if (!valid_id(id) || length == 0 || !data || kStatusOverhead + length > kMaxPacketBytes)
+    return Status::kInvalidArgument;
   PacketEncoder e(tx_.data(), tx_.size());
   e.begin(id, instruction::kRead);
   e.put16(address);
@@ -345,10 +346,9 @@ Status Protocol2Bus::sync_read(std::uint16_t address, std::uint16_t length, cons
   return first_failure(replies, n);
 }
 
-Status Protocol2Bus::fast_sync_read(std::uint16_t address, std::uint16_t length, const std::uint8_t* ids,
-                                    std::size_t n, std::uint8_t* data, ServoReply* replies) noexcept {
-  if (!valid_ids(ids, n) || length == 0 || !data || !replies ||
-      kStatusOverhead + n * (length + 4u) > kMaxPacketBytes) {
+Status Protocol2Bus::fast_sync_read(std::uint16_t address, std::uint16_t length, const std::uint8_t* ids, std::size_t n,
+                                    std::uint8_t* data, ServoReply* replies) noexcept {
+  if (!valid_ids(ids, n) || length == 0 || !data || !replies || kStatusOverhead + n * (length + 4u) > kMaxPacketBytes) {
     return Status::kInvalidArgument;
   }
   std::size_t size = 0;
@@ -396,8 +396,8 @@ Status Protocol2Bus::fast_sync_read(std::uint16_t address, std::uint16_t length,
       }
       const std::uint8_t err = b[0];
       const Status st = (err & kErrorNumberMask) ? Status::kServoError
-                        : (err & kAlertBit)       ? Status::kHardwareError
-                                                  : Status::kOk;
+                        : (err & kAlertBit)      ? Status::kHardwareError
+                                                 : Status::kOk;
       replies[i].status = record_reply(st);
       replies[i].error = err;
       if (has_data(st)) std::memcpy(data + i * length, b + 2, length);

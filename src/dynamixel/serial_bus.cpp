@@ -60,7 +60,8 @@ void SerialPort::open(const std::string& device, int baud_bps, bool low_latency)
     throw SerialError(device + ": not a serial port (TCGETS2): " + errno_text(err));
   }
   // Raw 8N1, no flow control, no echo, no translation; reads return at once (VMIN = VTIME = 0).
-  tio.c_iflag &= ~static_cast<tcflag_t>(IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | IGNCR | ICRNL | IXON | IXOFF | IXANY);
+  tio.c_iflag &=
+      ~static_cast<tcflag_t>(IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | IGNCR | ICRNL | IXON | IXOFF | IXANY);
   tio.c_oflag &= ~static_cast<tcflag_t>(OPOST);
   tio.c_lflag &= ~static_cast<tcflag_t>(ECHO | ECHONL | ICANON | ISIG | IEXTEN);
   tio.c_cflag &= ~static_cast<tcflag_t>(CSIZE | PARENB | CSTOPB | CRTSCTS | CBAUD | (CBAUD << IBSHIFT));
@@ -72,7 +73,8 @@ void SerialPort::open(const std::string& device, int baud_bps, bool low_latency)
   if (ioctl(fd, TCSETS2, &tio) != 0) {
     const int err = errno;
     ::close(fd);
-    throw SerialError(device + ": cannot set baud rate " + std::to_string(baud_bps) + " (TCSETS2/BOTHER): " + errno_text(err));
+    throw SerialError(device + ": cannot set baud rate " + std::to_string(baud_bps) +
+                      " (TCSETS2/BOTHER): " + errno_text(err));
   }
   low_latency_applied_ = false;
   if (low_latency) {

@@ -6,8 +6,8 @@
 namespace snake_autonomy::dynamixel {
 namespace {
 
-constexpr const char* kFaultNames[kNumReplyFaults] = {"drop_reply", "corrupt_crc", "truncate_reply",
-                                                      "garbage_before", "garbage_data"};
+constexpr const char* kFaultNames[kNumReplyFaults] = {"drop_reply", "corrupt_crc", "truncate_reply", "garbage_before",
+                                                      "garbage_data"};
 constexpr std::uint8_t kGarbage[] = {0x00, 0x13, 0xFF, 0xFF, 0xFD, 0xFD};
 constexpr std::size_t kRxBytes = 4 * kMaxPacketBytes;
 
@@ -274,9 +274,8 @@ void SimulatedServos::refresh() noexcept {
   hooks_->before_read(*this);
 }
 
-void SimulatedServos::set_present(std::uint8_t id, std::int64_t position, std::int64_t velocity,
-                                  std::int64_t current, std::int64_t input_voltage,
-                                  std::int64_t temperature) noexcept {
+void SimulatedServos::set_present(std::uint8_t id, std::int64_t position, std::int64_t velocity, std::int64_t current,
+                                  std::int64_t input_voltage, std::int64_t temperature) noexcept {
   if (!has(id)) return;
   Servo& s = servo(id);
   const auto put = [&s](const Entry& e, std::int64_t v) {
@@ -298,7 +297,8 @@ void SimulatedServos::set_present(std::uint8_t id, std::int64_t position, std::i
 void SimulatedServos::inject(ReplyFault kind, const std::vector<std::uint8_t>& ids, int count) {
   if (static_cast<std::size_t>(kind) >= kNumReplyFaults) throw ConfigError("kind: not a reply fault");
   if (count == 0) throw ConfigError("count: 0 is not a positive count (or negative: until cleared)");
-  if (n_faults_ >= kMaxFaults) throw ConfigError("inject: more than " + std::to_string(kMaxFaults) + " faults standing");
+  if (n_faults_ >= kMaxFaults)
+    throw ConfigError("inject: more than " + std::to_string(kMaxFaults) + " faults standing");
   Fault f;
   f.kind = kind;
   f.remaining = count < 0 ? -1 : count;
@@ -392,8 +392,8 @@ void SimulatedServos::reply(const Servo& s, std::uint8_t error, const std::uint8
     std::memset(data_.data(), 0xA5, n);
     data = data_.data();
   }
-  std::size_t size = encode_status(s.id, static_cast<std::uint8_t>(error | alert(s)), data, n, packet_.data(),
-                                   packet_.size());
+  std::size_t size =
+      encode_status(s.id, static_cast<std::uint8_t>(error | alert(s)), data, n, packet_.data(), packet_.size());
   if (size == 0) {  // cannot happen for reads within the memory; refuse rather than send nothing
     size = encode_status(s.id, static_cast<std::uint8_t>(servo_error::kDataLengthError | alert(s)), nullptr, 0,
                          packet_.data(), packet_.size());
@@ -418,8 +418,14 @@ void SimulatedServos::fast_reply(const std::uint8_t* ids, std::size_t n, std::ui
     // CRCs over the un-stuffed packet so far; the last one is the packet's own).
     const std::size_t n_params = m * (length + 4u) - 2;
     std::size_t b = 0;
-    const std::uint8_t head[] = {0xFF, 0xFF, 0xFD, 0x00, kBroadcastId, static_cast<std::uint8_t>((n_params + 3) & 0xFF),
-                                 static_cast<std::uint8_t>((n_params + 3) >> 8), instruction::kStatus};
+    const std::uint8_t head[] = {0xFF,
+                                 0xFF,
+                                 0xFD,
+                                 0x00,
+                                 kBroadcastId,
+                                 static_cast<std::uint8_t>((n_params + 3) & 0xFF),
+                                 static_cast<std::uint8_t>((n_params + 3) >> 8),
+                                 instruction::kStatus};
     std::memcpy(body_.data(), head, sizeof head);
     b = sizeof head;
     for (std::size_t k = 0; k < m; ++k) {

@@ -44,7 +44,6 @@
 #include <thread>
 
 #include "driver_params.hpp"
-#include "trajectory_topics.hpp"
 #include "snake_autonomy/core/driver_controller.hpp"
 #include "snake_autonomy/core/gait_library.hpp"
 #include "snake_autonomy/core/loop_timer.hpp"
@@ -52,6 +51,7 @@
 #include "snake_autonomy/core/robot_model.hpp"
 #include "snake_autonomy/dynamixel/control_table.hpp"
 #include "snake_autonomy/dynamixel/serial_bus.hpp"
+#include "trajectory_topics.hpp"
 
 namespace core = snake_autonomy::core;
 namespace dxl = snake_autonomy::dynamixel;
@@ -96,8 +96,8 @@ std::string fixed(double v, int digits) {
 
 class DriverNode {
  public:
-  DriverNode(ros::NodeHandle& nh, const DriverNodeConfig& config, const core::RobotModel& model,
-             dxl::SerialBus& bus, core::DriverController& controller)
+  DriverNode(ros::NodeHandle& nh, const DriverNodeConfig& config, const core::RobotModel& model, dxl::SerialBus& bus,
+             core::DriverController& controller)
       : nh_(nh), config_(config), model_(model), bus_(bus), controller_(controller), epoch_(Clock::now()) {
     for (auto* s : {&work_, &shared_, &published_}) s->driver = controller_.make_snapshot();
     joint_states_.name = model_.joint_names();
@@ -140,8 +140,8 @@ class DriverNode {
     snapshot_cv_.notify_all();
     if (publisher_thread_.joinable()) publisher_thread_.join();
     const bool ok = controller_.shutdown();
-    std::fprintf(stderr, "[driver] shutdown: servos left in '%s'%s\n", core::to_string(config_.controller.shutdown_action),
-                 ok ? "" : " (the bus did not take the write)");
+    std::fprintf(stderr, "[driver] shutdown: servos left in '%s'%s\n",
+                 core::to_string(config_.controller.shutdown_action), ok ? "" : " (the bus did not take the write)");
   }
 
  private:
@@ -192,7 +192,8 @@ class DriverNode {
       }
       {
         std::unique_lock<std::mutex> lock(snapshot_mutex_);
-        snapshot_cv_.wait_for(lock, std::chrono::milliseconds(20), [&] { return shared_.seq != last_seq || !running_; });
+        snapshot_cv_.wait_for(lock, std::chrono::milliseconds(20),
+                              [&] { return shared_.seq != last_seq || !running_; });
         if (shared_.seq == last_seq) continue;
         published_.driver = shared_.driver;
         published_.loop = shared_.loop;
@@ -209,7 +210,8 @@ class DriverNode {
       log_changes();
       if (ros::WallTime::now() >= next_diag) {
         next_diag += ros::WallDuration(config_.diagnostics_period_s);
-        if (next_diag < ros::WallTime::now()) next_diag = ros::WallTime::now() + ros::WallDuration(config_.diagnostics_period_s);
+        if (next_diag < ros::WallTime::now())
+          next_diag = ros::WallTime::now() + ros::WallDuration(config_.diagnostics_period_s);
         publish_diagnostics();
         reset_window_ = true;
       }
@@ -266,9 +268,10 @@ class DriverNode {
     if (s.state != logged_state_ || std::strcmp(s.fault_reason.data(), logged_fault_.c_str()) != 0) {
       if (s.state == core::DriverState::kFault) {
         // The core's reasons name no ROS interface: the recovery services are named here.
-        ROS_ERROR("driver: locomotion stopped (%s): %s [recover: driver/reboot_servo for a hardware error, then "
-                  "driver/enable_torque]",
-                  core::to_string(config_.controller.fault_action), s.fault_reason.data());
+        ROS_ERROR(
+            "driver: locomotion stopped (%s): %s [recover: driver/reboot_servo for a hardware error, then "
+            "driver/enable_torque]",
+            core::to_string(config_.controller.fault_action), s.fault_reason.data());
       } else if (s.hold_reason == core::HoldReason::kCommandTimeout) {
         ROS_WARN("driver: %s", command_timeout_text().c_str());
       } else {
@@ -332,17 +335,21 @@ class DriverNode {
     const bool ok = l.window_overruns == 0 && rate_ok;
     const bool rt_known = realtime_known_.load(std::memory_order_acquire);
     const bool rt_refused = rt_known && realtime_.degraded();
-    std::string summary = ok ? "on time" : (l.window_overruns > 0 ? str(l.window_overruns) + " overruns" : "rate off by more than 10 %");
+    std::string summary =
+        ok ? "on time" : (l.window_overruns > 0 ? str(l.window_overruns) + " overruns" : "rate off by more than 10 %");
     if (rt_refused) summary += "; real-time mode refused: " + realtime_.mode();
     stat.summary(ok && !rt_refused ? DiagnosticStatus::OK : DiagnosticStatus::WARN, summary);
-    stat.values = {kv("target_rate_hz", fixed(config_.loop.rate_hz, 1)), kv("rate_hz", fixed(rate, 2)),
+    stat.values = {kv("target_rate_hz", fixed(config_.loop.rate_hz, 1)),
+                   kv("rate_hz", fixed(rate, 2)),
                    kv("period_mean_ms", fixed(l.window_period_mean_s() * 1e3, 3)),
                    kv("period_std_ms", fixed(l.window_period_std_s() * 1e3, 3)),
                    kv("period_max_ms", fixed(l.window_period_max_s * 1e3, 3)),
                    kv("wake_late_max_ms", fixed(l.window_late_max_s * 1e3, 3)),
                    kv("work_mean_ms", fixed(l.window_cycles ? l.window_work_sum_s / l.window_cycles * 1e3 : 0.0, 3)),
-                   kv("work_max_ms", fixed(l.window_work_max_s * 1e3, 3)), kv("overruns", str(l.overruns)),
-                   kv("window_overruns", str(l.window_overruns)), kv("skipped_deadlines", str(l.skipped_deadlines)),
+                   kv("work_max_ms", fixed(l.window_work_max_s * 1e3, 3)),
+                   kv("overruns", str(l.overruns)),
+                   kv("window_overruns", str(l.window_overruns)),
+                   kv("skipped_deadlines", str(l.skipped_deadlines)),
                    kv("cycles", str(l.cycles)),
                    kv("realtime", rt_known ? realtime_.mode() : "starting"),
                    kv("realtime_priority", str(config_.realtime_priority)),
@@ -364,15 +371,19 @@ class DriverNode {
     } else {
       stat.summary(DiagnosticStatus::OK, core::to_string(s.state));
     }
-    stat.values = {kv("state", core::to_string(s.state)), kv("gait", s.gait.data()),
-                   kv("fault", s.fault_reason.data()), kv("last_fault", s.last_fault.data()),
+    stat.values = {kv("state", core::to_string(s.state)),
+                   kv("gait", s.gait.data()),
+                   kv("fault", s.fault_reason.data()),
+                   kv("last_fault", s.last_fault.data()),
                    kv("pose_received", s.pose_received ? "true" : "false"),
                    kv("pose_fresh", s.pose_fresh ? "true" : "false"),
                    kv("locomotion_held_for_pose", s.locomotion_gated ? "true" : "false"),
                    kv("commands_accepted", str(controller_.commands_accepted())),
                    kv("commands_refused", str(controller_.commands_refused())),
-                   kv("commands_applied", str(s.commands_applied)), kv("last_refusal", controller_.last_refusal()),
-                   kv("poses_refused", str(s.poses_refused)), kv("last_pose_refusal", s.pose_refusal.data()),
+                   kv("commands_applied", str(s.commands_applied)),
+                   kv("last_refusal", controller_.last_refusal()),
+                   kv("poses_refused", str(s.poses_refused)),
+                   kv("last_pose_refusal", s.pose_refusal.data()),
                    kv("hold_reason", core::to_string(s.hold_reason)),
                    kv("command_age_s", fixed(s.command_age_s, 2)),
                    kv("command_timeout_s", fixed(config_.controller.command_timeout_s, 2)),
@@ -385,19 +396,20 @@ class DriverNode {
     using diagnostic_msgs::DiagnosticStatus;
     const core::DriverSnapshot& s = published_.driver;
     stat.hardware_id = config_.serial.device;
-    stat.summary(s.consecutive_failed_cycles > 0 ? DiagnosticStatus::WARN : DiagnosticStatus::OK,
-                 s.consecutive_failed_cycles > 0 ? str(s.consecutive_failed_cycles) + " consecutive failed cycles" : "ok");
+    stat.summary(
+        s.consecutive_failed_cycles > 0 ? DiagnosticStatus::WARN : DiagnosticStatus::OK,
+        s.consecutive_failed_cycles > 0 ? str(s.consecutive_failed_cycles) + " consecutive failed cycles" : "ok");
     const auto& c = s.bus;
-    stat.values = {kv("port", config_.serial.device), kv("baud", str(config_.serial.baud_bps)),
-                   kv("transactions", str(c.transactions)), kv("bytes_sent", str(c.bytes_sent)),
-                   kv("bytes_received", str(c.bytes_received)), kv("packets_received", str(c.packets_received)),
-                   kv("crc_errors", str(c.crc_errors)), kv("timeouts", str(c.timeouts)), kv("malformed", str(c.malformed)),
-                   kv("hardware_error_alerts", str(c.hardware_error_alerts)), kv("servo_errors", str(c.servo_errors)),
-                   kv("unexpected_packets", str(c.unexpected_packets)), kv("io_errors", str(c.io_errors)),
-                   kv("drains", str(c.drains)), kv("late_bytes", str(c.late_bytes)),
-                   kv("verify_mismatches", str(c.verify_mismatches)),
-                   kv("failed_cycles", str(s.failed_cycles)),
-                   kv("consecutive_failed_cycles", str(s.consecutive_failed_cycles))};
+    stat.values = {
+        kv("port", config_.serial.device),           kv("baud", str(config_.serial.baud_bps)),
+        kv("transactions", str(c.transactions)),     kv("bytes_sent", str(c.bytes_sent)),
+        kv("bytes_received", str(c.bytes_received)), kv("packets_received", str(c.packets_received)),
+        kv("crc_errors", str(c.crc_errors)),         kv("timeouts", str(c.timeouts)),
+        kv("malformed", str(c.malformed)),           kv("hardware_error_alerts", str(c.hardware_error_alerts)),
+        kv("servo_errors", str(c.servo_errors)),     kv("unexpected_packets", str(c.unexpected_packets)),
+        kv("io_errors", str(c.io_errors)),           kv("drains", str(c.drains)),
+        kv("late_bytes", str(c.late_bytes)),         kv("verify_mismatches", str(c.verify_mismatches)),
+        kv("failed_cycles", str(s.failed_cycles)),   kv("consecutive_failed_cycles", str(s.consecutive_failed_cycles))};
   }
 
   void diagnose_servo(std::size_t j, diagnostic_updater::DiagnosticStatusWrapper& stat) {
@@ -414,15 +426,22 @@ class DriverNode {
     } else {
       stat.summary(DiagnosticStatus::OK, "ok");
     }
-    stat.values = {kv("id", str(int(d.id))), kv("temperature_c", std::isnan(d.temperature_c) ? "unknown" : fixed(d.temperature_c, 0)),
+    stat.values = {kv("id", str(int(d.id))),
+                   kv("temperature_c", std::isnan(d.temperature_c) ? "unknown" : fixed(d.temperature_c, 0)),
                    kv("voltage_v", std::isnan(d.voltage_v) ? "unknown" : fixed(d.voltage_v, 1)),
                    kv("hardware_error", d.hardware_error ? "true" : "false"),
-                   kv("hardware_error_bits", str(int(d.hardware_error_bits))), kv("hardware_error_names", bits),
-                   kv("stale", d.stale ? "true" : "false"), kv("consecutive_misses", str(d.consecutive_misses)),
-                   kv("timeouts", str(d.timeouts)), kv("crc_errors", str(d.crc_errors)),
-                   kv("implausible", str(d.implausible)), kv("other_errors", str(d.other_errors)),
-                   kv("present_ticks", str(d.present_ticks)), kv("goal_ticks", str(d.goal_ticks)),
-                   kv("goal_min_ticks", str(d.min_ticks)), kv("goal_max_ticks", str(d.max_ticks))};
+                   kv("hardware_error_bits", str(int(d.hardware_error_bits))),
+                   kv("hardware_error_names", bits),
+                   kv("stale", d.stale ? "true" : "false"),
+                   kv("consecutive_misses", str(d.consecutive_misses)),
+                   kv("timeouts", str(d.timeouts)),
+                   kv("crc_errors", str(d.crc_errors)),
+                   kv("implausible", str(d.implausible)),
+                   kv("other_errors", str(d.other_errors)),
+                   kv("present_ticks", str(d.present_ticks)),
+                   kv("goal_ticks", str(d.goal_ticks)),
+                   kv("goal_min_ticks", str(d.min_ticks)),
+                   kv("goal_max_ticks", str(d.max_ticks))};
   }
 
   // ---- callbacks (spinner threads) ----
@@ -560,7 +579,8 @@ int main(int argc, char** argv) {
   while (ros::ok()) {
     try {
       if (!bus) bus = std::make_unique<dxl::SerialBus>(config.serial);
-      if (!controller) controller = std::make_unique<core::DriverController>(*model, *gaits, *table, *bus, config.controller);
+      if (!controller)
+        controller = std::make_unique<core::DriverController>(*model, *gaits, *table, *bus, config.controller);
       controller->start(0.0);
       break;
     } catch (const dxl::SerialError& e) {

@@ -51,6 +51,7 @@ class ParamReader {
       bad(key, v, "is not true or false");
     }
   }
+
  private:
   bool fetch(const std::string& key, XmlRpc::XmlRpcValue* v) { return nh_.getParam(key, *v); }
   void bad(const std::string& key, XmlRpc::XmlRpcValue& v, const char* what) {

@@ -1,7 +1,7 @@
 // The driver node's configuration: a plain struct read from rosparam (config/driver.yaml documents
 // every key). The controller's keys go through the core's loader (DriverConfig::apply_yaml): an
-// optional ~driver_config_file, then the rosparams over it. read_driver_params() collects every problem (wrong type, bad value), naming the key
-// and the value, so that the node refuses to start with the complete list.
+// optional ~driver_config_file, then the rosparams over it. read_driver_params() collects every problem (wrong type,
+// bad value), naming the key and the value, so that the node refuses to start with the complete list.
 #pragma once
 
 #include <ros/node_handle.h>

@@ -57,9 +57,10 @@ void TrajectoryTopics::count_lost(const std::string& publisher, std::uint32_t se
   }
   if (gap == 0) return;
   lost_ += gap;
-  ROS_WARN("driver/joint_trajectory: %u message(s) from %s never reached the driver (header.seq jumped to %u): "
-           "lost in a queue (driver's: %u messages), they get no status",
-           gap, publisher.c_str(), seq, kQueueSize);
+  ROS_WARN(
+      "driver/joint_trajectory: %u message(s) from %s never reached the driver (header.seq jumped to %u): "
+      "lost in a queue (driver's: %u messages), they get no status",
+      gap, publisher.c_str(), seq, kQueueSize);
 }
 
 void TrajectoryTopics::on_trajectory(const ros::MessageEvent<const trajectory_msgs::JointTrajectory>& event) {
@@ -120,9 +121,9 @@ void TrajectoryTopics::publish(const driver::TrajectoryProgress& p, const ros::T
       ROS_INFO("driver/joint_trajectory '%s' (sequence %llu) superseded: %s", f.id.data(),
                static_cast<unsigned long long>(f.sequence), f.reason.data());
     else if (f.phase == driver::TrajectoryPhase::kAborted)
-      ROS_WARN("driver/joint_trajectory '%s' aborted (%s): %s", f.id.data(), driver::to_string(f.abort), f.reason.data());
-    else
-      ROS_INFO("driver/joint_trajectory '%s' done: holding its last point", f.id.data());
+      ROS_WARN("driver/joint_trajectory '%s' aborted (%s): %s", f.id.data(), driver::to_string(f.abort),
+               f.reason.data());
+    else ROS_INFO("driver/joint_trajectory '%s' done: holding its last point", f.id.data());
   }
 }
 
@@ -136,21 +137,31 @@ void TrajectoryTopics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& sta
       stat.summary(DiagnosticStatus::OK, "running '" + id + "': point " + std::to_string(p.point_reached + 1) + " of " +
                                              std::to_string(p.num_points));
       break;
-    case driver::TrajectoryPhase::kDone: stat.summary(DiagnosticStatus::OK, "'" + id + "' done: last point held"); break;
+    case driver::TrajectoryPhase::kDone:
+      stat.summary(DiagnosticStatus::OK, "'" + id + "' done: last point held");
+      break;
     case driver::TrajectoryPhase::kAborted:
-      stat.summary(DiagnosticStatus::WARN, "'" + id + "' aborted (" + driver::to_string(p.abort) + "): " + p.reason.data());
+      stat.summary(DiagnosticStatus::WARN,
+                   "'" + id + "' aborted (" + driver::to_string(p.abort) + "): " + p.reason.data());
       break;
   }
-  stat.values = {kv("id", id), kv("sequence", std::to_string(p.sequence)), kv("phase", driver::to_string(p.phase)),
-                 kv("abort", driver::to_string(p.abort)), kv("reason", p.reason.data()),
-                 kv("point_reached", std::to_string(p.point_reached)), kv("num_points", std::to_string(p.num_points)),
-                 kv("time_s", fixed(p.time_s)), kv("duration_s", fixed(p.duration_s)),
+  stat.values = {kv("id", id),
+                 kv("sequence", std::to_string(p.sequence)),
+                 kv("phase", driver::to_string(p.phase)),
+                 kv("abort", driver::to_string(p.abort)),
+                 kv("reason", p.reason.data()),
+                 kv("point_reached", std::to_string(p.point_reached)),
+                 kv("num_points", std::to_string(p.num_points)),
+                 kv("time_s", fixed(p.time_s)),
+                 kv("duration_s", fixed(p.duration_s)),
                  kv("trajectories_accepted", std::to_string(controller_.trajectories_accepted())),
                  kv("trajectories_refused", std::to_string(controller_.trajectories_refused())),
-                 kv("last_refusal", refusal), kv("final_statuses", std::to_string(finals_published_)),
-                 kv("last_final", last_final_.sequence == 0 ? "" : std::string(last_final_.id.data()) + " " +
-                                                                     driver::to_string(last_final_.phase) + " " +
-                                                                     driver::to_string(last_final_.abort)),
+                 kv("last_refusal", refusal),
+                 kv("final_statuses", std::to_string(finals_published_)),
+                 kv("last_final", last_final_.sequence == 0 ? ""
+                                                            : std::string(last_final_.id.data()) + " " +
+                                                                  driver::to_string(last_final_.phase) + " " +
+                                                                  driver::to_string(last_final_.abort)),
                  kv("final_statuses_dropped", std::to_string(controller_.trajectory_finals_dropped())),
                  kv("lost_before_driver", std::to_string(lost_.load())),
                  kv("queue_size", std::to_string(kQueueSize))};

@@ -90,5 +90,4 @@ struct Rig {
   int cycles_since_beat_ = 0;
 };
 
-
 }  // namespace snake_autonomy::test

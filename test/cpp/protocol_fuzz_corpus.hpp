@@ -171,10 +171,9 @@ class CorpusGenerator {
 
   // A valid packet of one of the instructions the driver and the servos exchange.
   Bytes valid_packet() {
-    static constexpr std::uint8_t kInstructions[] = {instruction::kPing,     instruction::kRead,
-                                                      instruction::kWrite,    instruction::kReboot,
-                                                      instruction::kStatus,   instruction::kSyncRead,
-                                                      instruction::kSyncWrite, instruction::kFastSyncRead};
+    static constexpr std::uint8_t kInstructions[] = {
+        instruction::kPing,   instruction::kRead,     instruction::kWrite,     instruction::kReboot,
+        instruction::kStatus, instruction::kSyncRead, instruction::kSyncWrite, instruction::kFastSyncRead};
     const std::uint8_t inst = kInstructions[uniform(0, sizeof kInstructions - 1)];
     const std::uint8_t id = chance(0.2) ? kBroadcastId : static_cast<std::uint8_t>(uniform(0, kMaxServoId));
     Bytes p;

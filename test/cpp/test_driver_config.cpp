@@ -31,9 +31,10 @@ TEST(DriverConfigYaml, EmptyTextGivesTheDefaults) {
 
 TEST(DriverConfigYaml, EveryProblemNamesKeyAndValue) {
   try {
-    DriverConfig::from_yaml_string("max_failed_cycles: 2.5\nfault_action: explode\nreturn_delay_time_us: 3\n"
-                                   "require_pose: maybe\npose_timeout_s: .nan\n",
-                                   "drv.yaml");
+    DriverConfig::from_yaml_string(
+        "max_failed_cycles: 2.5\nfault_action: explode\nreturn_delay_time_us: 3\n"
+        "require_pose: maybe\npose_timeout_s: .nan\n",
+        "drv.yaml");
     FAIL() << "accepted";
   } catch (const ConfigError& e) {
     const std::string what = e.what();

@@ -9,8 +9,8 @@
 #include <new>
 #include <thread>
 
-#include "snake_autonomy/core/driver_controller.hpp"
 #include "driver_rig.hpp"
+#include "snake_autonomy/core/driver_controller.hpp"
 
 using namespace snake_autonomy::core;
 using snake_autonomy::dynamixel::FakeServoBus;
@@ -36,7 +36,6 @@ void* operator new(std::size_t size) {
 }
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-
 
 TEST(DriverConfig, ValidateCollectsEveryProblem) {
   DriverConfig c;
@@ -97,7 +96,8 @@ TEST(DriverController, StartWritesTheReturnDelayTimeAndTheBusAllowsForTheSlowest
   Rig rig;
   ASSERT_EQ(rig.bus->servos().get(4, "return_delay_time"), 250);
   rig.start();
-  for (int id = 1; id <= 11; ++id) EXPECT_EQ(rig.bus->servos().get(static_cast<std::uint8_t>(id), "return_delay_time"), 0) << id;
+  for (int id = 1; id <= 11; ++id)
+    EXPECT_EQ(rig.bus->servos().get(static_cast<std::uint8_t>(id), "return_delay_time"), 0) << id;
   EXPECT_EQ(rig.bus->return_delay_s(), 0.0);
   ASSERT_EQ(rig.ctl->start_notes().size(), 11u);
   EXPECT_NE(rig.ctl->start_notes()[0].find("servo 1 (joint_1): Return Delay Time 500 us -> 0 us"), std::string::npos)
@@ -170,7 +170,8 @@ TEST(DriverController, GaitCommandDrivesTheGoalsThroughTheCpg) {
     hi = std::max(hi, rig.goal(2));
   }
   EXPECT_GT(hi - lo, 600);  // yaw joint 2 swings about ±45 deg (±512 ticks)
-  EXPECT_EQ(rig.bus->servos().goal_writes(2), rig.bus->servos().stats().sync_write - 1);  // every cycle wrote (all but the torque-on write)
+  EXPECT_EQ(rig.bus->servos().goal_writes(2),
+            rig.bus->servos().stats().sync_write - 1);  // every cycle wrote (all but the torque-on write)
   DriverSnapshot snap = rig.ctl->make_snapshot();
   rig.ctl->fill_snapshot(snap);
   EXPECT_STREQ(snap.gait.data(), "sidewind");
@@ -182,12 +183,15 @@ TEST(DriverController, GaitCommandDrivesTheGoalsThroughTheCpg) {
 }
 
 TEST(DriverController, GoalsNeverLeaveTheJointOrServoLimits) {
-  Rig rig({}, [](RobotModel& m) {
-    for (int j = 0; j < m.num_joints; ++j) {
-      m.joint_lower_rad[j] = -20 * kDeg;
-      m.joint_upper_rad[j] = 25 * kDeg;
-    }
-  }, [](FakeServoBus& b) { b.servos().set(4, "max_position_limit", 2100); });
+  Rig rig(
+      {},
+      [](RobotModel& m) {
+        for (int j = 0; j < m.num_joints; ++j) {
+          m.joint_lower_rad[j] = -20 * kDeg;
+          m.joint_upper_rad[j] = 25 * kDeg;
+        }
+      },
+      [](FakeServoBus& b) { b.servos().set(4, "max_position_limit", 2100); });
   rig.start();
   GaitCommandRequest c;
   c.gait = "sidewind";
@@ -241,8 +245,8 @@ TEST(DriverController, RefusedCommandLeavesTheRunningGaitUntouched) {
   c.bias.assign(11, 0.0);
   c.bias[7] = INFINITY;
   const std::string why = rig.ctl->command_gait(c);
-  for (const char* part : {"unknown gait 'moonwalk'", "amplitude: 5 values", "omega[3] (joint_4): nan",
-                           "bias[7] (joint_8): inf"})
+  for (const char* part :
+       {"unknown gait 'moonwalk'", "amplitude: 5 values", "omega[3] (joint_4): nan", "bias[7] (joint_8): inf"})
     EXPECT_NE(why.find(part), std::string::npos) << part << " in:\n" << why;
   GaitCommandRequest fast;
   fast.omega.assign(11, 2 * M_PI * 5.0);

@@ -218,7 +218,8 @@ TEST(DriverSafety, AbsurdBasePosesAreRefusedWithTheReasonAndNeverReachTheKinemat
   EXPECT_LT(rig.ctl->kinematics().com.norm(), 10.0);
   DriverSnapshot snap = rig.ctl->make_snapshot();
   rig.ctl->fill_snapshot(snap);
-  EXPECT_TRUE(contains(snap.pose_refusal.data(), "outside the workspace (pose_workspace_m) 1000 m")) << snap.pose_refusal.data();
+  EXPECT_TRUE(contains(snap.pose_refusal.data(), "outside the workspace (pose_workspace_m) 1000 m"))
+      << snap.pose_refusal.data();
   // (x, y, z, w) = (0, 0, 1e200, 1e200): its norm overflows; normalising gave a zero rotation.
   EXPECT_FALSE(rig.ctl->set_base_pose(t, Eigen::Vector3d(1, 2, 0), Eigen::Quaterniond(1e200, 0, 0, 1e200)));
   EXPECT_FALSE(rig.ctl->set_base_pose(t, Eigen::Vector3d(1, 2, 0), Eigen::Quaterniond(1.05, 0, 0, 0)));

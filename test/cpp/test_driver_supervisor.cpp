@@ -124,7 +124,8 @@ TEST(DriverSupervisor, FaultAfterMaxFailedCyclesNamesTheServoAndHolds) {
   EXPECT_FALSE(s.cycle());
   ASSERT_EQ(s.sup.state(), DriverState::kFault);
   const std::string why = s.sup.fault_reason().data();
-  EXPECT_TRUE(contains(why, "4 consecutive cycles with missing replies: servo 7 (joint_7) timeout for 4 cycles")) << why;
+  EXPECT_TRUE(contains(why, "4 consecutive cycles with missing replies: servo 7 (joint_7) timeout for 4 cycles"))
+      << why;
   EXPECT_EQ(src.deactivated, "fault");  // the source was taken off
   EXPECT_EQ(s.sup.active(), nullptr);
   // fault action hold: the others keep torque and their goals stay put.

@@ -65,7 +65,8 @@ struct Emulator {
       case dx::instruction::kSyncWrite: {
         const std::uint16_t addr = u16(0), len = u16(2);
         for (std::size_t i = 4; i + 1 + len <= p.n_params; i += 1 + len) {
-          if (memory.count(p.params[i])) std::copy(p.params + i + 1, p.params + i + 1 + len, &memory[p.params[i]][addr]);
+          if (memory.count(p.params[i]))
+            std::copy(p.params + i + 1, p.params + i + 1 + len, &memory[p.params[i]][addr]);
         }
         break;
       }
@@ -83,7 +84,8 @@ struct Emulator {
           params.insert(params.end(), &memory[id][u16(0)], &memory[id][u16(0)] + u16(2));
         }
         Bytes b(dx::kMaxPacketBytes);
-        b.resize(dx::encode_packet(dx::kBroadcastId, dx::instruction::kStatus, params.data(), params.size(), b.data(), b.size()));
+        b.resize(dx::encode_packet(dx::kBroadcastId, dx::instruction::kStatus, params.data(), params.size(), b.data(),
+                                   b.size()));
         damage(dx::kBroadcastId, b);
         out.insert(out.end(), b.begin(), b.end());
         break;
@@ -151,7 +153,9 @@ struct BusFixture : ::testing::Test {
     }
     feedback.fill(0xEE);
   }
-  std::int32_t position_of(std::size_t i) const { return dx::decode_feedback(&feedback[i * dx::kFeedbackBytes]).position_ticks; }
+  std::int32_t position_of(std::size_t i) const {
+    return dx::decode_feedback(&feedback[i * dx::kFeedbackBytes]).position_ticks;
+  }
 };
 
 }  // namespace
@@ -180,7 +184,8 @@ TEST_F(BusFixture, SyncReadFaultsAreAttributedToTheirServo) {
     if (id == 7) b.resize(b.size() - 3);        // truncated
   };
   const auto t0 = std::chrono::steady_clock::now();
-  const dx::Status s = bus.sync_read(dx::kFeedbackAddress, dx::kFeedbackBytes, ids.data(), kN, feedback.data(), replies.data());
+  const dx::Status s =
+      bus.sync_read(dx::kFeedbackAddress, dx::kFeedbackBytes, ids.data(), kN, feedback.data(), replies.data());
   const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_EQ(s, dx::Status::kTimeout);  // the first servo (in ID order) that failed: 3
   for (std::size_t i = 0; i < kN; ++i) {
@@ -207,8 +212,9 @@ TEST_F(BusFixture, SyncReadFaultsAreAttributedToTheirServo) {
 }
 
 TEST_F(BusFixture, FastSyncReadSameDataFewerBytes) {
-  EXPECT_EQ(bus.fast_sync_read(dx::kFeedbackAddress, dx::kFeedbackBytes, ids.data(), kN, feedback.data(), replies.data()),
-            dx::Status::kOk);
+  EXPECT_EQ(
+      bus.fast_sync_read(dx::kFeedbackAddress, dx::kFeedbackBytes, ids.data(), kN, feedback.data(), replies.data()),
+      dx::Status::kOk);
   for (std::size_t i = 0; i < kN; ++i) {
     EXPECT_EQ(replies[i].status, dx::Status::kOk) << i;
     EXPECT_EQ(position_of(i), 2048 + 100 * static_cast<int>(i));
@@ -221,15 +227,18 @@ TEST_F(BusFixture, FastSyncReadSameDataFewerBytes) {
 
 TEST_F(BusFixture, FastSyncReadMissingServoAndBadCrc) {
   emu.silent.insert(4);
-  EXPECT_EQ(bus.fast_sync_read(dx::kFeedbackAddress, dx::kFeedbackBytes, ids.data(), kN, feedback.data(), replies.data()),
-            dx::Status::kTimeout);
-  for (std::size_t i = 0; i < kN; ++i) EXPECT_EQ(replies[i].status, i == 3 ? dx::Status::kTimeout : dx::Status::kOk) << i;
+  EXPECT_EQ(
+      bus.fast_sync_read(dx::kFeedbackAddress, dx::kFeedbackBytes, ids.data(), kN, feedback.data(), replies.data()),
+      dx::Status::kTimeout);
+  for (std::size_t i = 0; i < kN; ++i)
+    EXPECT_EQ(replies[i].status, i == 3 ? dx::Status::kTimeout : dx::Status::kOk) << i;
   EXPECT_EQ(bus.counters().timeouts, 1u);
 
   emu.silent.clear();
   emu.damage = [](std::uint8_t, Bytes& b) { b[b.size() - 1] ^= 0xFF; };
-  EXPECT_EQ(bus.fast_sync_read(dx::kFeedbackAddress, dx::kFeedbackBytes, ids.data(), kN, feedback.data(), replies.data()),
-            dx::Status::kCrcError);
+  EXPECT_EQ(
+      bus.fast_sync_read(dx::kFeedbackAddress, dx::kFeedbackBytes, ids.data(), kN, feedback.data(), replies.data()),
+      dx::Status::kCrcError);
   for (const auto& r : replies) EXPECT_EQ(r.status, dx::Status::kCrcError);
   EXPECT_EQ(bus.counters().crc_errors, 1u);
 }
@@ -237,9 +246,11 @@ TEST_F(BusFixture, FastSyncReadMissingServoAndBadCrc) {
 TEST_F(BusFixture, SyncWriteGoalsAndBytesPerCycle) {
   std::array<std::uint8_t, kN * 4> goals{};
   for (std::size_t i = 0; i < kN; ++i) dx::put_le(&goals[i * 4], 4, 1000 + static_cast<int>(i));
-  EXPECT_EQ(bus.sync_write(dx::kGoalPositionAddress, dx::kGoalPositionBytes, ids.data(), kN, goals.data()), dx::Status::kOk);
+  EXPECT_EQ(bus.sync_write(dx::kGoalPositionAddress, dx::kGoalPositionBytes, ids.data(), kN, goals.data()),
+            dx::Status::kOk);
   EXPECT_EQ(transport.written.size(), 69u);  // 12 + 11 * (1 + 4) + 2
-  for (std::size_t i = 0; i < kN; ++i) EXPECT_EQ(dx::get_le(&emu.memory[ids[i]][116], 4, true), 1000 + static_cast<int>(i));
+  for (std::size_t i = 0; i < kN; ++i)
+    EXPECT_EQ(dx::get_le(&emu.memory[ids[i]][116], 4, true), 1000 + static_cast<int>(i));
   bus.reset_counters();
   // One cycle, feedback sync read + goal sync write: the ~325-byte minimum of the issue (plus stuffing).
   for (auto& [id, m] : emu.memory) dx::put_le(&m[126], 2, 5);  // no FF FF FD: the plain minimum
@@ -296,7 +307,8 @@ TEST_F(BusFixture, IoErrorsAndInvalidArguments) {
 // ---------------------------------------------------------------------------------------------
 namespace {
 struct FakeFixture : ::testing::Test {
-  dx::ControlTable table = dx::ControlTable::from_yaml_file(std::string(SNAKE_SOURCE_DIR) + "/config/dynamixel/xh540_w270.yaml");
+  dx::ControlTable table =
+      dx::ControlTable::from_yaml_file(std::string(SNAKE_SOURCE_DIR) + "/config/dynamixel/xh540_w270.yaml");
   std::vector<std::uint8_t> id_list{1, 2, 3};
   dx::FakeServoBus bus{table, id_list};
   std::array<std::uint8_t, 3 * 10> data{};

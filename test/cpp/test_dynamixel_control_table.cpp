@@ -88,14 +88,20 @@ TEST(ControlTable, ErrorsNameKeyAndValue) {
     std::string key, line, expected;
   };
   const Case cases[] = {
-      {"torque_enable", "  torque_enable: {address: 64, size: 3, access: rw}", "entries.torque_enable.size: 3 is not 1, 2 or 4"},
-      {"torque_enable", "  torque_enable: {address: 65, size: 1, access: rx}", "entries.torque_enable.access: 'rx' is not r or rw"},
-      {"torque_enable", "  torque_enable: {address: 64, size: 1, acess: rw}", "entries.torque_enable.acess: unknown key"},
-      {"torque_enable", "  torque_enable: {address: 10, size: 2, access: rw}", "entries.operating_mode.address: 11 overlaps entries.torque_enable (10, 2 bytes)"},
+      {"torque_enable", "  torque_enable: {address: 64, size: 3, access: rw}",
+       "entries.torque_enable.size: 3 is not 1, 2 or 4"},
+      {"torque_enable", "  torque_enable: {address: 65, size: 1, access: rx}",
+       "entries.torque_enable.access: 'rx' is not r or rw"},
+      {"torque_enable", "  torque_enable: {address: 64, size: 1, acess: rw}",
+       "entries.torque_enable.acess: unknown key"},
+      {"torque_enable", "  torque_enable: {address: 10, size: 2, access: rw}",
+       "entries.operating_mode.address: 11 overlaps entries.torque_enable (10, 2 bytes)"},
       {"torque_enable", "  torque_enable: {address: 64, size: 1, access: rw, min: 2, max: 1}", "min 2 > max 1"},
-      {"torque_enable", "  torque_enable: {address: x, size: 1, access: rw}", "entries.torque_enable.address: expected an integer, got 'x'"},
+      {"torque_enable", "  torque_enable: {address: x, size: 1, access: rw}",
+       "entries.torque_enable.address: expected an integer, got 'x'"},
       {"torque_enable", "  led: {address: 65, size: 1, access: rw}", "entries.torque_enable: missing"},
-      {"present_velocity", "  present_velocity: {address: 136, size: 4, access: r, signed: true, unit: rpm, scale: 0.229}",
+      {"present_velocity",
+       "  present_velocity: {address: 136, size: 4, access: r, signed: true, unit: rpm, scale: 0.229}",
        "not the contiguous 10-byte block"},
       {"present_current", "  present_current: {address: 126, size: 2, access: r, signed: true, unit: A, scale: 2.69}",
        "entries.present_current.unit: 'A' is not mA"},
@@ -107,7 +113,8 @@ TEST(ControlTable, ErrorsNameKeyAndValue) {
     EXPECT_NE(err.find(c.expected), std::string::npos) << "expected '" << c.expected << "' in:\n" << err;
     EXPECT_NE(err.find("test.yaml"), std::string::npos) << err;
   }
-  EXPECT_NE(load_error("model: t\nmodel_number: 0\nentries: {}\n").find("model_number: 0 is not in 1..65535"), std::string::npos);
+  EXPECT_NE(load_error("model: t\nmodel_number: 0\nentries: {}\n").find("model_number: 0 is not in 1..65535"),
+            std::string::npos);
   EXPECT_NE(load_error("[1, 2]").find("expected a mapping"), std::string::npos);
   EXPECT_THROW(dx::ControlTable::from_yaml_file("/nonexistent.yaml"), dx::ConfigError);
 }

@@ -281,7 +281,8 @@ TEST(ManualVectors, All21Packets) {
   // <clone's parent>/wt/NAME;
   // SNAKE_AUTONOMY_SHARED overrides both (as test/python/conftest.py does).
   const std::filesystem::path root = std::filesystem::canonical(SNAKE_SOURCE_DIR);
-  std::vector<std::filesystem::path> candidates = {root.parent_path() / "shared", root.parent_path().parent_path() / "shared"};
+  std::vector<std::filesystem::path> candidates = {root.parent_path() / "shared",
+                                                   root.parent_path().parent_path() / "shared"};
   if (const char* env = std::getenv("SNAKE_AUTONOMY_SHARED")) candidates.insert(candidates.begin(), env);
   std::filesystem::path shared = candidates[candidates.size() - 2];
   for (const auto& c : candidates) {
@@ -291,7 +292,9 @@ TEST(ManualVectors, All21Packets) {
     }
   }
   const std::filesystem::path path = shared / "data/dynamixel/protocol2_emanual_vectors.json";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is absent: the manual's vectors live in the shared data directory (SNAKE_AUTONOMY_SHARED)";
+  if (!std::filesystem::exists(path))
+    GTEST_SKIP() << path
+                 << " is absent: the manual's vectors live in the shared data directory (SNAKE_AUTONOMY_SHARED)";
   const YAML::Node json = YAML::LoadFile(path.string());  // JSON is YAML
   const YAML::Node vectors = json["vectors"];
   ASSERT_EQ(vectors.size(), 21u);
@@ -323,10 +326,17 @@ TEST(Bytes, LittleEndianTable) {
     std::int32_t value;
   };
   const Case cases[] = {
-      {"7F", 1, false, 127},           {"FF", 1, false, 255},          {"FF", 1, true, -1},
-      {"00 08", 2, false, 2048},       {"FF FF", 2, true, -1},         {"FF FF", 2, false, 65535},
-      {"00 80", 2, true, -32768},      {"A6 00 00 00", 4, true, 166},  {"FF FF FF FF", 4, true, -1},
-      {"1F 08 00 00", 4, false, 2079}, {"00 00 00 80", 4, true, INT32_MIN},
+      {"7F", 1, false, 127},
+      {"FF", 1, false, 255},
+      {"FF", 1, true, -1},
+      {"00 08", 2, false, 2048},
+      {"FF FF", 2, true, -1},
+      {"FF FF", 2, false, 65535},
+      {"00 80", 2, true, -32768},
+      {"A6 00 00 00", 4, true, 166},
+      {"FF FF FF FF", 4, true, -1},
+      {"1F 08 00 00", 4, false, 2079},
+      {"00 00 00 80", 4, true, INT32_MIN},
   };
   for (const auto& c : cases) {
     const Bytes b = hex(c.bytes);
@@ -343,8 +353,8 @@ TEST(Conversions, PositionTable) {
     double rad;
   };
   const Case cases[] = {
-      {2048, 0.0}, {3072, M_PI / 2}, {1024, -M_PI / 2}, {0, -M_PI}, {4096, M_PI},
-      {2049, 2 * M_PI / 4096}, {2048 + 4096, 2 * M_PI},
+      {2048, 0.0},  {3072, M_PI / 2},        {1024, -M_PI / 2},       {0, -M_PI},
+      {4096, M_PI}, {2049, 2 * M_PI / 4096}, {2048 + 4096, 2 * M_PI},
   };
   for (const auto& c : cases) {
     EXPECT_NEAR(dx::ticks_to_rad(c.ticks), c.rad, 1e-12) << c.ticks;

@@ -126,7 +126,9 @@ TEST(SteeringLaw, GaitsNameTheirLawAndSteerableReadsAsAmplitudeModulation) {
   EXPECT_FALSE(lib.spec("rect").steerable);
   EXPECT_EQ(lib.spec("plain").steering, SteeringLaw::kNone);
   try {
-    snake_autonomy::core::GaitLibrary::from_yaml_string("gaits:\n  g: {frequency_hz: 0.3, steering: wiggle, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 0}}\n", "g.yaml");
+    snake_autonomy::core::GaitLibrary::from_yaml_string(
+        "gaits:\n  g: {frequency_hz: 0.3, steering: wiggle, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 0}}\n",
+        "g.yaml");
     FAIL() << "accepted";
   } catch (const snake_autonomy::core::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("gaits.g.steering: 'wiggle'"), std::string::npos) << e.what();
@@ -156,8 +158,10 @@ TEST(SteeringLaw, ASteeringValueTheGaitDoesNotAcceptIsRefusedWithTheReason) {
   const auto lib = snake_autonomy::core::GaitLibrary::from_yaml_string(
       "gaits:\n"
       "  hold: {frequency_hz: 0, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 0}}\n"
-      "  am: {frequency_hz: 0.3, steering: amplitude_modulation, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 30, lag_deg: 30}}\n"
-      "  rect: {frequency_hz: 0.3, steering: curvature, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 10, lag_deg: 30}}\n");
+      "  am: {frequency_hz: 0.3, steering: amplitude_modulation, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 30, "
+      "lag_deg: 30}}\n"
+      "  rect: {frequency_hz: 0.3, steering: curvature, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 10, lag_deg: "
+      "30}}\n");
   snake_autonomy::core::GaitCommandResolver r(model, lib, 2.0);
   snake_autonomy::core::GaitParameters out = snake_autonomy::core::GaitParameters::zeros(model.num_joints);
   snake_autonomy::core::GaitCommandRequest c;

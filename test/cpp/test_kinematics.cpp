@@ -11,8 +11,7 @@ using snake_autonomy::test::cobra;
 
 namespace {
 
-KinematicState fk(const Kinematics& k, const Eigen::VectorXd& q,
-                  const Eigen::Vector3d& p = Eigen::Vector3d::Zero(),
+KinematicState fk(const Kinematics& k, const Eigen::VectorXd& q, const Eigen::Vector3d& p = Eigen::Vector3d::Zero(),
                   const Eigen::Quaterniond& o = Eigen::Quaterniond::Identity()) {
   KinematicState s = k.make_state();
   EXPECT_TRUE(k.compute(p, o, q, s));

@@ -39,9 +39,10 @@ TEST(ProtocolFuzz, FixedSeedCorpusEveryValidPacketRecoveredInEveryChunking) {
     }
     for (const auto& s : segs) damaged += s.valid ? 0 : 1;
   }
-  std::printf("parser fuzz: %zu streams, %zu valid packets, %zu recovered, %zu lost to CRC collisions, "
-              "%zu refused (bad CRC or malformed) from %zu damaged pieces\n",
-              streams, expected, recovered, collisions, refused, damaged);
+  std::printf(
+      "parser fuzz: %zu streams, %zu valid packets, %zu recovered, %zu lost to CRC collisions, "
+      "%zu refused (bad CRC or malformed) from %zu damaged pieces\n",
+      streams, expected, recovered, collisions, refused, damaged);
   EXPECT_EQ(recovered + collisions, expected);
   EXPECT_LE(collisions, expected / 10000);  // CRC-16 collisions only: about 1 in 65536 damaged packets
   EXPECT_GT(refused, damaged);  // the damage is seen and counted (4 chunkings per stream)

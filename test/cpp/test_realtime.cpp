@@ -86,8 +86,9 @@ TEST(Realtime, RefusedItSaysWhatFailedAndCarriesOn) {
   EXPECT_TRUE(r.degraded());
   EXPECT_TRUE(contains(r.mode(), "normal scheduling (SCHED_FIFO 50 refused: EPERM)")) << r.mode();
   const std::string w = r.warning();
-  EXPECT_TRUE(contains(w, "realtime_priority 50: SCHED_FIFO refused (EPERM: Operation not permitted): the loop "
-                          "thread runs with normal scheduling"))
+  EXPECT_TRUE(contains(w,
+                       "realtime_priority 50: SCHED_FIFO refused (EPERM: Operation not permitted): the loop "
+                       "thread runs with normal scheduling"))
       << w;
   EXPECT_TRUE(contains(w, "mlockall(MCL_CURRENT|MCL_FUTURE) refused")) << w;
   EXPECT_TRUE(contains(w, "the driver carries on")) << w;

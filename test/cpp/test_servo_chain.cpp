@@ -29,12 +29,15 @@ std::string joined(const std::vector<std::string>& lines) {
 
 // Joint limits [-20, 25] deg on every joint; servo 4's own max_position_limit 2100 ticks.
 Rig limited_rig() {
-  return Rig({}, [](core::RobotModel& m) {
-    for (int j = 0; j < m.num_joints; ++j) {
-      m.joint_lower_rad[j] = -20 * kDeg;
-      m.joint_upper_rad[j] = 25 * kDeg;
-    }
-  }, [](dx::FakeServoBus& b) { b.servos().set(4, "max_position_limit", 2100); });
+  return Rig(
+      {},
+      [](core::RobotModel& m) {
+        for (int j = 0; j < m.num_joints; ++j) {
+          m.joint_lower_rad[j] = -20 * kDeg;
+          m.joint_upper_rad[j] = 25 * kDeg;
+        }
+      },
+      [](dx::FakeServoBus& b) { b.servos().set(4, "max_position_limit", 2100); });
 }
 
 }  // namespace

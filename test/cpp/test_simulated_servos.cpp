@@ -67,7 +67,9 @@ struct Servos : ::testing::Test {
     const std::size_t n = s.handle(p.data(), p.size());
     return Bytes(s.output(), s.output() + n);
   }
-  std::vector<Reply> ask(std::uint8_t id, std::uint8_t inst, const Bytes& params) { return replies(send(packet(id, inst, params))); }
+  std::vector<Reply> ask(std::uint8_t id, std::uint8_t inst, const Bytes& params) {
+    return replies(send(packet(id, inst, params)));
+  }
   std::uint8_t write(std::uint8_t id, std::uint16_t address, const Bytes& data) {
     const auto r = ask(id, dx::instruction::kWrite, cat({le(address, 2), data}));
     EXPECT_EQ(r.size(), 1u);
@@ -92,24 +94,35 @@ TEST_F(Servos, EveryInstructionAnswersAsTheServo) {
       {"ping of an absent ID: silence", 9, dx::instruction::kPing, {}, 0, 0, 0},
       {"read", 1, dx::instruction::kRead, cat({le(132, 2), le(4, 2)}), 1, 0, 4},
       {"read, 3 parameters", 1, dx::instruction::kRead, {132, 0, 4}, 1, dx::servo_error::kDataLengthError, 0},
-      {"read past the memory", 1, dx::instruction::kRead, cat({le(1020, 2), le(8, 2)}), 1, dx::servo_error::kDataRangeError, 0},
-      {"read of 0 bytes", 1, dx::instruction::kRead, cat({le(132, 2), le(0, 2)}), 1, dx::servo_error::kDataLengthError, 0},
+      {"read past the memory", 1, dx::instruction::kRead, cat({le(1020, 2), le(8, 2)}), 1,
+       dx::servo_error::kDataRangeError, 0},
+      {"read of 0 bytes", 1, dx::instruction::kRead, cat({le(132, 2), le(0, 2)}), 1, dx::servo_error::kDataLengthError,
+       0},
       {"broadcast read: silence", dx::kBroadcastId, dx::instruction::kRead, cat({le(132, 2), le(4, 2)}), 0, 0, 0},
       {"write LED", 3, dx::instruction::kWrite, cat({le(65, 2), le(1, 1)}), 1, 0, 0},
       {"write, 2 parameters", 3, dx::instruction::kWrite, le(65, 2), 1, dx::servo_error::kDataLengthError, 0},
-      {"write a read-only entry", 3, dx::instruction::kWrite, cat({le(132, 2), le(5, 4)}), 1, dx::servo_error::kAccessError, 0},
-      {"write half an entry", 3, dx::instruction::kWrite, cat({le(116, 2), le(5, 2)}), 1, dx::servo_error::kDataLengthError, 0},
-      {"write outside [min, max]", 3, dx::instruction::kWrite, cat({le(65, 2), le(2, 1)}), 1, dx::servo_error::kDataLimitError, 0},
-      {"write past the memory", 3, dx::instruction::kWrite, cat({le(1023, 2), le(0, 2)}), 1, dx::servo_error::kDataRangeError, 0},
+      {"write a read-only entry", 3, dx::instruction::kWrite, cat({le(132, 2), le(5, 4)}), 1,
+       dx::servo_error::kAccessError, 0},
+      {"write half an entry", 3, dx::instruction::kWrite, cat({le(116, 2), le(5, 2)}), 1,
+       dx::servo_error::kDataLengthError, 0},
+      {"write outside [min, max]", 3, dx::instruction::kWrite, cat({le(65, 2), le(2, 1)}), 1,
+       dx::servo_error::kDataLimitError, 0},
+      {"write past the memory", 3, dx::instruction::kWrite, cat({le(1023, 2), le(0, 2)}), 1,
+       dx::servo_error::kDataRangeError, 0},
       {"broadcast write: no reply", dx::kBroadcastId, dx::instruction::kWrite, cat({le(65, 2), le(1, 1)}), 0, 0, 0},
       {"reboot", 2, dx::instruction::kReboot, {}, 1, 0, 0},
-      {"sync read: one reply each, asked order", dx::kBroadcastId, dx::instruction::kSyncRead, cat({le(126, 2), le(10, 2), {3, 1, 9}}), 2, 0, 10},
-      {"sync read past the memory", dx::kBroadcastId, dx::instruction::kSyncRead, cat({le(1020, 2), le(10, 2), {1}}), 1, dx::servo_error::kDataRangeError, 0},
+      {"sync read: one reply each, asked order", dx::kBroadcastId, dx::instruction::kSyncRead,
+       cat({le(126, 2), le(10, 2), {3, 1, 9}}), 2, 0, 10},
+      {"sync read past the memory", dx::kBroadcastId, dx::instruction::kSyncRead, cat({le(1020, 2), le(10, 2), {1}}), 1,
+       dx::servo_error::kDataRangeError, 0},
       {"sync read not broadcast: silence", 1, dx::instruction::kSyncRead, cat({le(126, 2), le(10, 2), {1}}), 0, 0, 0},
       {"sync read, 3 parameters: silence", dx::kBroadcastId, dx::instruction::kSyncRead, {126, 0, 10}, 0, 0, 0},
-      {"sync write: no reply", dx::kBroadcastId, dx::instruction::kSyncWrite, cat({le(65, 2), le(1, 2), {1, 1, 2, 1}}), 0, 0, 0},
-      {"fast sync read: one packet", dx::kBroadcastId, dx::instruction::kFastSyncRead, cat({le(126, 2), le(10, 2), {1, 2, 3}}), 1, 0, 3 * 14 - 1 - 2},
-      {"fast sync read too long for a packet", dx::kBroadcastId, dx::instruction::kFastSyncRead, cat({le(0, 2), le(1000, 2), {1, 2, 3}}), 1, dx::servo_error::kDataLengthError, 0},
+      {"sync write: no reply", dx::kBroadcastId, dx::instruction::kSyncWrite, cat({le(65, 2), le(1, 2), {1, 1, 2, 1}}),
+       0, 0, 0},
+      {"fast sync read: one packet", dx::kBroadcastId, dx::instruction::kFastSyncRead,
+       cat({le(126, 2), le(10, 2), {1, 2, 3}}), 1, 0, 3 * 14 - 1 - 2},
+      {"fast sync read too long for a packet", dx::kBroadcastId, dx::instruction::kFastSyncRead,
+       cat({le(0, 2), le(1000, 2), {1, 2, 3}}), 1, dx::servo_error::kDataLengthError, 0},
       {"unknown instruction", 1, 0x04, {}, 1, dx::servo_error::kInstructionError, 0},
       {"a status packet: silence", 1, dx::instruction::kStatus, {0}, 0, 0, 0},
   };
@@ -184,7 +197,7 @@ TEST_F(Servos, EveryReplyFault) {
     int replies, bad;  // parsed status packets, bad packets
   };
   const std::vector<Case> cases = {
-      {dx::ReplyFault::kDropReply, 0, 0},    {dx::ReplyFault::kCorruptCrc, 0, 1},
+      {dx::ReplyFault::kDropReply, 0, 0},     {dx::ReplyFault::kCorruptCrc, 0, 1},
       {dx::ReplyFault::kTruncateReply, 0, 0}, {dx::ReplyFault::kGarbageBefore, 1, 0},
       {dx::ReplyFault::kGarbageData, 1, 0},
   };
@@ -247,9 +260,11 @@ TEST_F(Servos, BadCrcNamingAServoGetsACrcErrorStatus) {
 }
 
 TEST_F(Servos, AnyChunkingGivesTheSameReplies) {
-  const Bytes stream = cat({packet(1, dx::instruction::kPing, {}), {0x00, 0xFF},
-                            packet(dx::kBroadcastId, dx::instruction::kSyncRead, cat({le(126, 2), le(10, 2), {1, 2, 3}})),
-                            packet(3, dx::instruction::kRead, cat({le(132, 2), le(4, 2)}))});
+  const Bytes stream =
+      cat({packet(1, dx::instruction::kPing, {}),
+           {0x00, 0xFF},
+           packet(dx::kBroadcastId, dx::instruction::kSyncRead, cat({le(126, 2), le(10, 2), {1, 2, 3}})),
+           packet(3, dx::instruction::kRead, cat({le(132, 2), le(4, 2)}))});
   const Bytes whole = send(stream);
   EXPECT_EQ(replies(whole).size(), 5u);
   for (std::size_t chunk : {1u, 2u, 3u, 7u}) {

@@ -178,8 +178,9 @@ TEST(TrajectorySource, RefusesATrajectoryLongerThanTheMaximumDuration) {
   TrajectorySource src(n, limits(n));
   const JointTrajectoryRequest r = ramp(n, {1.0, 2147483648.0}, {0.1, 0.2});
   const std::string why = src.submit(r);
-  EXPECT_TRUE(contains(why, "points[1].time_from_start: 2.14748e+09 s, the trajectory would last longer than "
-                            "max_trajectory_duration_s 600 s"))
+  EXPECT_TRUE(contains(why,
+                       "points[1].time_from_start: 2.14748e+09 s, the trajectory would last longer than "
+                       "max_trajectory_duration_s 600 s"))
       << why;
   EXPECT_FALSE(src.take(0.0, Eigen::VectorXd::Zero(n))) << "nothing was handed over";
   // At the bound it is accepted.
@@ -216,7 +217,8 @@ TEST(TrajectorySource, EveryAcceptedTrajectoryEndsWithExactlyOneFinalStatus) {
   EXPECT_EQ(f[0].abort, TrajectoryAbort::kSuperseded);
   EXPECT_STREQ(f[0].superseded_by.data(), "c");
   EXPECT_EQ(f[0].superseded_by_sequence, 3u);
-  EXPECT_TRUE(contains(f[0].reason.data(), "superseded by 'c' (sequence 3) at 0.200 s of 1.000 s")) << f[0].reason.data();
+  EXPECT_TRUE(contains(f[0].reason.data(), "superseded by 'c' (sequence 3) at 0.200 s of 1.000 s"))
+      << f[0].reason.data();
   EXPECT_STREQ(f[1].id.data(), "b");
   EXPECT_EQ(f[1].sequence, 2u);
   EXPECT_EQ(f[1].abort, TrajectoryAbort::kSuperseded);

@@ -62,7 +62,8 @@ TEST(Transmission, VelocityAndCurrentInJointSense) {
 
 TEST(Transmission, ForRobotTakesTheTableAndTheRobotYaml) {
   const auto model = snake_autonomy::test::cobra();
-  const auto table = dx::ControlTable::from_yaml_file(snake_autonomy::test::source_path("config/dynamixel/" + model.servos.model + ".yaml"));
+  const auto table = dx::ControlTable::from_yaml_file(
+      snake_autonomy::test::source_path("config/dynamixel/" + model.servos.model + ".yaml"));
   const auto tx = Transmission::for_robot(model, table);
   ASSERT_EQ(static_cast<int>(tx.size()), model.num_joints);
   for (int j = 0; j < model.num_joints; ++j) {

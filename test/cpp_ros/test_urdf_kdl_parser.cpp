@@ -70,7 +70,8 @@ TEST(Urdf, CameraFramesParsedByKdlMatchTheCalibration) {
   const RobotModel model = RobotModel::from_yaml_file(std::string(SNAKE_SOURCE_DIR) + "/config/robots/cobra.yaml");
   CameraMount camera;
   camera.camera_in_head = Eigen::Translation3d(0.03, -0.01, 0.02) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()) *
-                          Eigen::AngleAxisd(-1.2, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ());
+                          Eigen::AngleAxisd(-1.2, Eigen::Vector3d::UnitY()) *
+                          Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ());
   KDL::Tree tree;
   ASSERT_TRUE(kdl_parser::treeFromString(make_urdf(model, 9.9, 4.8, camera), tree));
   KDL::Chain chain;

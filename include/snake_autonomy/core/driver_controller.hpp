@@ -123,7 +123,9 @@ class DriverController {
   // Called by a kEnableTorque request when the bus reports an I/O error (the port went away: an
   // unplugged adapter, the mock restarted): reopen the port, return false with a reason if it cannot.
   // Runs on the loop thread, only then (a recovery path: it may allocate and take milliseconds).
-  void set_reconnect(std::function<bool(std::string* why)> reconnect) { supervisor_.set_reconnect(std::move(reconnect)); }
+  void set_reconnect(std::function<bool(std::string* why)> reconnect) {
+    supervisor_.set_reconnect(std::move(reconnect));
+  }
   // Copies the loop's outputs; `out` must come from make_snapshot() (no allocation then).
   void fill_snapshot(DriverSnapshot& out) const noexcept;
   DriverSnapshot make_snapshot() const;

@@ -13,8 +13,8 @@
 //   delta      non-finite or |δ| > π (within, Steering clips it to the robot's delta_limit)
 //   kappa      non-finite or |kappa| > 100 1/m (within, the biases are clamped to the joint limits)
 // and a steering value the gait does not accept (steer on a gait without amplitude_modulation,
-// curve on a gait without curvature, both at once). The resolver remembers the nominal (unsteered) parameters of the last
-// accepted command: steering applies to one command at a time, it does not accumulate.
+// curve on a gait without curvature, both at once). The resolver remembers the nominal (unsteered) parameters of the
+// last accepted command: steering applies to one command at a time, it does not accumulate.
 //
 // Not real-time: resolve() allocates. It runs in the caller's thread (a ROS callback), never in the
 // loop; the driver hands the result to the loop without blocking it (DriverController).

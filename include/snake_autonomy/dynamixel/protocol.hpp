@@ -96,8 +96,8 @@ class PacketEncoder {
 };
 
 // Whole packets in one call (tests, the mock bus). Return the size, 0 if it did not fit.
-std::size_t encode_packet(std::uint8_t id, std::uint8_t instruction, const std::uint8_t* params,
-                          std::size_t n_params, std::uint8_t* out, std::size_t capacity) noexcept;
+std::size_t encode_packet(std::uint8_t id, std::uint8_t instruction, const std::uint8_t* params, std::size_t n_params,
+                          std::uint8_t* out, std::size_t capacity) noexcept;
 std::size_t encode_status(std::uint8_t id, std::uint8_t error, const std::uint8_t* data, std::size_t n_data,
                           std::uint8_t* out, std::size_t capacity) noexcept;
 
@@ -135,7 +135,7 @@ struct ParseResult {
 // that decide have not arrived. So however the reads chunk the bytes, a packet following a damaged
 // one is never dropped with it. A valid CRC over broken stuffing is kMalformed (header consumed).
 // `input_ended`: no more bytes will come (a reply deadline passed): nothing is held back for them.
-ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t* scratch,
-                         std::size_t scratch_capacity, Packet* out, bool input_ended = false) noexcept;
+ParseResult parse_packet(const std::uint8_t* in, std::size_t size, std::uint8_t* scratch, std::size_t scratch_capacity,
+                         Packet* out, bool input_ended = false) noexcept;
 
 }  // namespace snake_autonomy::dynamixel
