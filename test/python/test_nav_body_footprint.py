@@ -1,4 +1,4 @@
-"""The body's footprint in the perception-space check (issue 13 round 4, planning/rectilinear/):
+"""The body's footprint in the perception-space check (planning/rectilinear/):
 the checked width covers the body's swept width (sampler.body_clearance_m), the image judges every
 point it shows however near, and points hidden now are looked up in earlier replans' images."""
 import dataclasses
@@ -6,12 +6,12 @@ import dataclasses
 import numpy as np
 import pytest
 
+from nav_scenes import CFG, K, T_GC, drawn_mask, shifted
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig
 from snake_autonomy.planning.rectilinear.follower import RecedingHorizonFollower
 from snake_autonomy.planning.rectilinear.planner import NavPlanner
 from snake_autonomy.planning.rectilinear.sampler import SamplerParams, TrajectorySampler
-from test_nav_planning import CFG, K, T_GC, drawn_mask
 
 HEAD_W = 0.09                          # COBRA's capsule diameter
 
@@ -61,13 +61,6 @@ def test_an_obstacle_the_image_shows_is_not_free_however_near():
     c = PerceptionCollisionChecker(K, T_GC, 0.5)
     assert c.near_field_m > 0.4
     assert straight_free(0.5, mask) < 0.15
-
-
-def shifted(dx):
-    """T_ground_camera of a camera dx metres along x from the current one (an earlier pose)."""
-    T = np.eye(4)
-    T[0, 3] = dx
-    return T @ T_GC
 
 
 def test_an_obstacle_beside_the_body_seen_by_an_earlier_view_stays_blocked():

@@ -5,35 +5,15 @@ import math
 import numpy as np
 import pytest
 
+from nav_scenes import CFG, K, T_GC, drawn_mask
 from snake_autonomy.perception.ground_region import grow_from_bottom, traversable
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
-from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera
 from snake_autonomy.planning.rectilinear.follower import (FOLLOW, TURN_IN_PLACE, FollowerParams,
                                                           RecedingHorizonFollower)
 from snake_autonomy.planning.rectilinear.sampler import SamplerParams, TrajectorySampler
 from snake_autonomy.planning.rectilinear.unicycle import arc_poses, predict
 
-CFG = NavConfig.from_yaml()
-K = CFG.intrinsics
-T_GC = T_ground_camera(CFG.mount, 0.046)
 HEAD_W = 0.051
-
-
-def drawn_mask(discs=(), boxes=()):
-    """Ground mask of a floor with discs (x, y, r) and axis-aligned boxes (x0, x1, y0, y1) standing
-    on it, drawn per pixel from the ray's floor hit, then grown from the bottom (pixel cells)."""
-    v, u = np.mgrid[0:K.height, 0:K.width]
-    rays = np.dstack([(u - K.cx) / K.fx, (v - K.cy) / K.fy, np.ones(u.shape)]) @ T_GC[:3, :3].T
-    o = T_GC[:3, 3]
-    hits = rays[..., 2] < -1e-6
-    s = np.where(hits, -o[2] / np.where(hits, rays[..., 2], -1), 0)
-    x, y = o[0] + s * rays[..., 0], o[1] + s * rays[..., 1]
-    ground = hits & (s < 10)
-    for cx, cy, r in discs:
-        ground &= np.hypot(x - cx, y - cy) > r
-    for x0, x1, y0, y1 in boxes:
-        ground &= ~((x > x0) & (x < x1) & (y > y0) & (y < y1))
-    return grow_from_bottom(ground)
 
 
 def sampler(head_w=HEAD_W, **kw):
