@@ -1,0 +1,211 @@
+"""What the planner's checks make of points the current image does not show (collision_check.py):
+floor beyond the commit distance that the view has not reached yet is not an obstacle
+(sampler.known_free_m), the near field behind and beside the camera counts as free only as far as the
+view shows floor (sampler.near_field_max_m caps it), and earlier views answer for hidden points: an
+obstacle in one of them wins (sampler.blocked_wins) unless it is only the shadow behind a face that a
+newer view shows as floor (sampler.blocked_wins_depth_m), and an earlier view's non-ground far from its
+camera may be left unknown (sampler.view_obstacle_range_m)."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from nav_scenes import CFG, COBRA, K, T_GC, drawn_mask, shifted
+from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker, _View, near_field
+from snake_autonomy.planning.rectilinear.config import CameraMount, NavConfig, NavConfigError, T_ground_camera
+from snake_autonomy.planning.rectilinear.follower import RecedingHorizonFollower
+from snake_autonomy.planning.rectilinear.planner import NavPlanner
+from snake_autonomy.planning.rectilinear.sampler import SamplerParams, TrajectorySampler
+
+
+def _curved_free(known_free_m, mask, width=0.25, c=1.0):
+    checker = PerceptionCollisionChecker(K, T_GC, width)
+    sp = SamplerParams(num_arcs=3, max_curvature_per_m=c, known_free_m=known_free_m)
+    return {a.curvature_per_m: a.free_m for a in TrajectorySampler(checker, sp).select(mask).arcs}
+
+
+def test_an_arc_leaving_the_view_is_free_beyond_known_free_m_and_cut_without_it():
+    mask = drawn_mask()                                       # open floor
+    strict = _curved_free(math.inf, mask)
+    relaxed = _curved_free(0.3, mask)
+    # the paper's rule: the curved arcs' footprint leaves the 55 deg view -> cut there
+    assert strict[1.0] < 0.8 and strict[-1.0] < 0.8
+    assert strict[0.0] == pytest.approx(CFG.sampler.horizon_m)
+    # only what is seen blocks beyond 0.3 m: every arc free to the horizon
+    for c in (-1.0, 0.0, 1.0):
+        assert relaxed[c] == pytest.approx(CFG.sampler.horizon_m)
+
+
+def test_an_obstacle_the_image_shows_still_blocks_beyond_known_free_m():
+    mask = drawn_mask(discs=[(0.7, 0.0, 0.1)])
+    relaxed = _curved_free(0.35, mask)
+    assert relaxed[0.0] <= 0.7 - 0.1 + 1e-9                   # the straight arc stops at the disc
+    assert relaxed[0.0] > 0.35
+
+
+def test_pose_state_tells_blocked_from_unknown():
+    checker = PerceptionCollisionChecker(K, T_GC, 0.09)
+    mask = drawn_mask(discs=[(0.6, 0.0, 0.1)])
+    poses = np.array([[0.3, 0.0, 0.0],       # seen floor
+                      [0.6, 0.0, 0.0],       # the disc
+                      [1.0, 1.5, 0.0],       # far beside the view: nobody has seen it
+                      [-0.2, 0.0, 0.0]])     # behind the camera: where the robot is (near field)
+    blocked, unknown = checker.pose_state(poses, mask)
+    assert list(blocked) == [False, True, False, False]
+    assert list(unknown) == [False, False, True, False]
+
+
+STEEP = T_ground_camera(CameraMount((0.03, 0.0, 0.0), (0.0, 27.2, 0.0)), 0.022)
+
+
+def furthest_floor_ahead(T) -> float:
+    """How far ahead of the camera (along its heading on the floor) the image's top row meets the floor."""
+    fwd = T[:2, 2] / np.linalg.norm(T[:2, 2])
+    ray = T[:3, :3] @ np.array([(0.0 - K.cx) / K.fx, (0.0 - K.cy) / K.fy, 1.0])
+    assert ray[2] < 0, "the steep camera's top row must still look down"
+    return float((-T[2, 3] / ray[2]) * ray[:2] @ fwd)
+
+
+def test_a_view_never_as_wide_as_the_footprint_does_not_free_every_unseen_point():
+    top = furthest_floor_ahead(STEEP)
+    assert 0.15 < top < 0.3
+    fwd = STEEP[:2, 2] / np.linalg.norm(STEEP[:2, 2])
+    nf = near_field(K, STEEP, fwd, 0.15)                # the 12-link robot's 0.3 m footprint
+    assert math.isfinite(nf) and nf == pytest.approx(top, abs=0.01)
+    # the usual camera is unchanged: its view is 0.3 m wide 0.29 m ahead, before its top row
+    assert near_field(K, T_GC, T_GC[:2, 2] / np.linalg.norm(T_GC[:2, 2]), 0.15) == pytest.approx(0.29, abs=0.01)
+    c = PerceptionCollisionChecker(K, STEEP, 0.3)
+    cam = STEEP[:3, 3]
+    beside_far = np.array([[cam[0] + 0.5, cam[1] + 0.6, 0.0]])  # no view shows it: not known to be free
+    behind = np.array([[cam[0] - 0.2, cam[1] + 0.1, 0.0]])      # where the robot is: free
+    ground = np.ones((K.height, K.width), bool)
+    assert not c.point_free(beside_far, ground)[0]
+    assert c.point_free(behind, ground)[0]
+
+
+def test_near_field_max_m_caps_where_unseen_floor_counts_as_free():
+    """An option, off in nav.yaml: the near field is 0.5 m ahead of the camera for COBRA's
+    0.5 m footprint, sideways too, so a sharp arc's floor no view showed counted as free (COBRA
+    mono world 15 seed 9 turned into a cylinder 37-86 deg off the camera's axis). Capped, floor
+    0.3 m ahead and 0.3 m to the side that no view shows is unknown; behind the camera it stays free."""
+    from snake_autonomy.planning.rectilinear.follower import RecedingHorizonFollower
+    from snake_autonomy.planning.rectilinear.planner import NavPlanner
+    beside, behind = np.array([[0.35, 0.3, 0.0]]), np.array([[-0.3, 0.3, 0.0]])
+    state = {}
+    for cap in (float("inf"), 0.24):
+        p = NavPlanner(K, 0.09, dataclasses.replace(CFG.sampler, near_field_max_m=cap),
+                       RecedingHorizonFollower(CFG.follower), COBRA)
+        checker = p._checker(T_GC, np.eye(4), CFG.sampler.obstacle_depth_m)
+        state[cap] = [bool(checker.point_free(pt, drawn_mask())[0]) for pt in (beside, behind)]
+        assert checker.near_field_m == pytest.approx(min(cap, 0.495), abs=0.01)
+    assert state == {float("inf"): [True, True], 0.24: [False, True]}
+    with pytest.raises(NavConfigError, match=r"sampler.near_field_max_m: must be >= 0, got -0.1"):
+        NavConfig.from_dict({"sampler": {"near_field_max_m": -0.1}})
+
+
+def test_a_hidden_point_one_earlier_view_shows_as_an_obstacle_is_blocked_with_blocked_wins():
+    # a disc 0.6 m ahead of a camera 1 m back (hidden now: behind the camera); one earlier view
+    # misses it (the classifier called it ground), the other shows it
+    point = np.array([[-0.4, 0.0, 0.0]])
+    missed, seen = drawn_mask(), drawn_mask(discs=[(0.6, 0.0, 0.06)])
+    now = drawn_mask()
+    for blocked_wins, order, free in ((False, (missed, seen), True), (False, (seen, missed), True),
+                                      (True, (missed, seen), False), (True, (seen, missed), False)):
+        c = PerceptionCollisionChecker(K, T_GC, 0.5, blocked_wins=blocked_wins)
+        for ground in order:
+            c.add_view(ground, shifted(-1.0), obstacle_depth_m=0.25)
+        assert bool(c.point_free(point, now)[0]) == free, (blocked_wins, free)
+    # ground in every view that shows it: free either way; shown by none: not known
+    c = PerceptionCollisionChecker(K, T_GC, 0.5, blocked_wins=True)
+    c.add_view(missed, shifted(-1.0), obstacle_depth_m=0.25)
+    assert c.point_free(point, now)[0]
+    assert not PerceptionCollisionChecker(K, T_GC, 0.5, blocked_wins=True).point_state(
+        np.array([[-3.0, 0.0, 0.0]]), now)[1][0]
+
+
+def test_the_planner_passes_blocked_wins_to_its_checks_and_a_passed_obstacle_stays_blocked():
+    # the robot drove straight along x; 0.5 m back one view showed a disc 0.2 m ahead and 0.3 m to
+    # the left of where the robot is now (beside the view now: hidden), an older one (0.8 m back)
+    # showed ground there (a classifier's miss): only with blocked_wins do the left arcs avoid it
+    def free_lengths(blocked_wins):
+        sp = dataclasses.replace(CFG.sampler, blocked_wins=blocked_wins)
+        p = NavPlanner(K, 0.09, sp, RecedingHorizonFollower(CFG.follower))
+        for x, ground in ((-0.8, drawn_mask()), (-0.5, drawn_mask(discs=[(0.7, 0.3, 0.06)]))):
+            p.replan(0.0, ground, T_GC, (x, 0.0, 0.0))
+        r = p.replan(10.0, drawn_mask(), T_GC, (0.0, 0.0, 0.0))
+        return {a.curvature_per_m: a.free_m for a in r.selection.arcs}
+
+    off, on = free_lengths(False), free_lengths(True)
+    assert all(f == pytest.approx(1.1) for f in off.values())          # measured: every arc 1.1 m
+    assert on[1.5] < 0.3 and on[3.0] < 0.3                            # 0.14 and 0.26 m
+    assert on[0.0] == pytest.approx(1.1) and on[-1.5] == pytest.approx(1.1) and on[-3.0] == pytest.approx(1.1)
+
+
+def test_an_old_views_shadow_yields_to_floor_another_view_shows_its_face_does_not():
+    # a view 1 m back shows a disc 0.6 m ahead of it: the disc spans x -0.46..-0.34 in the current
+    # frame (hidden now, behind the camera); the floor 0.2 m beyond its face is in its shadow
+    face, shadow = np.array([[-0.45, 0.0, 0.0]]), np.array([[-0.26, 0.0, 0.0]])
+    seen, floor, now = drawn_mask(discs=[(0.6, 0.0, 0.06)]), drawn_mask(), drawn_mask()
+
+    def free(depth_m, views):
+        c = PerceptionCollisionChecker(K, T_GC, 0.5, blocked_wins=True, blocked_wins_depth_m=depth_m)
+        for ground, x in views:
+            c.add_view(ground, shifted(x), obstacle_depth_m=0.25)
+        return [bool(c.point_state(p, now)[0][0]) for p in (face, shadow)]
+
+    both = [(floor, -0.7), (seen, -1.0)]            # a newer view showed floor at both points
+    assert free(float("inf"), both) == [False, False]          # no depth limit: any obstacle wins
+    assert free(0.1, both) == [False, True]                    # 0.1 m: only the face does
+    assert free(0.1, [(seen, -1.0)]) == [False, False]         # no view shows floor there: blocked
+
+
+def test_the_planner_passes_blocked_wins_depth_m_and_it_is_validated():
+    sp = dataclasses.replace(CFG.sampler, blocked_wins_depth_m=0.1)
+    p = NavPlanner(K, 0.09, sp, RecedingHorizonFollower(CFG.follower), COBRA)
+    assert p._checker(T_GC, np.eye(4), sp.obstacle_depth_m).blocked_wins_depth_m == pytest.approx(0.1)
+    with pytest.raises(NavConfigError, match=r"sampler.blocked_wins_depth_m: must be >= 0, got -1"):
+        NavConfig.from_dict({"sampler": {"blocked_wins_depth_m": -1}})
+
+
+NONE = np.zeros((K.height, K.width), bool)
+
+
+AHEAD = np.array([[0.5, 0.0, 0.0], [1.0, 0.0, 0.0]])
+
+
+def test_a_views_far_non_ground_is_not_shown():
+    shown, ground = _View(K.K(), NONE, T_GC).look(AHEAD)
+    assert shown.tolist() == [True, True] and not ground.any()
+    shown, ground = _View(K.K(), NONE, T_GC, obstacle_range_m=0.8).look(AHEAD)
+    assert shown.tolist() == [True, False]
+    # ground is shown however far (the range is about obstacles)
+    shown, ground = _View(K.K(), ~NONE, T_GC, obstacle_range_m=0.8).look(AHEAD)
+    assert shown.all() and ground.all()
+
+
+def test_an_old_views_far_shadow_no_longer_blocks_the_floor_beside_the_head():
+    """The view of a camera 1 m behind the current one, a cylinder (r 0.05 m) 0.1 m before the current
+    camera and 0.1 m to the left: the floor beside the head behind it (1.05 m from that camera) is
+    non-ground in that view; the current image does not show it. With view_obstacle_range_m 0.8 it is
+    not known (and the near field counts it free): the pose at the head is free, as w19 s5 needed;
+    the floor 0.85 m from that camera, before the cylinder, is still judged by the view (ground)."""
+    T_back = T_GC.copy()
+    T_back[0, 3] -= 1.0
+    old = drawn_mask(discs=[(0.9, 0.1, 0.05)])             # drawn for a camera at the origin
+
+    def checker(range_m):
+        c = PerceptionCollisionChecker(K, T_GC, 0.25, blocked_wins=True, blocked_wins_depth_m=0.1,
+                                       view_obstacle_range_m=range_m)
+        c.add_view(old, T_back, 1.2, 0.25)
+        return c
+
+    beside, before = [0.05, 0.1, 0.0], [-0.15, 0.1, 0.0]
+    free, known = checker(np.inf).point_state(np.array([beside, before]), drawn_mask())
+    assert known.tolist() == [True, True] and free.tolist() == [False, True]
+    free, known = checker(0.8).point_state(np.array([beside, before]), drawn_mask())
+    assert known.tolist() == [False, True] and free.tolist() == [False, True]
+    head = np.zeros((1, 3))
+    assert checker(np.inf).pose_state(head, drawn_mask())[0].all()           # blocked
+    blocked, unknown = checker(0.8).pose_state(head, drawn_mask())
+    assert not blocked.any() and not unknown.any()
