@@ -1,5 +1,5 @@
 """Every `snake_autonomy` subcommand, as a process, on hostile input files: exit 1, the file or key
-named in one message, never a traceback (issue 10, point 6).
+named in one message, never a traceback.
 
 Before the bounded loaders each of these cases ended in a traceback (UnicodeDecodeError,
 RecursionError, MemoryError after gigabytes, bad_alloc), was silently accepted (a duplicated key, a

@@ -1,4 +1,4 @@
-"""Trajectory execution through the batch driver (issue 11): a planned FBSR trajectory handed to the
+"""Trajectory execution through the batch driver: a planned FBSR trajectory handed to the
 C++ DriverController (command_trajectory, the TrajectorySource driver_node runs on
 driver/joint_trajectory), executed in lock-step on the MuJoCo plant, reaches its final posture and is
 held there; a bad trajectory is refused whole with its reasons and nothing moves."""

@@ -1,4 +1,4 @@
-"""`snake_autonomy evaluate` on rows that are not poses and on out-of-range options (issue 10, point 7).
+"""`snake_autonomy evaluate` on rows that are not poses and on out-of-range options.
 
 Rule: the documented tracking-loss markers (a zero quaternion: RTAB-Map's null pose; an Odometry
 covariance at the loss threshold) are counted and reported as loss; anything else that is not a pose

@@ -153,7 +153,7 @@ def test_cli_entry_point_exit_code(tmp_path):
 
 
 def test_sizes_and_physical_ranges(tmp_path):
-    """Finite but absurd values and oversized lists are refused with key and value (issue 10, point 6)."""
+    """Finite but absurd values and oversized lists are refused with key and value."""
     data = {"waypoints": [[1e308, 0, 0], [0, 1, 7200]], "time_limit_s": 1e12,
             "tracker": {"d_th_m": 1e9, "psi_wp_deg": 1e6, "kp": 1e300}}
     with pytest.raises(MissionError) as err:

@@ -1,7 +1,7 @@
 """The mocked bus on a loaded machine answers like a real servo: within its return delay or not at
 all. When this (Python) process was slow and the master has already sent its next packet, the late
 answer is dropped instead of being sent into the next transaction, where the driver could take it
-for the next request's reply (issue 10 follow-up)."""
+for the next request's reply."""
 import os
 import select
 import struct

@@ -50,9 +50,9 @@ def test_nav_run_refuses_a_bad_world(tmp_path, capsys):
 
 
 def test_cobra_goes_round_two_cylinders_to_the_goal_without_touching_them():
-    """The short version of the experiment (README round 5): random world 0 (a cylinder on the
+    """The short version of the experiment (README): random world 0 (a cylinder on the
     straight line 1.0 m ahead, another 0.34 m to its left), depth, seed 0, through the driver:
-    reached in 175 s with no contact (round 5: 183 s); all 5 seeds of the 20 x 5 experiment did. About 15-30 s wall."""
+    reached in 175 s with no contact (183 s when first measured); all 5 seeds of the 20 x 5 experiment did. About 15-30 s wall."""
     from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
     from snake_autonomy.runs.nav_experiment import random_corridor
     result = NavRun(NavRunSpec(random_corridor(0), seed=0, time_limit_s=260.0, keep_frames=False)).run()
@@ -68,16 +68,16 @@ def test_cobra_goes_round_two_cylinders_to_the_goal_without_touching_them():
 def test_the_reference_gait_backs_off_too(root, tmp_path):
     """nav run --gait-source reference: with nav.yaml's back_off the Python reference gait backs off
     with its wave reversed (it used to crawl on forward with kappa held). Random world 1 seed 0 with
-    round 6's steering (arcs to 2 /m, kappa <= 1: round 7's tighter arcs go round this cylinder
+    the earlier steering (arcs to 2 /m, kappa <= 1: nav.yaml's tighter arcs go round this cylinder
     without stopping): the cylinder ahead stops COBRA at 0.29 m after 42 s; measured: two back-off
     replans take base_link back 0.14 m (0.285 -> 0.148 m), then it turns. About 5 s wall."""
     from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
     from snake_autonomy.runs.nav_experiment import random_corridor
-    cfg = tmp_path / "nav_round6.yaml"
+    cfg = tmp_path / "nav_wide_arcs.yaml"
     cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nsampler: {{max_curvature_per_m: 2.0}}\n"
                    f"follower: {{gait_map: {root / 'config' / 'gait_maps' / 'cobra_rectilinear.yaml'}, "
                    "lookahead_m: 0.06, k_heading: 0.008, kappa_rate_per_m_s: 0.05}\n"
-                   "map: {source: none, route: false}\n")     # round 15's route goes round without a stop
+                   "map: {source: none, route: false}\n")     # the map's route goes round without a stop
     result = NavRun(NavRunSpec(random_corridor(1), seed=0, time_limit_s=63.0, keep_frames=False,
                                gait_source="reference", nav_config=str(cfg))).run()
     assert result.metrics["outcome"] == "stopped"       # the last replans: back off, back off, turn

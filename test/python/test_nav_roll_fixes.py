@@ -1,4 +1,4 @@
-"""What keeps COBRA upright on the rectilinear gait (issue 13 round 2, bench/nav_roll): the
+"""What keeps COBRA upright on the rectilinear gait (bench/nav_roll): the
 follower's kappa rate limit, the flat-belly plant option (off by default), the gait map read by
 nav.yaml's follower."""
 import math
@@ -106,7 +106,7 @@ def test_with_every_arc_free_the_goal_bias_takes_the_arc_passing_closest_to_the_
     from snake_autonomy.planning.rectilinear.sampler import SamplerParams, TrajectorySampler
     s = TrajectorySampler(_AllFree(), SamplerParams(num_arcs=5, max_curvature_per_m=2.0, horizon_m=1.2,
                                                     goal_tie_m=0.3))
-    # the goal 0.5 m ahead and 0.25 m to the right (round 1's run drove past such a goal)
+    # the goal 0.5 m ahead and 0.25 m to the right (a run without the bias drove past such a goal)
     sel = s.select(np.ones((4, 4), bool), (0.5, -0.25))
     assert sel.arc.curvature_per_m < 0
     assert s.select(np.ones((4, 4), bool), (0.5, 0.25)).arc.curvature_per_m > 0

@@ -190,7 +190,7 @@ def test_bad_gate_parameters(tmp_path):
         load_gate_params(f)
 
 
-# ---- absurd but finite poses (issue 10, point 5) -------------------------------------------------
+# ---- absurd but finite poses ---------------------------------------------------------------------
 def test_a_first_pose_far_outside_the_workspace_is_refused_and_normal_poses_still_pass():
     g = gate(workspace_m=100.0)
     r = g.check(0.0, (1e300, 0, 0), IDQ, COV)

@@ -43,7 +43,7 @@ def test_random_streams_are_named(root):
 
 
 def test_every_number_has_a_range(tmp_path):
-    """A finite but absurd value (1e308) is refused with its key, like NaN (issue 10, point 6)."""
+    """A finite but absurd value (1e308) is refused with its key, like NaN."""
     from snake_autonomy.sim.config import SimConfig
     f = tmp_path / "sim.yaml"
     f.write_text("physics:\n  timestep_s: 1.0e+308\n  floor_friction: [0.5, .inf]\n")

@@ -1,4 +1,4 @@
-"""launch/sim.launch ended the two ways a user ends it (issue 10 points 2 and 8a), in a process group
+"""launch/sim.launch ended the two ways a user ends it, in a process group
 of its own on a master port of its own:
 - Ctrl+C: SIGINT reaches every node at once; the driver's shutdown action (its final hold write)
   must reach the simulated servos before the sim node closes the mocked bus.
