@@ -8,7 +8,7 @@ WITH_ENV := scripts/with-env
 
 help:
 	@echo "make demo   install, build, run the simulated robot through its main mission, write results/"
-	@echo "make test   install, build, run every test (gtest, pytest, rostest); ends with 'N passed, N failed'"
+	@echo "make test   install, build, run every test (gtest, layers, style, pytest, rostest); ends with 'N passed, N failed'"
 	@echo "make build  install and build only"
 	@echo "make bench  run the benchmarks in bench/ and print their figures"
 

@@ -3,10 +3,9 @@
 socket: CRC errors and dropped/truncated replies are counted and the driver carries on; a servo
 that stops answering, a hardware error and the pty closing each stop locomotion (hold: goals
 frozen, torque stays on), say why in /diagnostics, and recover through the services."""
-import rospy
 import rostest
 
-from driver_test_helpers import LOCO, DriverTestCase, wait_for
+from driver_test_helpers import LOCO, DriverTestCase
 
 BUS = "snake_driver: bus"
 

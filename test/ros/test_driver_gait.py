@@ -9,7 +9,6 @@ import signal
 import subprocess
 import time
 
-import rospy
 import rostest
 
 from driver_test_helpers import LOCO, DriverTestCase, wait_for

@@ -11,10 +11,9 @@ import xmlrpc.client
 
 import rosgraph
 import rosnode
-import rospy
 import rostest
 
-from driver_test_helpers import DriverTestCase, wait_for
+from driver_test_helpers import DriverTestCase
 
 LOOP = "snake_driver: loop"
 PRIORITY = 50

@@ -87,7 +87,8 @@ class MissionNodeTest(unittest.TestCase):
         wait_for(lambda: self.diagnostics[name].message.startswith("done"), 5, "the mission diagnostics to say done")
         values = {kv.key: kv.value for kv in self.diagnostics[name].values}
         self.assertEqual(values["mission"], "straight")
-        self.assertTrue(any(n.endswith("tracking_status topic status") for n in self.diagnostics), sorted(self.diagnostics))
+        self.assertTrue(any(n.endswith("tracking_status topic status") for n in self.diagnostics),
+                        sorted(self.diagnostics))
 
     def test_3_stale_pose_holds_then_resumes_and_abort_holds(self):
         with self.driver.lock:

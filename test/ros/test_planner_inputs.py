@@ -8,7 +8,6 @@ an unknown encoding, too few bytes, a camera that falls silent. After each, the 
 send a gait command every tick (no gap longer than GAP_S), name the refusal on /diagnostics, hold on
 a stale frame, and move again (rectilinear, curve=true) once good data returns.
 """
-import math
 import threading
 import time
 import unittest

@@ -13,7 +13,6 @@ driver's loop jitter, bus latency and a mission that starts before the first pos
 """
 import itertools
 import threading
-import time
 import unittest
 
 import numpy as np

@@ -3,8 +3,9 @@
 
 Checks: the mission ends "done"; its run started at a /clock time (the mission node waited for the
 first /clock: a start at time zero would have fired the time limit at once), the CoM poses of the bag
-carry stamps of the same clock; the run's bag holds /tf (the driver's world frame -> base_link), /tf_static (robot_state_publisher's fixed joints, e.g. the
-camera, written at the run's start) and /diagnostics.
+carry stamps of the same clock; the run's bag holds /tf (the driver's world frame -> base_link),
+/tf_static (robot_state_publisher's fixed joints, e.g. the camera, written at the run's start) and
+/diagnostics.
 """
 import glob
 import json

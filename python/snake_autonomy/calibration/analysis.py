@@ -86,7 +86,8 @@ class CalibrationResult:
                  f"(scatter: {heading_scatter})"]
         if len(self.per_run_delta_offset_deg) > 1:
             v = np.array(list(self.per_run_delta_offset_deg.values()))
-            lines.append(f"per run: delta_offset median {np.median(v):+.2f} deg, range [{v.min():+.2f}, {v.max():+.2f}]")
+            lines.append(f"per run: delta_offset median {np.median(v):+.2f} deg, "
+                         f"range [{v.min():+.2f}, {v.max():+.2f}]")
         return "\n".join(lines + [f"warning: {w}" for w in self.warnings])
 
 

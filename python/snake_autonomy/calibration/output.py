@@ -29,7 +29,8 @@ def write_yaml(path, result: CalibrationResult, source: Dict) -> Path:
     r = result
     evidence = {
         **source,
-        "method": "thesis eq. 3.31: delta_offset = -K_bias * drift rate at delta 0, K_bias = 1 / (d turn rate / d delta)",
+        "method": ("thesis eq. 3.31: delta_offset = -K_bias * drift rate at delta 0, "
+                   "K_bias = 1 / (d turn rate / d delta)"),
         "delta_offset_deg": r.delta_offset_deg, "delta_offset_std_deg": r.delta_offset_std_deg,
         "drift_rate_deg_s": r.drift_rate_deg_s, "steering_gain_deg_s_per_deg": r.steering_gain_deg_s_per_deg,
         "k_bias_s": r.k_bias_s, "rate_residual_std_deg_s": r.rate_residual_std_deg_s,

@@ -13,9 +13,10 @@ the simulated robot (sim_backend.SimRobot, lock-step) or the robot through ROS (
 Safety: nothing moves before a first pose arrived (within start_timeout_s). The gait command is
 re-sent every resend_s of pose time (the driver's command lifetime). The robot is commanded to hold
 (the driver's `hold` gait) at the end, when the pose goes stale (no pose for pose_timeout_s), when a
-command is refused, when the robot does not move (the driver not running: fault, torque off), on Ctrl-C (KeyboardInterrupt) and on any error (a RuntimeError, the driver's
-fault or a roll-over, ends the run like a stale pose; others propagate after the hold); the segments
-completed so far are kept. Time is the poses' own (simulated time, or the stamps of com_pose), so settling and recording
+command is refused, when the robot does not move (the driver not running: fault, torque off), on
+Ctrl-C (KeyboardInterrupt) and on any error (a RuntimeError, the driver's fault or a roll-over,
+ends the run like a stale pose; others propagate after the hold); the segments completed so far are
+kept. Time is the poses' own (simulated time, or the stamps of com_pose), so settling and recording
 windows mean the same on both back-ends.
 """
 import math

@@ -35,7 +35,8 @@ def add_arguments(parser):
     parser.add_argument("--out", required=True, metavar="DIR", help="calibration.yaml and calibration.png go here")
     parser.add_argument("--deltas", default=DEFAULT_DELTAS, help=f"steering values, degrees (default {DEFAULT_DELTAS})")
     parser.add_argument("--gait", default="sidewind", help="the steerable gait (default sidewind)")
-    parser.add_argument("--settle-cycles", type=float, default=3.0, help="gait cycles after each new delta, not recorded")
+    parser.add_argument("--settle-cycles", type=float, default=3.0,
+                        help="gait cycles after each new delta, not recorded")
     parser.add_argument("--cycles", type=int, default=6, help="gait cycles recorded per delta (default 6)")
     root = config_path()
     parser.add_argument("--gaits", default=str(root / "gaits.yaml"), help="gait library (its period; the driver's)")

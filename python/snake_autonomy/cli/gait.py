@@ -149,7 +149,8 @@ def main(args) -> int:
         "final_lags_deg": np.round(np.degrees(result["lags"]), 3).tolist(),
         "target_lags_deg": np.round(np.degrees(np.angle(np.exp(1j * np.diff(targets.phase)))), 3).tolist(),
         "max_abs_joint_deg": float(np.degrees(np.abs(q).max())),
-        "joint_limit_violations": int(((q < model.joint_lower_rad - 1e-12) | (q > model.joint_upper_rad + 1e-12)).sum()),
+        "joint_limit_violations": int(((q < model.joint_lower_rad - 1e-12)
+                                       | (q > model.joint_upper_rad + 1e-12)).sum()),
         "bbox_span_mean_m": np.round(result["bbox"].mean(axis=0), 4).tolist(),
     }
     (out_dir / f"gait_{args.gait}.json").write_text(json.dumps(summary, indent=2))
@@ -157,7 +158,8 @@ def main(args) -> int:
     print(f"  amplitudes reached [deg]: {summary['final_amplitudes_deg']}")
     print(f"  lags reached       [deg]: {summary['final_lags_deg']}")
     print(f"  lags commanded     [deg]: {summary['target_lags_deg']}")
-    print(f"  max |q| {summary['max_abs_joint_deg']:.1f} deg, joint-limit violations: {summary['joint_limit_violations']}")
+    print(f"  max |q| {summary['max_abs_joint_deg']:.1f} deg, "
+          f"joint-limit violations: {summary['joint_limit_violations']}")
     print(f"  mean bounding box span [m]: {summary['bbox_span_mean_m']}")
     print(f"  wrote {plot}, {out_dir / f'gait_{args.gait}.csv'}, {out_dir / f'gait_{args.gait}.json'}")
     return 0

@@ -83,7 +83,8 @@ def main(args) -> int:
     wall = time.perf_counter() - t0
     summary = fit_gait_map(rows, args.nominal_amplitude)
     doc = {"robot": args.robot, "gait": args.gait, "driver_gait": args.driver_gait or None,
-           "wavelength_m": args.wavelength if args.gait == "rectilinear" else None, "scales": bool(args.scales), "flat_belly_fraction": args.flat_belly, "seed": args.seed,
+           "wavelength_m": args.wavelength if args.gait == "rectilinear" else None, "scales": bool(args.scales),
+           "flat_belly_fraction": args.flat_belly, "seed": args.seed,
            "engine": args.engine, "points": len(rows), "wall_s": round(wall, 1), **summary}
     (out / "gait_map.yaml").write_text(
         "# snake_autonomy gait-map: steady body velocity fits (runs/gait_map.py). follower: keys are\n"

@@ -264,11 +264,14 @@ class TrackingGate:
 
     def state_at(self, now_s: float):
         """(state, detail) at time now_s: turns OK into STALE when no message came for too long."""
-        if self._state == OK and self._last_msg_t is not None and now_s - self._last_msg_t > self.params.stale_timeout_s:
+        if (self._state == OK and self._last_msg_t is not None
+                and now_s - self._last_msg_t > self.params.stale_timeout_s):
             self._state = STALE
-            self._detail = f"no odometry for {now_s - self._last_msg_t:.2f} s (timeout {self.params.stale_timeout_s:g} s)"
+            self._detail = (f"no odometry for {now_s - self._last_msg_t:.2f} s "
+                            f"(timeout {self.params.stale_timeout_s:g} s)")
         elif self._state == STALE and self._last_msg_t is not None:
-            self._detail = f"no odometry for {now_s - self._last_msg_t:.2f} s (timeout {self.params.stale_timeout_s:g} s)"
+            self._detail = (f"no odometry for {now_s - self._last_msg_t:.2f} s "
+                            f"(timeout {self.params.stale_timeout_s:g} s)")
         return self._state, self._detail
 
 

@@ -25,8 +25,8 @@ simulator's ground truth); rows that are null poses are dropped and reported as 
 Every user-fixable problem raises ``EvaluationError`` with a message; the CLI prints it and exits 1.
 
 Files: readers.py (TUM, EuRoC, bag topics/TF), alignment.py (yaw-only + dispatch), metrics.py
-(options, evaluate, result), stats.py (evo's statistics), tracking_loss.py, segments.py (TrackingStatus), plots.py, report.py;
-the command line: cli/evaluate.py.
+(options, evaluate, result), stats.py (evo's statistics), tracking_loss.py, segments.py (TrackingStatus),
+plots.py, report.py; the command line: cli/evaluate.py.
 """
 from .alignment import ALIGN_MODES, yaw_alignment
 from .errors import EvaluationError

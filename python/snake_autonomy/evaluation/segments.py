@@ -111,7 +111,7 @@ def labels_at(stamps: np.ndarray, samples: Sequence[StatusSample], key: str) -> 
 def spans(samples: Sequence[StatusSample], key: str, end_s: Optional[float] = None):
     """[(start_s, end_s, label)] of the runs of equal label, for shading plots."""
     out = []
-    for k, s in enumerate(samples):
+    for s in samples:
         label = s.label(key)
         if out and out[-1][2] == label:
             continue

@@ -18,8 +18,9 @@ Action      mission/run (snake_autonomy/RunMission): goal = a mission (name or f
             cancel = abort (hold). A new goal while an action's mission runs preempts it; a goal while
             a service- or auto-started mission runs is rejected.
 Services    mission/load (snake_autonomy/LoadMission), mission/start, mission/abort, mission/resume
-            (std_srvs/Trigger; resume goes on after a pause for a driver fault), kept beside the action: ~auto_start and `rosservice call` (the one-line stop of any run,
-            whoever started it) need no action client.
+            (std_srvs/Trigger; resume goes on after a pause for a driver fault), kept beside the action:
+            ~auto_start and `rosservice call` (the one-line stop of any run, whoever started it) need no
+            action client.
 Diagnostics /diagnostics (diagnostic_updater): "mission" (state, mission, waypoint, distance, last
             scout stop; WARN while holding for a stale pose, ERROR when a run aborted) and
             "tracking_status topic status" (the tracker's rate against ~rate_hz).
@@ -348,7 +349,8 @@ class MissionNode:
             if self.mission is None:
                 return False, "no mission loaded (mission/load or ~mission)"
             if self.driver_fault:
-                return False, f"the driver reports a fault ({self.driver_fault}): recover it first (driver/enable_torque)"
+                return False, (f"the driver reports a fault ({self.driver_fault}): "
+                               "recover it first (driver/enable_torque)")
             if self.runner.state != "idle":
                 # a finished mission reruns from its first waypoint
                 self.runner = self.make_runner(self.mission)

@@ -130,7 +130,8 @@ class SimNode:
             self.contacts = CollisionMonitor(self.sim.plant.model)
         self.sim.start()
         rospy.loginfo(f"simulated {self.sim.robot.name}: seed {setup.seed}, {self.feedback} feedback, servo bus on "
-                      f"{setup.port}, start {start_t}; {self.sim.params.summary()['floor_friction']:.3f} floor friction")
+                      f"{setup.port}, start {start_t}; "
+                      f"{self.sim.params.summary()['floor_friction']:.3f} floor friction")
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self.loop, name="sim", daemon=True)
         self._thread.start()

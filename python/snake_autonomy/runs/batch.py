@@ -359,7 +359,8 @@ class BatchRun:
         meta = {"mission": self.mission.name, "mission_source": self.mission.source, "t_start": t_start,
                 "seed": spec.seed, "feedback": spec.feedback, "start": list(spec.start),
                 "time_limit_s": self.time_limit_s, "label": spec.label,
-                "tracker": {k: (v * DEG if k in ("psi_wp", "psi_turn", "delta0", "delta_lim", "delta_turn", "far_blend_max_gap") else v)
+                "tracker": {k: (v * DEG if k in ("psi_wp", "psi_turn", "delta0", "delta_lim", "delta_turn",
+                                                 "far_blend_max_gap") else v)
                             for k, v in tracker.items()},
                 "tracker_config": self.defaults.get("source", ""), "rate_hz": self.defaults["rate_hz"],
                 "heading_offset_deg": self.defaults["heading_offset_deg"], "gaits": self.mission.gaits,
@@ -374,4 +375,5 @@ def _progress_bar(enabled: bool, total_s: float, desc: str):
     if not enabled:
         return None
     return tqdm(total=round(total_s), desc=desc, unit="sim s", leave=False, dynamic_ncols=True,
-                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}, {rate_fmt}{postfix}]")
+                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} sim s "
+                           "[{elapsed}, {rate_fmt}{postfix}]")

@@ -215,7 +215,7 @@ def summary_figure(out_dir: Path, summary, results) -> Path:
     cmap = plt.get_cmap("tab10")
     waypoints = None
     labelled = set()
-    for n, (label, m) in enumerate(results):
+    for label, m in results:
         traj = out_dir / label / "trajectory.csv"
         if not traj.is_file():
             continue

@@ -96,7 +96,7 @@ def plot_all(out: Path, waypoints, traj, dec, t0: float, d_th: float, psi_wp: fl
     ax.plot(t, dec["yaw_error_abs"] * DEG, "-", lw=1, color="tab:orange", label="absolute")
     ax.plot(t, dec["yaw_error_rel"] * DEG, "-", lw=1, color="tab:green", label="relative")
     ax.plot(t, dec["yaw_error"] * DEG, "-", lw=1.8, color="tab:blue", label="combined")
-    for v, name in ((psi_wp, "psi_wp"), (psi_turn, "psi_turn")):
+    for v in (psi_wp, psi_turn):
         ax.axhline(v * DEG, ls=":", color="grey", lw=0.8)
         ax.axhline(-v * DEG, ls=":", color="grey", lw=0.8)
     paths["yaw_png"] = _save_over_time(plt, fig, ax, "yaw error (deg)", "Yaw errors" + suffix,

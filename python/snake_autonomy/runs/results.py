@@ -127,7 +127,12 @@ def compute_metrics(waypoints: Sequence[Sequence[float]], decisions: Mapping[str
     d = normalise_decisions(decisions)
     t = d["t"]
     if t0 is None:
-        t0 = float(t[0]) if len(t) else (float(trajectory["t"][0]) if trajectory is not None and len(trajectory.get("t", [])) else 0.0)
+        if len(t):
+            t0 = float(t[0])
+        elif trajectory is not None and len(trajectory.get("t", [])):
+            t0 = float(trajectory["t"][0])
+        else:
+            t0 = 0.0
     per_wp = []
     prev_reach_t = t0
     for i, wp in enumerate(waypoints):

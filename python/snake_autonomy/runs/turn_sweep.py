@@ -5,8 +5,8 @@ where each frame of the body goes when the curvature steps (test_nav_body_model 
 The run: straight for start_s, kappa for turn_s, straight for 60 s; the plant with nav runs' flat
 belly (the robot's nav config plant:), the gait through the C++ driver (its gaits.forward, e.g.
 config/gaits.yaml rectilinear) or the Python reference (its gait:, planning/rectilinear/gait.py).
-Steering laws (nav.yaml gaits.steering): uniform (every yaw joint at kappa: the driver's curvature law) or follow_the_leader
-(planning/rectilinear/follow_the_leader.py: the driver gets per-joint biases).
+Steering laws (nav.yaml gaits.steering): uniform (every yaw joint at kappa: the driver's curvature law)
+or follow_the_leader (planning/rectilinear/follow_the_leader.py: the driver gets per-joint biases).
 """
 import math
 from dataclasses import dataclass

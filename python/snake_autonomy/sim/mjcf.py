@@ -133,7 +133,7 @@ def build_mjcf(robot, params: SimParams, scene_xml: str = "", assets_xml: str = 
         roll += twists[i]
         indent += "  "
         parent_pos, parent_quat = f"{_f(-L)} 0 0", _quat_rx(twists[i])
-    for i in reversed(range(n)):
+    for _ in range(n):
         indent = indent[:-2]
         lines.append(f"{indent}</body>")
     lines += ['    </body>', '  </worldbody>', '  <actuator>']

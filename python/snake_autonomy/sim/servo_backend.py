@@ -6,8 +6,9 @@ a first-order servo model for driver tests (KinematicServoBackend, in mock_servo
 the MuJoCo plant (snake_autonomy.sim.plant) for the simulated robot.
 
 Units are those of the servo shaft, not of the robot's joints: radians from the servo's centre
-(the control table's position_centre_ticks, 2048 on the XH540), positive in the servo's own direction. The mapping between joint angles and shaft
-angles (servo direction and zero offset from the robot YAML) belongs to whoever knows the robot:
+(the control table's position_centre_ticks, 2048 on the XH540), positive in the servo's own direction.
+The mapping between joint angles and shaft angles (servo direction and zero offset from the robot
+YAML) belongs to whoever knows the robot:
 the driver on one side, the plant's adapter on the other.
 """
 import math
@@ -63,7 +64,8 @@ class ShaftUnits:
 
     def present(self, st: ShaftState):
         """(position ticks, velocity units, current units, voltage units, temperature C) of `st`."""
-        return (round(st.position_rad / self.rad_per_tick) + self.centre, round(st.velocity_rad_s / self.rad_s_per_unit),
+        return (round(st.position_rad / self.rad_per_tick) + self.centre,
+                round(st.velocity_rad_s / self.rad_s_per_unit),
                 round(st.current_a / self.amps_per_unit), round(st.voltage_v / self.volts_per_unit),
                 round(st.temperature_c))
 

@@ -72,12 +72,12 @@ class Pipe:
         return (self.x_m, self.y_m, self.mouth_m + depth_m)
 
 
-def stability_cost(l, ks_per_m2: float, k_out_per_m2: float) -> np.ndarray:
+def stability_cost(l, ks_per_m2: float, k_out_per_m2: float) -> np.ndarray:  # noqa: E741 - the paper's l
     """Cs(t) of eq. 13 for signed distances l (> 0 inside), with the outside branch above."""
-    l = np.asarray(l, float)
-    inside = np.pi / 2 - np.arctan(ks_per_m2 * l ** 2)
-    outside = np.pi / 2 + k_out_per_m2 * l ** 2
-    return np.where(l > 0, inside, outside)
+    d = np.asarray(l, float)
+    inside = np.pi / 2 - np.arctan(ks_per_m2 * d ** 2)
+    outside = np.pi / 2 + k_out_per_m2 * d ** 2
+    return np.where(d > 0, inside, outside)
 
 
 def pipe_cost(positions_xy, pipe: Pipe) -> float:

@@ -72,9 +72,9 @@ class Checks:
         pos, com = cost.positions_com(delta, sample_times(cost.t_end_s, self.period_s))
         out = []
         zmp = com[:, :2]
-        l = self.within.signed_distance(zmp)
-        if np.any(l <= 0):
-            out.append(f"ZMP leaves the polygon (worst edge distance {l.min() * 1e3:.1f} mm)")
+        edge_m = self.within.signed_distance(zmp)
+        if np.any(edge_m <= 0):
+            out.append(f"ZMP leaves the polygon (worst edge distance {edge_m.min() * 1e3:.1f} mm)")
         if self.end_within is not None and self.end_within.signed_distance(zmp[-1:])[0] <= 0:
             out.append("ZMP ends outside U ∩ U'")
         r = cost.chain.radius_m

@@ -8,10 +8,11 @@ what to show out. planner_node (nodes/planner_node.py) only converts messages an
     out = loop.tick(t)                        # at the follower's rate: NavTick
 
 Every replan_period_s (config/nav.yaml follower.replan_period_s) the latest frame with the pose
-nearest its stamp (of the last POSE_HISTORY poses) becomes a replan (perception -> perception-space arcs -> the follower); between replans the
-follower turns the pose into kappa. The camera's pose in the replan's ground frame is base_link's
-pose (the one the driver uses, base_pose) times the mount of config/nav.yaml camera: (the head
-bobs with the gait: the mount is the camera's mean pose, the error the batch path does not have).
+nearest its stamp (of the last POSE_HISTORY poses) becomes a replan (perception -> perception-space
+arcs -> the follower); between replans the follower turns the pose into kappa. The camera's pose
+in the replan's ground frame is base_link's pose (the one the driver uses, base_pose) times the
+mount of config/nav.yaml camera: (the head bobs with the gait: the mount is the camera's mean pose,
+the error the batch path does not have).
 
 Inputs are checked where they enter (on_pose, on_frame return the reason of a refusal, counted in
 `refused`): a pose must be finite, a rotation, inside POSE_WORKSPACE_M and not older than the last one;

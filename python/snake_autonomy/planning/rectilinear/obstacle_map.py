@@ -23,7 +23,7 @@ Geometry is shapely's (a prepared polygon, contains_xy).
 """
 import math
 from dataclasses import dataclass
-from typing import Iterable, List, Tuple
+from typing import Iterable, List
 
 import numpy as np
 import shapely

@@ -146,9 +146,9 @@ class SamplerParams:
         for key in ("max_curvature_per_m", "horizon_m", "spacing_m", "swing_obstacle_depth_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
-        for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "curvature_step_per_m", "known_free_m", "resume_free_m",
-                    "footprint_taper_m",
-                    "switch_cost_m", "swing_guard_m", "turn_free_m", "near_field_max_m", "back_off_check_m", "swing_guard_tail_m",
+        for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "curvature_step_per_m", "known_free_m",
+                    "resume_free_m", "footprint_taper_m", "switch_cost_m", "swing_guard_m", "turn_free_m",
+                    "near_field_max_m", "back_off_check_m", "swing_guard_tail_m",
                     "blocked_wins_depth_m", "crawl_guard_m", "crawl_dead_band_per_m", "crawl_margin_m",
                     "view_obstacle_range_m"):
             if getattr(self, key) < 0:
