@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "snake_autonomy/core/driver_controller.hpp"
-#include "snake_autonomy/core/loop_timer.hpp"
+#include "snake_autonomy/driver/driver_controller.hpp"
+#include "snake_autonomy/driver/loop_timer.hpp"
 #include "snake_autonomy/dynamixel/serial_bus.hpp"
 
 using namespace snake_autonomy;

@@ -9,9 +9,9 @@
 
 #include "snake_autonomy/core/config_reader.hpp"
 
-#include "snake_autonomy/core/driver_config.hpp"
-#include "snake_autonomy/core/driver_controller.hpp"
-#include "snake_autonomy/core/gait_command.hpp"
+#include "snake_autonomy/driver/driver_config.hpp"
+#include "snake_autonomy/driver/driver_controller.hpp"
+#include "snake_autonomy/driver/gait_command.hpp"
 #include "snake_autonomy/dynamixel/control_table.hpp"
 #include "snake_autonomy/dynamixel/servo_bus.hpp"
 
@@ -108,7 +108,7 @@ void expose_driver(py::module_& m) {
 
   py::class_<DriverController>(
       m, "DriverController",
-      "The driver's control loop (src/core/driver_controller.cpp), the one driver_node runs: gait commands, CPG + "
+      "The driver's control loop (src/driver/driver_controller.cpp), the one driver_node runs: gait commands, CPG + "
       "steering, stale-pose gating, slew limit, joint limits, faults, kinematics. Call start(), then update() at "
       "the loop's rate; everything from one thread.")
       .def(py::init<const RobotModel&, const GaitLibrary&, const dx::ControlTable&, dx::ServoBus&,

@@ -1,6 +1,6 @@
 #include "snake_autonomy/driver/gait_source.hpp"
 
-#include "snake_autonomy/core/safety_rules.hpp"
+#include "snake_autonomy/driver/safety_rules.hpp"
 
 namespace snake_autonomy::driver {
 

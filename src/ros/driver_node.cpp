@@ -44,11 +44,11 @@
 #include <thread>
 
 #include "driver_params.hpp"
-#include "snake_autonomy/core/driver_controller.hpp"
 #include "snake_autonomy/core/gait_library.hpp"
-#include "snake_autonomy/core/loop_timer.hpp"
-#include "snake_autonomy/core/realtime.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
+#include "snake_autonomy/driver/driver_controller.hpp"
+#include "snake_autonomy/driver/loop_timer.hpp"
+#include "snake_autonomy/driver/realtime.hpp"
 #include "snake_autonomy/dynamixel/control_table.hpp"
 #include "snake_autonomy/dynamixel/serial_bus.hpp"
 #include "trajectory_topics.hpp"

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "snake_autonomy/core/driver_config.hpp"
-#include "snake_autonomy/core/loop_timer.hpp"
+#include "snake_autonomy/driver/driver_config.hpp"
+#include "snake_autonomy/driver/loop_timer.hpp"
 #include "snake_autonomy/dynamixel/serial_bus.hpp"
 
 namespace snake_autonomy::ros_driver {

@@ -33,7 +33,7 @@
 #include <set>
 #include <string>
 
-#include "snake_autonomy/core/driver_controller.hpp"
+#include "snake_autonomy/driver/driver_controller.hpp"
 #include "snake_autonomy/driver/trajectory_source.hpp"
 
 namespace snake_autonomy::ros_driver {

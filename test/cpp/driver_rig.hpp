@@ -9,7 +9,7 @@
 #include <optional>
 #include <string>
 
-#include "snake_autonomy/core/driver_controller.hpp"
+#include "snake_autonomy/driver/driver_controller.hpp"
 #include "snake_autonomy/dynamixel/fake_servo_bus.hpp"
 #include "test_helpers.hpp"
 

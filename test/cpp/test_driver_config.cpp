@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "snake_autonomy/core/driver_config.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
+#include "snake_autonomy/driver/driver_config.hpp"
 
 using snake_autonomy::core::ConfigError;
 using snake_autonomy::core::DriverConfig;

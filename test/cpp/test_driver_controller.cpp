@@ -10,7 +10,7 @@
 #include <thread>
 
 #include "driver_rig.hpp"
-#include "snake_autonomy/core/driver_controller.hpp"
+#include "snake_autonomy/driver/driver_controller.hpp"
 
 using namespace snake_autonomy::core;
 using snake_autonomy::dynamixel::FakeServoBus;

@@ -7,7 +7,7 @@
 #include <cstring>
 
 #include "driver_rig.hpp"
-#include "snake_autonomy/core/safety_rules.hpp"
+#include "snake_autonomy/driver/safety_rules.hpp"
 #include "test_access.hpp"
 
 namespace snake_autonomy::core {

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "snake_autonomy/core/gait_command.hpp"
+#include "snake_autonomy/driver/gait_command.hpp"
 #include "test_helpers.hpp"
 
 using namespace snake_autonomy::core;

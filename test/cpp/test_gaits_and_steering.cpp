@@ -3,9 +3,9 @@
 #include <cmath>
 
 #include "snake_autonomy/core/curvature_steering.hpp"
-#include "snake_autonomy/core/gait_command.hpp"
 #include "snake_autonomy/core/gait_library.hpp"
 #include "snake_autonomy/core/steering.hpp"
+#include "snake_autonomy/driver/gait_command.hpp"
 #include "test_helpers.hpp"
 
 using namespace snake_autonomy::core;

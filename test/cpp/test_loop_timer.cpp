@@ -2,8 +2,8 @@
 
 #include <thread>
 
-#include "snake_autonomy/core/loop_timer.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
+#include "snake_autonomy/driver/loop_timer.hpp"
 
 using namespace snake_autonomy::core;
 using Clock = LoopTimer::Clock;

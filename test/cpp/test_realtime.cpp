@@ -10,7 +10,7 @@
 #include <functional>
 #include <string>
 
-#include "snake_autonomy/core/realtime.hpp"
+#include "snake_autonomy/driver/realtime.hpp"
 
 using snake_autonomy::core::enter_realtime;
 using snake_autonomy::core::RealtimeReport;

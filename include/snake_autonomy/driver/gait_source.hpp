@@ -27,10 +27,10 @@
 #include <string>
 
 #include "snake_autonomy/core/cpg.hpp"
-#include "snake_autonomy/core/driver_config.hpp"
-#include "snake_autonomy/core/gait_command.hpp"
 #include "snake_autonomy/core/gait_library.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
+#include "snake_autonomy/driver/driver_config.hpp"
+#include "snake_autonomy/driver/gait_command.hpp"
 #include "snake_autonomy/driver/joint_command_source.hpp"
 #include "snake_autonomy/driver/message.hpp"
 

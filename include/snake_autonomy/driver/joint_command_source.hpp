@@ -12,7 +12,7 @@
 #include <Eigen/Dense>
 #include <cstdint>
 
-#include "snake_autonomy/core/safety_rules.hpp"
+#include "snake_autonomy/driver/safety_rules.hpp"
 
 namespace snake_autonomy::driver {
 

@@ -31,8 +31,8 @@
 #include <string>
 #include <vector>
 
-#include "snake_autonomy/core/driver_config.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
+#include "snake_autonomy/driver/driver_config.hpp"
 #include "snake_autonomy/driver/message.hpp"
 #include "snake_autonomy/driver/transmission.hpp"
 #include "snake_autonomy/dynamixel/control_table.hpp"

@@ -30,10 +30,10 @@
 #include <mutex>
 #include <string>
 
-#include "snake_autonomy/core/driver_config.hpp"
-#include "snake_autonomy/core/safety_rules.hpp"
+#include "snake_autonomy/driver/driver_config.hpp"
 #include "snake_autonomy/driver/joint_command_source.hpp"
 #include "snake_autonomy/driver/message.hpp"
+#include "snake_autonomy/driver/safety_rules.hpp"
 #include "snake_autonomy/driver/servo_chain.hpp"
 
 namespace snake_autonomy::driver {

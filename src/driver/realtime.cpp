@@ -1,4 +1,4 @@
-#include "snake_autonomy/core/realtime.hpp"
+#include "snake_autonomy/driver/realtime.hpp"
 
 #include <pthread.h>
 #include <sched.h>

@@ -44,14 +44,14 @@
 #include <vector>
 
 #include "snake_autonomy/core/cpg.hpp"
-#include "snake_autonomy/core/driver_config.hpp"
-#include "snake_autonomy/core/gait_command.hpp"
 #include "snake_autonomy/core/gait_library.hpp"
 #include "snake_autonomy/core/kinematics.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
-#include "snake_autonomy/core/safety_rules.hpp"
+#include "snake_autonomy/driver/driver_config.hpp"
+#include "snake_autonomy/driver/gait_command.hpp"
 #include "snake_autonomy/driver/gait_source.hpp"
 #include "snake_autonomy/driver/message.hpp"
+#include "snake_autonomy/driver/safety_rules.hpp"
 #include "snake_autonomy/driver/servo_chain.hpp"
 #include "snake_autonomy/driver/supervisor.hpp"
 #include "snake_autonomy/driver/trajectory_command.hpp"

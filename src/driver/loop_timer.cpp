@@ -1,4 +1,4 @@
-#include "snake_autonomy/core/loop_timer.hpp"
+#include "snake_autonomy/driver/loop_timer.hpp"
 
 #include <time.h>
 

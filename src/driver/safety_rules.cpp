@@ -1,4 +1,4 @@
-#include "snake_autonomy/core/safety_rules.hpp"
+#include "snake_autonomy/driver/safety_rules.hpp"
 
 #include <cmath>
 #include <cstdio>

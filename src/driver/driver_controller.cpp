@@ -1,4 +1,4 @@
-#include "snake_autonomy/core/driver_controller.hpp"
+#include "snake_autonomy/driver/driver_controller.hpp"
 
 #include <algorithm>
 #include <cmath>

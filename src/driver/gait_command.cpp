@@ -1,4 +1,4 @@
-#include "snake_autonomy/core/gait_command.hpp"
+#include "snake_autonomy/driver/gait_command.hpp"
 
 #include <cmath>
 #include <sstream>

@@ -1,4 +1,4 @@
-#include "snake_autonomy/core/driver_config.hpp"
+#include "snake_autonomy/driver/driver_config.hpp"
 
 #include <yaml-cpp/yaml.h>
 
