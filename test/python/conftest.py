@@ -1,4 +1,5 @@
-"""Shared pytest fixtures: paths of the package and of ../shared (optional test data)."""
+"""Shared pytest fixtures: paths of the package and of ../shared (optional test data), and nav config
+overlays written over config/nav.yaml."""
 import os
 from pathlib import Path
 
@@ -31,3 +32,14 @@ def shared_dir() -> Path:
     if not SHARED.is_dir():
         pytest.skip(f"{SHARED} is absent: this test needs the shared reference data")
     return SHARED
+
+
+@pytest.fixture
+def nav_config_over(tmp_path):
+    """nav_config_over(name, overrides) writes tmp_path/name: config/nav.yaml as its base with the
+    YAML text overrides over it (sections merged key by key), and returns its path as a str."""
+    def write(name: str, overrides: str = "") -> str:
+        path = tmp_path / name
+        path.write_text(f"base: {ROOT / 'config' / 'nav.yaml'}\n{overrides}")
+        return str(path)
+    return write

@@ -65,7 +65,7 @@ def test_cobra_goes_round_two_cylinders_to_the_goal_without_touching_them():
     assert abs(result.trajectory[:, 2]).max() > 0.054 + 0.045
 
 
-def test_the_reference_gait_backs_off_too(root, tmp_path):
+def test_the_reference_gait_backs_off_too(root, nav_config_over):
     """nav run --gait-source reference: with nav.yaml's back_off the Python reference gait backs off
     with its wave reversed (it used to crawl on forward with kappa held). Random world 1 seed 0 with
     the earlier steering (arcs to 2 /m, kappa <= 1: nav.yaml's tighter arcs go round this cylinder
@@ -73,13 +73,12 @@ def test_the_reference_gait_backs_off_too(root, tmp_path):
     replans take base_link back 0.14 m (0.285 -> 0.148 m), then it turns. About 5 s wall."""
     from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
     from snake_autonomy.runs.nav_experiment import random_corridor
-    cfg = tmp_path / "nav_wide_arcs.yaml"
-    cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nsampler: {{max_curvature_per_m: 2.0}}\n"
-                   f"follower: {{gait_map: {root / 'config' / 'gait_maps' / 'cobra_rectilinear.yaml'}, "
-                   "lookahead_m: 0.06, k_heading: 0.008, kappa_rate_per_m_s: 0.05}\n"
-                   "map: {source: none, route: false}\n")     # the map's route goes round without a stop
+    cfg = nav_config_over("nav_wide_arcs.yaml", "sampler: {max_curvature_per_m: 2.0}\n"
+                          f"follower: {{gait_map: {root / 'config' / 'gait_maps' / 'cobra_rectilinear.yaml'}, "
+                          "lookahead_m: 0.06, k_heading: 0.008, kappa_rate_per_m_s: 0.05}\n"
+                          "map: {source: none, route: false}\n")     # the map's route goes round without a stop
     result = NavRun(NavRunSpec(random_corridor(1), seed=0, time_limit_s=63.0, keep_frames=False,
-                               gait_source="reference", nav_config=str(cfg))).run()
+                               gait_source="reference", nav_config=cfg)).run()
     assert result.metrics["outcome"] == "stopped"       # the last replans: back off, back off, turn
     backs = [r for r in result.replans if "back off" in r.reason]
     assert len(backs) >= 1, [r.reason for r in result.replans]

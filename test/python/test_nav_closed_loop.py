@@ -35,27 +35,27 @@ def test_the_12_link_robot_reaches_a_goal_it_used_to_orbit():
     assert m["goal_reached"] and m["collisions"] == 0 and m["outcome"] == "success"
 
 
-def _truth_run(tmp_path, root, stride_px):
+def _truth_run(nav_config_over, stride_px):
     """COBRA in random world 0, seed 1, perception truth (the segmentation render through 40 px
     blocks judging cells of stride_px: the classifier's pipeline with a perfect classifier)."""
-    cfg = tmp_path / f"nav_{stride_px}.yaml"
-    cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nclassifier: {{stride_px: {stride_px}}}\n"
-                   "sampler: {blocked_wins: false, reshape_keeps_centroid: false, swing_guard_tail_m: 0.0}\n"
-                   "map: {source: none, route: false}\n")   # without the later guards and map (reshaping about
-                                                           # the centroid, the tiles run reaches without a contact too)
+    cfg = nav_config_over(f"nav_{stride_px}.yaml", f"classifier: {{stride_px: {stride_px}}}\n"
+                          "sampler: {blocked_wins: false, reshape_keeps_centroid: false, swing_guard_tail_m: 0.0}\n"
+                          "map: {source: none, route: false}\n")   # without the later guards and map (reshaping
+                                                                  # about the centroid, the tiles run reaches
+                                                                  # without a contact too)
     m = NavRun(NavRunSpec(random_corridor(0), seed=1, perception="truth", time_limit_s=300.0,
-                          nav_config=str(cfg), keep_frames=False)).run().metrics
+                          nav_config=cfg, keep_frames=False)).run().metrics
     print({k: m[k] for k in ("goal_reached", "time_s", "collisions", "outcome", "stops_no_free_arc")})
     assert m["perception"] == "truth"
     return m
 
 
-def test_with_tiles_cobra_touches_the_cylinder_at_the_image_edge_and_with_cells_it_does_not(tmp_path, root):
+def test_with_tiles_cobra_touches_the_cylinder_at_the_image_edge_and_with_cells_it_does_not(nav_config_over):
     """40 px tiles: 16 contact episodes, time limit; 20 px cells: reached in 217 s, no contact, no
     stop. With the newest earlier view deciding (sampler.blocked_wins false; with blocked_wins the
     tiles run reached in 237 s without contact too). About 30 s wall for both."""
-    assert _truth_run(tmp_path, root, 40)["collisions"] > 0
-    m = _truth_run(tmp_path, root, 20)
+    assert _truth_run(nav_config_over, 40)["collisions"] > 0
+    m = _truth_run(nav_config_over, 20)
     assert m["goal_reached"] and m["collisions"] == 0 and m["outcome"] == "success"
 
 
@@ -71,7 +71,7 @@ def test_a_nav_run_with_follow_the_leader_steering(root):
     assert not any("turn in place" in r.reason for r in result.replans)
 
 
-def test_cobra_passes_the_three_cylinders_of_world_6_without_its_front_links_touching(tmp_path, root):
+def test_cobra_passes_the_three_cylinders_of_world_6_without_its_front_links_touching(nav_config_over):
     """Random world 6 seed 4, depth. Without the swing guard the planner reached at 449 s with 21
     contact episodes (the head passed the right cylinder 0.18 m off, the left arc back to the goal
     swung link 1 into it). With the swing guard: reached without a contact (measured 470 s). ~30 s
@@ -81,26 +81,25 @@ def test_cobra_passes_the_three_cylinders_of_world_6_without_its_front_links_tou
     middle (reshape_keeps_centroid on: reached with 6 contact episodes; without the map the tail guard
     does nothing)."""
     world = random_corridor(6)
-    cfg = tmp_path / "no_map.yaml"
-    cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{source: none, route: false}}\n"
-                   "sampler: {blocked_wins_depth_m: .inf, back_off_check_m: 0.0, reshape_keeps_centroid: false,"
-                   " swing_guard_tail_m: 0.0}\n")
-    m = NavRun(NavRunSpec(world, seed=4, time_limit_s=567.0, keep_frames=False, nav_config=str(cfg))).run().metrics
+    cfg = nav_config_over("no_map.yaml", "map: {source: none, route: false}\n"
+                          "sampler: {blocked_wins_depth_m: .inf, back_off_check_m: 0.0, reshape_keeps_centroid: false,"
+                          " swing_guard_tail_m: 0.0}\n")
+    m = NavRun(NavRunSpec(world, seed=4, time_limit_s=567.0, keep_frames=False, nav_config=cfg)).run().metrics
     print({k: m[k] for k in ("goal_reached", "time_s", "collisions", "min_clearance_m", "outcome")})
     assert m["goal_reached"] and m["collisions"] == 0, m["outcome"]
 
 
-def test_cobra_backs_off_instead_of_turning_its_head_into_the_cylinder_of_world_6_seed_2(tmp_path, root):
+def test_cobra_backs_off_instead_of_turning_its_head_into_the_cylinder_of_world_6_seed_2(nav_config_over):
     """Random world 6 seed 2, depth. Without turn_free_m (a turn needs no room to crawl) it stopped 0.41 m short of a
     cylinder, turned in place left, and at the next replan (every arc 0.00 m free, the cylinder
     right ahead) kept turning: base_link touched it at 103 s (6 episodes by 123 s). With
     turn_free_m it backs off there instead; no contact (measured: none in the whole 567 s run).
     Both runs to 160 s, ~15 s wall."""
-    off, on = tmp_path / "off.yaml", tmp_path / "on.yaml"      # both without the map
-    off.write_text(f"base: {root / 'config' / 'nav.yaml'}\nsampler: {{turn_free_m: 0.0}}\nmap: {{source: none, route: false}}\n")
-    on.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{source: none, route: false}}\n")
+    # both without the map
+    off = nav_config_over("off.yaml", "sampler: {turn_free_m: 0.0}\nmap: {source: none, route: false}\n")
+    on = nav_config_over("on.yaml", "map: {source: none, route: false}\n")
     runs = {}
-    for name, cfg in (("on", str(on)), ("off", str(off))):
+    for name, cfg in (("on", on), ("off", off)):
         runs[name] = NavRun(NavRunSpec(random_corridor(6), seed=2, time_limit_s=160.0, nav_config=cfg,
                                        keep_frames=False)).run()
     on, off_run = runs["on"], runs["off"]
@@ -110,7 +109,7 @@ def test_cobra_backs_off_instead_of_turning_its_head_into_the_cylinder_of_world_
                max(a.free_m for a in r.selection.arcs) < 0.05 for r in on.replans)
 
 
-def test_cobra_goes_round_world_6_instead_of_into_its_funnel(tmp_path, root):
+def test_cobra_goes_round_world_6_instead_of_into_its_funnel(nav_config_over):
     """Random world 6 (three cylinders, gaps 0.26-0.30 m: narrower than COBRA's 0.5 m checked
     footprint), seed 7, depth. Without the map COBRA drove into the funnel, stopped, and touched at
     103 s (75 episodes over seeds 7-9). With config/nav.yaml's map and route it went round the
@@ -120,16 +119,14 @@ def test_cobra_goes_round_world_6_instead_of_into_its_funnel(tmp_path, root):
     without the body and crawl guards (with them this run reaches the time limit, no contact)."""
     committed = NavConfig.from_yaml().map
     assert (committed.source, committed.route) == ("faces", True)
-    off = tmp_path / "off.yaml"
     no_body_guards = ("sampler: {reshape_keeps_centroid: false, swing_guard_body: false, crawl_guard_m: 0.0, "
-               "crawl_blocked_backs_off: false}\n")
-    off.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{source: none, route: false}}\n{no_body_guards}")
-    before = NavRun(NavRunSpec(random_corridor(6), seed=7, time_limit_s=120.0, nav_config=str(off),
+                      "crawl_blocked_backs_off: false}\n")
+    off = nav_config_over("off.yaml", f"map: {{source: none, route: false}}\n{no_body_guards}")
+    before = NavRun(NavRunSpec(random_corridor(6), seed=7, time_limit_s=120.0, nav_config=off,
                                keep_frames=False)).run()
     assert before.metrics["collisions"] > 0, before.metrics
-    own = tmp_path / "priors_on_own_floor.yaml"
-    own.write_text(f"base: {root / 'config' / 'nav.yaml'}\nmap: {{priors_off_own_floor: false}}\n{no_body_guards}")
-    run = NavRun(NavRunSpec(random_corridor(6), seed=7, time_limit_s=400.0, keep_frames=False, nav_config=str(own)))
+    own = nav_config_over("priors_on_own_floor.yaml", f"map: {{priors_off_own_floor: false}}\n{no_body_guards}")
+    run = NavRun(NavRunSpec(random_corridor(6), seed=7, time_limit_s=400.0, keep_frames=False, nav_config=own))
     result = run.run()
     assert result.metrics["outcome"] == "success", result.metrics
     # it went round (south of the cluster's lowest cylinder or north of its highest), not between
@@ -140,7 +137,7 @@ def test_cobra_goes_round_world_6_instead_of_into_its_funnel(tmp_path, root):
     assert all(r.route_world is not None for r in result.replans)
 
 
-def test_cobra_world_4_seed_3_backs_off_instead_of_swinging_its_head_back(tmp_path, root):
+def test_cobra_world_4_seed_3_backs_off_instead_of_swinging_its_head_back(nav_config_over):
     """Random world 4 seed 3, depth. Turning to either side, at 112 s it turned in place
     right (kappa -1.5), at 122 s left (+1.5), swinging the head ~0.2 m each way beside a cylinder;
     backing off at 132 s base_link touched obstacle_1. Keeping the side, no contact to 150 s (the
@@ -149,11 +146,10 @@ def test_cobra_world_4_seed_3_backs_off_instead_of_swinging_its_head_back(tmp_pa
     nav.yaml's values this run has no contact to 150 s either way) and nav.yaml's."""
     runs = {}
     for on in (False, True):
-        cfg = tmp_path / f"keep_{on}.yaml"
-        cfg.write_text(f"base: {root / 'config' / 'nav.yaml'}\n" +
-                       ("" if on else "sampler: {turn_keeps_side: false, blocked_wins_depth_m: .inf, "
-                                      "back_off_check_m: 0.0}\nmap: {priors_off_own_floor: false}\n"))
-        runs[on] = NavRun(NavRunSpec(random_corridor(4), seed=3, time_limit_s=150.0, nav_config=str(cfg),
+        cfg = nav_config_over(f"keep_{on}.yaml",
+                              "" if on else "sampler: {turn_keeps_side: false, blocked_wins_depth_m: .inf, "
+                                            "back_off_check_m: 0.0}\nmap: {priors_off_own_floor: false}\n")
+        runs[on] = NavRun(NavRunSpec(random_corridor(4), seed=3, time_limit_s=150.0, nav_config=cfg,
                                      keep_frames=False)).run()
     turns = lambda run: [r.reason for r in run.replans if "turn in place (kappa" in r.reason]
     off, on = runs[False], runs[True]

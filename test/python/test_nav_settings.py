@@ -3,7 +3,6 @@ shipped configs (config/nav*.yaml) carry the settings the experiments measured: 
 measured and left off, and that the planned arcs are ones the follower can drive."""
 import pytest
 
-from snake_autonomy.paths import config_path
 from snake_autonomy.planning.rectilinear.config import NavConfig, NavConfigError, nav_config_path
 from snake_autonomy.planning.rectilinear.obstacle_map import MapParams
 
@@ -30,30 +29,27 @@ def test_boolean_keys_take_true_or_false_only(tmp_path):
     assert cfg.follower.back_off is True and cfg.sampler.body_model is False
 
 
-def test_nav_config_refuses_a_stride_beyond_the_block(tmp_path, root):
+def test_nav_config_refuses_a_stride_beyond_the_block(root, nav_config_over):
     assert NavConfig.from_yaml(root / "config" / "nav.yaml").classifier.stride_px == 20
-    bad = tmp_path / "nav.yaml"
-    bad.write_text(f"base: {root / 'config' / 'nav.yaml'}\nclassifier: {{stride_px: 60}}\n")
+    bad = nav_config_over("nav.yaml", "classifier: {stride_px: 60}\n")
     with pytest.raises(NavConfigError, match=r"classifier.stride_px: must be in \(0, block_px = 40\], got 60"):
         NavConfig.from_yaml(bad)
 
 
-def test_the_ground_margin_key_is_checked_and_zero_in_nav_yaml(tmp_path):
+def test_the_ground_margin_key_is_checked_and_zero_in_nav_yaml(nav_config_over):
     assert NavConfig.from_yaml().classifier.ground_margin == 0.0           # the committed: the SVM's class
-    f = tmp_path / "nav.yaml"
-    f.write_text(f"base: {config_path('nav.yaml')}\nclassifier:\n  ground_margin: .nan\n")
+    f = nav_config_over("nav.yaml", "classifier:\n  ground_margin: .nan\n")
     with pytest.raises(NavConfigError, match="ground_margin: must be finite, got nan"):
         NavConfig.from_yaml(f)
-    f.write_text(f"base: {config_path('nav.yaml')}\nclassifier:\n  ground_margin: 0.25\n")
+    f = nav_config_over("nav.yaml", "classifier:\n  ground_margin: 0.25\n")
     assert NavConfig.from_yaml(f).classifier.ground_margin == 0.25
 
 
-def test_the_ground_fraction_key_is_checked_and_half_in_nav_yaml(tmp_path):
-    f = tmp_path / "nav.yaml"
-    f.write_text(f"base: {config_path('nav.yaml')}\nclassifier:\n  ground_fraction: 0.0\n")
+def test_the_ground_fraction_key_is_checked_and_half_in_nav_yaml(nav_config_over):
+    f = nav_config_over("nav.yaml", "classifier:\n  ground_fraction: 0.0\n")
     with pytest.raises(NavConfigError, match=r"ground_fraction: must be in \(0, 1\], got 0.0"):
         NavConfig.from_yaml(f)
-    f.write_text(f"base: {config_path('nav.yaml')}\nclassifier:\n  ground_fraction: 1.0\n")
+    f = nav_config_over("nav.yaml", "classifier:\n  ground_fraction: 1.0\n")
     assert NavConfig.from_yaml(f).classifier.ground_fraction == 1.0
     assert NavConfig.from_yaml().classifier.ground_fraction == 0.5        # committed: half the block
 
