@@ -8,8 +8,9 @@ from snake_autonomy._core import dynamixel as dx
 from snake_autonomy.sim.mock_servo_bus import CRC_ERROR
 
 IDS = list(range(1, 12))
-I = dx.instruction
-INSTRUCTIONS = [I.PING, I.READ, I.WRITE, I.REBOOT, I.SYNC_READ, I.SYNC_WRITE, I.FAST_SYNC_READ, I.STATUS]
+INST = dx.instruction
+INSTRUCTIONS = [INST.PING, INST.READ, INST.WRITE, INST.REBOOT, INST.SYNC_READ, INST.SYNC_WRITE, INST.FAST_SYNC_READ,
+                INST.STATUS]
 
 
 def u16(v: int) -> bytes:
@@ -22,7 +23,7 @@ def statuses(reply: bytes) -> list:
     while reply:
         st, consumed, start, pid, inst, params = dx.parse_packet(reply)
         assert st == dx.ParseStatus.OK and start == 0, f"{st} in reply {reply[:40].hex(' ')}"
-        assert inst == I.STATUS and len(params) >= 1, f"not a status packet: {reply[:40].hex(' ')}"
+        assert inst == INST.STATUS and len(params) >= 1, f"not a status packet: {reply[:40].hex(' ')}"
         out.append((pid, params[0], params[1:]))
         reply = reply[consumed:]
     return out
@@ -31,26 +32,26 @@ def statuses(reply: bytes) -> list:
 def answers_ping(mock, servo_id=3) -> bool:
     """The PING is answered last; before it may come the CRC error of a damaged packet whose end
     the mock could only judge when the PING's first bytes arrived."""
-    replies = [(p, e) for p, e, _ in statuses(mock.handle(dx.encode_packet(servo_id, I.PING)))]
+    replies = [(p, e) for p, e, _ in statuses(mock.handle(dx.encode_packet(servo_id, INST.PING)))]
     return replies[-1:] == [(servo_id, 0)] and all(e == CRC_ERROR for _, e in replies[:-1])
 
 
 def legal_packet(rng: random.Random) -> bytes:
     inst = rng.choice(INSTRUCTIONS + [rng.randrange(256)])
     pid = rng.choice(IDS + IDS + [dx.BROADCAST_ID, dx.BROADCAST_ID, 0, 200])
-    if inst in (I.SYNC_READ, I.SYNC_WRITE, I.FAST_SYNC_READ) and rng.random() < 0.9:
+    if inst in (INST.SYNC_READ, INST.SYNC_WRITE, INST.FAST_SYNC_READ) and rng.random() < 0.9:
         pid = dx.BROADCAST_ID  # as they are meant to be sent
     address = rng.choice([rng.randrange(0, 150), rng.randrange(0, 1100), rng.randrange(65536)])
     length = rng.choice([0, 1, 2, 4, 10, rng.randrange(0, 300), rng.randrange(65536)])
     ids = bytes(rng.sample(IDS, rng.randint(1, 11)) if rng.random() < 0.8 else
                 [rng.randrange(256) for _ in range(rng.randint(0, 20))])
-    if inst == I.READ:
+    if inst == INST.READ:
         params = u16(address) + u16(length)
-    elif inst == I.WRITE:
+    elif inst == INST.WRITE:
         params = u16(address) + bytes(rng.randrange(256) for _ in range(rng.choice([0, 1, 2, 4, rng.randrange(40)])))
-    elif inst in (I.SYNC_READ, I.FAST_SYNC_READ):
+    elif inst in (INST.SYNC_READ, INST.FAST_SYNC_READ):
         params = u16(address) + u16(length) + ids
-    elif inst == I.SYNC_WRITE:
+    elif inst == INST.SYNC_WRITE:
         length = rng.choice([1, 2, 4, rng.randrange(0, 12)])
         params = u16(address) + u16(length) + b"".join(bytes([i]) + bytes(rng.randrange(256) for _ in range(length))
                                                        for i in ids)
@@ -114,7 +115,7 @@ def run(mock, n_inputs: int, seed: int, ping_every: int = 10) -> dict:
                 # PING's first ones form a span with a valid CRC (e.g. a packet that lost its last
                 # byte, FF, completed by the PING's first FF: the same bytes as an intact packet
                 # followed by a PING that lost its first byte). A second PING must be answered.
-                st, consumed, *_ = dx.parse_packet(pending + dx.encode_packet(servo_id, I.PING))
+                st, consumed, *_ = dx.parse_packet(pending + dx.encode_packet(servo_id, INST.PING))
                 assert st == dx.ParseStatus.OK and consumed > len(pending), \
                     f"input {k} ({data[:40].hex(' ')}) left the mock deaf"
                 collisions += 1

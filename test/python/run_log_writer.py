@@ -33,7 +33,7 @@ def log_forever():
     t = 100.0
     index = 0
     for k in range(10_000):
-        for i in range(50):
+        for _ in range(50):
             t += 0.02
             x = min(1.0, 0.3 * (t - 100.0))
             msg = PoseStamped()

@@ -195,7 +195,8 @@ def test_calibration_yaml_is_what_the_tracker_reads(tmp_path):
     r = fit([synthetic_segment(d) for d in (6.0, 8.0)])
     path = write_yaml(tmp_path / "calibration.yaml", r, {"backend": "test"})
     overrides = read_overrides(path)
-    assert overrides == {"delta0_deg": round(r.delta_offset_deg, 1), "heading_offset_deg": round(r.heading_offset_deg, 1)}
+    assert overrides == {"delta0_deg": round(r.delta_offset_deg, 1),
+                         "heading_offset_deg": round(r.heading_offset_deg, 1)}
     d = load_defaults(overrides=overrides, overrides_source=str(path))
     assert d["tracker"]["delta0"] == pytest.approx(math.radians(overrides["delta0_deg"]))
     assert d["heading_offset_deg"] == overrides["heading_offset_deg"]

@@ -138,16 +138,18 @@ def status(index, reached, distance, yaw=0.1, stale=False, n=2, gait="sidewind")
 
 def test_the_result_carries_per_waypoint_metrics_and_the_feedback_a_decision():
     series = DecisionSeries()
-    for t, st in ((10.0, status(0, False, 1.0)), (11.0, status(1, True, 0.3)), (12.0, status(1, False, NAN, stale=True)),
-                  (13.0, status(1, False, 0.8)), (14.0, status(1, False, 0.6))):
+    for t, st in ((10.0, status(0, False, 1.0)), (11.0, status(1, True, 0.3)),
+                  (12.0, status(1, False, NAN, stale=True)), (13.0, status(1, False, 0.8)),
+                  (14.0, status(1, False, 0.6))):
         series.add(t, st)
     metrics = series.metrics([(1.0, 0.0, 0.0), (2.0, 0.0, math.pi / 2)], "aborted: test", t0=10.0)
-    result = fill_result(SimpleNamespace(), SimpleNamespace, "m", "aborted", "aborted: test", metrics, path_length_m=0.9,
-                         run_dir="/r")
+    result = fill_result(SimpleNamespace(), SimpleNamespace, "m", "aborted", "aborted: test", metrics,
+                         path_length_m=0.9, run_dir="/r")
     assert (result.mission, result.state, result.waypoints_reached, result.run_dir) == ("m", "aborted", 1, "/r")
     assert result.duration_s == pytest.approx(4.0)
     first, second = result.waypoints
-    assert first.reached and first.time_to_reach_s == pytest.approx(1.0) and first.final_distance_m == pytest.approx(0.3)
+    assert first.reached and first.time_to_reach_s == pytest.approx(1.0)
+    assert first.final_distance_m == pytest.approx(0.3)
     assert not second.reached and math.isnan(second.time_to_reach_s)
     assert second.final_distance_m == pytest.approx(0.6) and second.min_distance_m == pytest.approx(0.6)
     assert second.heading_deg == pytest.approx(90.0)

@@ -16,7 +16,7 @@ from snake_autonomy.sim.mock_servo_bus import (CRC_ERROR, DATA_LENGTH_ERROR, DAT
 from snake_autonomy.sim.servo_model import KinematicServoBackend
 
 import bus_fuzz_corpus
-from bus_fuzz_corpus import IDS, I, answers_ping, statuses, u16
+from bus_fuzz_corpus import IDS, INST, answers_ping, statuses, u16
 
 
 @pytest.fixture
@@ -27,22 +27,22 @@ def mock():
 # ---------------------------------------------------------------------------------------------
 # the packets that killed it, and the error statuses it owes
 def test_fast_sync_read_too_long_for_one_packet_answers_data_length_error(mock):
-    request = dx.encode_packet(dx.BROADCAST_ID, I.FAST_SYNC_READ, u16(0) + u16(200) + bytes(IDS))
+    request = dx.encode_packet(dx.BROADCAST_ID, INST.FAST_SYNC_READ, u16(0) + u16(200) + bytes(IDS))
     assert statuses(mock.handle(request)) == [(dx.BROADCAST_ID, DATA_LENGTH_ERROR, b"")]
     assert answers_ping(mock)
     # One that fits is answered in full: ERR ID DATA CRC per servo.
     length = 100
-    (pid, err, data), = statuses(mock.handle(dx.encode_packet(dx.BROADCAST_ID, I.FAST_SYNC_READ,
+    (pid, err, data), = statuses(mock.handle(dx.encode_packet(dx.BROADCAST_ID, INST.FAST_SYNC_READ,
                                                               u16(0) + u16(length) + bytes(IDS))))
     assert (pid, err, len(data)) == (dx.BROADCAST_ID, 0, len(IDS) * (length + 4) - 3)
 
 
 def test_reads_beyond_the_control_table_answer_data_range_error(mock):
     beyond = u16(1000) + u16(100)
-    assert statuses(mock.handle(dx.encode_packet(2, I.READ, beyond))) == [(2, DATA_RANGE_ERROR, b"")]
-    replies = statuses(mock.handle(dx.encode_packet(dx.BROADCAST_ID, I.SYNC_READ, beyond + bytes([1, 2]))))
+    assert statuses(mock.handle(dx.encode_packet(2, INST.READ, beyond))) == [(2, DATA_RANGE_ERROR, b"")]
+    replies = statuses(mock.handle(dx.encode_packet(dx.BROADCAST_ID, INST.SYNC_READ, beyond + bytes([1, 2]))))
     assert replies == [(1, DATA_RANGE_ERROR, b""), (2, DATA_RANGE_ERROR, b"")]
-    (pid, err, data), = statuses(mock.handle(dx.encode_packet(dx.BROADCAST_ID, I.FAST_SYNC_READ,
+    (pid, err, data), = statuses(mock.handle(dx.encode_packet(dx.BROADCAST_ID, INST.FAST_SYNC_READ,
                                                               u16(65535) + u16(4) + bytes([1, 2]))))
     assert pid == dx.BROADCAST_ID and err == DATA_RANGE_ERROR  # each block's error byte too
     assert (data[0], data[7], data[8]) == (1, DATA_RANGE_ERROR, 2)  # ID1 DATA(4) CRC(2) ERR2 ID2
@@ -50,22 +50,22 @@ def test_reads_beyond_the_control_table_answer_data_range_error(mock):
 
 
 def test_wrong_parameter_counts_answer_data_length_error(mock):
-    assert statuses(mock.handle(dx.encode_packet(2, I.READ, b"\x84\x00\x04")))[0][1] == DATA_LENGTH_ERROR
-    assert statuses(mock.handle(dx.encode_packet(2, I.READ, u16(132) + u16(0))))[0][1] == DATA_LENGTH_ERROR
-    assert statuses(mock.handle(dx.encode_packet(2, I.WRITE, b"\x40")))[0][1] == DATA_LENGTH_ERROR
+    assert statuses(mock.handle(dx.encode_packet(2, INST.READ, b"\x84\x00\x04")))[0][1] == DATA_LENGTH_ERROR
+    assert statuses(mock.handle(dx.encode_packet(2, INST.READ, u16(132) + u16(0))))[0][1] == DATA_LENGTH_ERROR
+    assert statuses(mock.handle(dx.encode_packet(2, INST.WRITE, b"\x40")))[0][1] == DATA_LENGTH_ERROR
     assert statuses(mock.handle(dx.encode_packet(2, 0x10)))[0][1] == INSTRUCTION_ERROR  # unknown instruction
-    assert mock.handle(dx.encode_packet(dx.BROADCAST_ID, I.SYNC_READ, b"\x84")) == b""  # broadcast: no reply
+    assert mock.handle(dx.encode_packet(dx.BROADCAST_ID, INST.SYNC_READ, b"\x84")) == b""  # broadcast: no reply
     assert answers_ping(mock)
 
 
 def test_bad_crc_to_one_servo_answers_crc_error_broadcast_stays_silent(mock):
-    bad = bytearray(dx.encode_packet(4, I.READ, u16(132) + u16(4)))
+    bad = bytearray(dx.encode_packet(4, INST.READ, u16(132) + u16(4)))
     bad[-1] ^= 0x55
     assert statuses(mock.handle(bytes(bad))) == [(4, CRC_ERROR, b"")]
-    bad_broadcast = bytearray(dx.encode_packet(dx.BROADCAST_ID, I.PING))
+    bad_broadcast = bytearray(dx.encode_packet(dx.BROADCAST_ID, INST.PING))
     bad_broadcast[-2] ^= 0x01
     assert mock.handle(bytes(bad_broadcast)) == b""
-    not_ours = bytearray(dx.encode_packet(99, I.PING))
+    not_ours = bytearray(dx.encode_packet(99, INST.PING))
     not_ours[-2] ^= 0x01
     assert mock.handle(bytes(not_ours)) == b""
     assert mock.stats()["bad_packets"] == 3
@@ -76,9 +76,9 @@ def test_guard_turns_an_unexpected_exception_into_a_counted_drop(mock, monkeypat
         raise ZeroDivisionError("injected")
 
     monkeypatch.setattr(mock.backend, "state", boom)  # the backend fails while the servos refresh for a READ
-    read = dx.encode_packet(5, I.READ, u16(132) + u16(4))
+    read = dx.encode_packet(5, INST.READ, u16(132) + u16(4))
     with caplog.at_level(logging.ERROR, logger="snake_autonomy.sim.mock_servo_bus"):
-        reply = mock.handle(read + dx.encode_packet(6, I.WRITE, u16(65) + b"\x01"))
+        reply = mock.handle(read + dx.encode_packet(6, INST.WRITE, u16(65) + b"\x01"))
     assert [pid for pid, _err, _data in statuses(reply)] == [5, 6]  # both answered (the READ with the last values)
     assert mock.stats()["dropped"] == 1
     assert any("ZeroDivisionError" in r.getMessage() and "before_read" in r.getMessage() for r in caplog.records)

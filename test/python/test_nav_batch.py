@@ -52,7 +52,8 @@ def test_nav_run_refuses_a_bad_world(tmp_path, capsys):
 def test_cobra_goes_round_two_cylinders_to_the_goal_without_touching_them():
     """The short version of the experiment (README): random world 0 (a cylinder on the
     straight line 1.0 m ahead, another 0.34 m to its left), depth, seed 0, through the driver:
-    reached in 175 s with no contact (183 s when first measured); all 5 seeds of the 20 x 5 experiment did. About 15-30 s wall."""
+    reached in 175 s with no contact (183 s when first measured); all 5 seeds of the 20 x 5 experiment
+    did. About 15-30 s wall."""
     from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
     from snake_autonomy.runs.nav_experiment import random_corridor
     result = NavRun(NavRunSpec(random_corridor(0), seed=0, time_limit_s=260.0, keep_frames=False)).run()

@@ -117,7 +117,8 @@ def test_nav_experiment_records_each_worlds_time_limit_and_refuses_bad_ones(tmp_
     for args, message in ((["--time-limit", "soon"], "--time-limit: expected seconds or auto, got 'soon'"),
                           (["--time-limit", "-5"], "--time-limit: must be a finite number of seconds > 0, got -5.0"),
                           (["--time-limit", "inf"], "--time-limit: must be a finite number of seconds > 0, got inf"),
-                          (["--time-limit", "60", "--time-factor", "2"], "--time-factor 2.0: only with --time-limit auto"),
+                          (["--time-limit", "60", "--time-factor", "2"],
+                           "--time-factor 2.0: only with --time-limit auto"),
                           (["--time-factor", "0"], "--time-factor: must be a finite number > 0, got 0.0"),
                           (["--time-factor", "nan"], "--time-factor: must be a finite number > 0, got nan")):
         assert cli_main(["nav", "experiment", "--worlds", "1", "--engine", "serial", "--no-progress",

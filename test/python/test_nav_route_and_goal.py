@@ -55,8 +55,6 @@ def arcs_near_the_goal(goal_disc_radius_m: float, free=WORLD_11_S1_FREE, goal=(0
     """The sampler's own five arcs with the free lengths COBRA's mono run of world 11 seed 1 had at
     162 s, the goal 0.32 m ahead-right (0.12 m from its 0.2 m disc), and a route whose cost to go is
     lower to the left (it went round a phantom on the disc's edge). -> the chosen curvature."""
-    from snake_autonomy.planning.rectilinear.sampler import Arc, TrajectorySampler
-    from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
     s = TrajectorySampler(PerceptionCollisionChecker(K, T_GC, 0.09),
                           dataclasses.replace(CFG.sampler, goal_disc=True), None)
     s._head_arcs = lambda ground: [Arc(c, poses, sm, free_m=free[float(c)]) for c, poses, sm in s._arcs]
@@ -85,8 +83,6 @@ def test_free_to_the_disc_edge_is_not_long_enough():
 def test_the_planner_passes_the_goal_radius_to_the_sampler(monkeypatch):
     """replan(goal_radius_m) reaches select (which honours it only with goal_disc)."""
     from snake_autonomy.planning.rectilinear import sampler as sampler_module
-    from snake_autonomy.planning.rectilinear.follower import RecedingHorizonFollower
-    from snake_autonomy.planning.rectilinear.planner import NavPlanner
     seen, select = [], sampler_module.TrajectorySampler.select
 
     def spy(self, *args, **kwargs):
@@ -102,8 +98,8 @@ def test_the_planner_passes_the_goal_radius_to_the_sampler(monkeypatch):
 def test_among_arcs_entering_the_disc_the_one_passing_nearest_the_centre():
     """The 12-link robot's depth run of world 9 seed 5 at 102 s, the goal 0.48 m ahead-right
     (0.435, -0.207) in the ground frame. The -3 and -1.5 /m arcs both enter the 0.2 m disc; preferring
-    an arc whose prefix ends in the disc took the -3 arc (its prefix ends in the disc), the robot turned less tightly than that,
-    missed the disc, and its tail touched a cylinder backing off. Now the arc passing nearest the
+    the arc whose prefix ends in the disc took the -3 arc, the robot turned less tightly than that,
+    missed the disc, and its tail touched a cylinder backing off. The arc passing nearest the
     centre (-1.5: 0.03 m, against 0.12 m) is taken, as without the disc."""
     free = {-3.0: 0.52, -1.5: 0.82, 0.0: 1.1, 1.5: 1.1, 3.0: 1.1}
     for radius in (0.0, 0.2):

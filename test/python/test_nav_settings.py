@@ -61,7 +61,8 @@ def test_the_steering_law_is_a_nav_config_key(root):
     assert ftl.gaits.forward == base.gaits.forward                   # merged key by key over nav.yaml
     assert ftl.sampler.body_clearance_m < base.sampler.body_clearance_m
     assert ftl.follower.kappa_max_per_m == ftl.sampler.max_curvature_per_m
-    with pytest.raises(NavConfigError, match=r"gaits.steering: expected one of uniform, follow_the_leader, got 'snake'"):
+    with pytest.raises(NavConfigError,
+                       match=r"gaits.steering: expected one of uniform, follow_the_leader, got 'snake'"):
         NavConfig.from_dict({"gaits": {"steering": "snake"}})
 
 

@@ -20,7 +20,7 @@ def guarded_replan(discs, swing_guard_m=0.2, swing_obstacle_depth_m=0.1):
     that view's ground frame); now it sees open floor. Returns (the replan, the follower)."""
     sp = dataclasses.replace(CFG.sampler, swing_guard_m=swing_guard_m,
                              swing_obstacle_depth_m=swing_obstacle_depth_m,
-                             reshape_keeps_centroid=False, swing_guard_tail_m=0.0)   # the front guard alone, about the middle
+                             reshape_keeps_centroid=False, swing_guard_tail_m=0.0)   # the front guard alone
     follower = RecedingHorizonFollower(CFG.follower)
     p = NavPlanner(K, 0.09, sp, follower, COBRA)
     p.replan(0.0, drawn_mask(discs=discs), T_GC, (-0.8, 0.0, 0.0))
@@ -80,7 +80,8 @@ def test_the_tail_guard_keeps_the_tails_swing_off_what_the_map_holds():
     while the head turned left (depth world 4 seed 7). A cylinder in the map 0.25-0.45 m to the left
     of COBRA's straight tail: bending left is bounded, bending right is not."""
     def bounds(tail_m, obstacle=(-1.45, 0.35, 0.1)):
-        sp = dataclasses.replace(CFG.sampler, swing_guard_tail_m=tail_m, reshape_keeps_centroid=False)   # about the middle
+        # reshaping about the middle
+        sp = dataclasses.replace(CFG.sampler, swing_guard_tail_m=tail_m, reshape_keeps_centroid=False)
         p = NavPlanner(K, 0.09, sp, RecedingHorizonFollower(CFG.follower), COBRA)
         p.obstacle_map = ObstacleMap(Point(obstacle[:2]).buffer(obstacle[2], 32))
         return p._swing_bounds(p._checker(T_GC, np.eye(4), sp.swing_obstacle_depth_m), drawn_mask())

@@ -18,7 +18,8 @@ def free_turn(free_by_curvature, turn_free_m, turning=1.0, sampler=None):
     """_free_turn on open floor (every reshaping shape free) with candidate arcs whose free
     lengths are given {curvature: free_m}; sampler: the sampler parameters (default: nav.yaml's with
     turn_keeps_side off, the other side tried when the turning side is not free)."""
-    sp = dataclasses.replace(sampler or dataclasses.replace(CFG.sampler, turn_keeps_side=False), turn_free_m=turn_free_m)
+    sp = dataclasses.replace(sampler or dataclasses.replace(CFG.sampler, turn_keeps_side=False),
+                             turn_free_m=turn_free_m)
     p = NavPlanner(K, 0.09, sp, RecedingHorizonFollower(CFG.follower), COBRA)
     ground = drawn_mask()
     checker = p._checker(T_GC, np.eye(4), sp.obstacle_depth_m)

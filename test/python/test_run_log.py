@@ -1,7 +1,6 @@
 """Run logging: the results folder from plain arrays, and runs that end badly (SIGKILL, SIGTERM)."""
 import json
 import math
-import os
 import signal
 import subprocess
 import sys
@@ -35,7 +34,8 @@ def test_metrics_from_plain_arrays_infer_the_reached_step():
     w0, w1 = m["waypoints"]
     assert (w0["reached"], w0["time_to_reach_s"], w0["final_distance_m"]) == (True, 2.0, 0.3)
     assert w0["final_yaw_error_deg"] == pytest.approx(math.degrees(0.05))
-    assert (w1["reached"], w1["time_to_reach_s"], w1["final_distance_m"], w1["min_distance_m"]) == (False, None, 0.55, 0.55)
+    assert (w1["reached"], w1["time_to_reach_s"], w1["final_distance_m"], w1["min_distance_m"]) == \
+        (False, None, 0.55, 0.55)
     assert (m["waypoints_reached"], m["all_reached"], m["stale_decisions"], m["path_length_m"]) == (1, False, 1, 5.0)
     assert m["outcome"] == "aborted"
 

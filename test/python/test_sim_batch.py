@@ -129,7 +129,8 @@ def test_load_driver_config_takes_the_controllers_keys_of_driver_yaml(tmp_path):
     f.write_text("rate_hz: 250.0\nbase_frame: b\nreturn_delay_time_us: -1\nmax_failed_cycles: 4\n"
                  "fault_action: torque_off\nrequire_pose: false\n")
     cfg = load_driver_config(str(f))
-    assert (cfg.return_delay_time_us, cfg.max_failed_cycles, cfg.fault_action, cfg.require_pose) == (-1, 4, "torque_off", False)
+    assert (cfg.return_delay_time_us, cfg.max_failed_cycles, cfg.fault_action, cfg.require_pose) == \
+        (-1, 4, "torque_off", False)
     f.write_text("return_delay_time_us: 3\n")
     with pytest.raises(ValueError, match="return_delay_time_us: 3"):
         load_driver_config(str(f))

@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from snake_autonomy.control import TrackerParams, WaypointTracker
+from snake_autonomy.control import WaypointTracker
 
 DEG = math.pi / 180.0
 FAR = 1.0     # m, > d_th
