@@ -2,7 +2,8 @@
 
 The declared dependencies are checked against what the code imports: each third-party module that
 python/, scripts/, test/ or bench/ imports has a rosdep key in package.xml or a pin in
-requirements.txt (PyPI-only), and each pin is imported somewhere (or listed in PLANNED).
+requirements.txt (PyPI-only), and each pin is imported somewhere (or listed in PLANNED), or is a
+command-line tool a script runs (TOOLS).
 """
 import ast
 import os
@@ -39,6 +40,8 @@ THIRD_PARTY = {
 }
 # Pinned before their first import, for work under way (none now: shapely is imported by planning/fbsr).
 PLANNED = set()
+# Pinned command-line tools, run rather than imported: each counts as used when the script named runs it.
+TOOLS = {"ruff": "scripts/check_style", "clang-format": "scripts/check_style"}
 
 
 def _imports():
@@ -107,6 +110,9 @@ def test_every_requirement_is_imported_and_pinned():
     by_name = {name: module for module, (kind, name) in THIRD_PARTY.items()}
     for name, version in _requirements().items():
         assert version, f"requirements.txt: {name} is not pinned (name==version)"
+        if name in TOOLS:
+            assert name in (ROOT / TOOLS[name]).read_text(), f"requirements.txt: {name} is not run by {TOOLS[name]}"
+            continue
         module = by_name.get(name, name)
         assert module in imported or module in PLANNED, f"requirements.txt: {name} is never imported"
 
