@@ -47,18 +47,18 @@ int main(int argc, char** argv) {
   sc.device = port;
   sc.timing.latency_s = 0.002;  // a pty has no USB latency; the Python mock answers in about 1 ms
   dynamixel::SerialBus bus(sc);
-  core::DriverConfig cfg;
+  driver::DriverConfig cfg;
   cfg.require_pose = false;
   cfg.command_timeout_s = 0.0;  // one command for the whole run: no command lifetime
   cfg.fast_sync_read = fast;
   cfg.status_every_cycles = static_cast<int>(rate_hz);  // voltage/temperature once a second, as on the robot
-  core::DriverController ctl(model, gaits, table, bus, cfg);
+  driver::DriverController ctl(model, gaits, table, bus, cfg);
   ctl.start(0.0);
-  core::GaitCommandRequest cmd;
+  driver::GaitCommandRequest cmd;
   cmd.gait = "sidewind";
   if (!ctl.command_gait(cmd).empty()) return 1;
 
-  core::LoopTimer timer(core::LoopConfig{rate_hz});
+  driver::LoopTimer timer(driver::LoopConfig{rate_hz});
   const auto n = static_cast<std::size_t>(rate_hz * seconds);
   std::vector<double> work_ms, cpu_us, period_ms;
   work_ms.reserve(n);
@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
       "state=%s\n",
       port.c_str(), rate_hz, fast ? "fast_sync_read" : "sync_read", n, (n - 1) / elapsed,
       static_cast<unsigned long>(st.overruns), static_cast<unsigned long>(st.skipped_deadlines),
-      static_cast<unsigned long>(failed), core::to_string(ctl.state()));
+      static_cast<unsigned long>(failed), driver::to_string(ctl.state()));
   std::printf("  period_ms mean=%.3f std=%.3f p99=%.3f max=%.3f\n", mean_p, std::sqrt(sq / period_ms.size()),
               pct(period_ms, 0.99), pct(period_ms, 1.0));
   std::printf("  wall_per_cycle_ms median=%.3f p99=%.3f max=%.3f (bus round trips to the Python mock included)\n",

@@ -23,13 +23,13 @@ int main(int argc, char** argv) {
   std::vector<std::uint8_t> ids;
   for (int id : model.servos.ids) ids.push_back(static_cast<std::uint8_t>(id));
   dynamixel::FakeServoBus bus(table, ids);
-  core::DriverConfig cfg;
+  driver::DriverConfig cfg;
   cfg.require_pose = false;
   cfg.command_timeout_s = 0.0;     // one command for the whole run
   cfg.status_every_cycles = 100;   // voltage/temperature once a second at 100 Hz
-  core::DriverController ctl(model, gaits, table, bus, cfg);
+  driver::DriverController ctl(model, gaits, table, bus, cfg);
   ctl.start(0.0);
-  core::GaitCommandRequest cmd;
+  driver::GaitCommandRequest cmd;
   cmd.gait = "sidewind";
   if (!ctl.command_gait(cmd).empty()) return 1;
   double t = 0.0;
@@ -42,6 +42,7 @@ int main(int argc, char** argv) {
   }
   std::sort(us.begin(), us.end());
   std::printf("driver_update cycles=%d median_us=%.2f p10_us=%.2f p99_us=%.2f max_us=%.2f state=%s\n", n,
-              us[us.size() / 2], us[us.size() / 10], us[us.size() * 99 / 100], us.back(), core::to_string(ctl.state()));
-  return ctl.state() == core::DriverState::kRunning ? 0 : 1;
+              us[us.size() / 2], us[us.size() / 10], us[us.size() * 99 / 100], us.back(),
+              driver::to_string(ctl.state()));
+  return ctl.state() == driver::DriverState::kRunning ? 0 : 1;
 }

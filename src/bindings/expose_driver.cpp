@@ -18,6 +18,7 @@
 namespace snake_autonomy::bindings {
 
 using namespace snake_autonomy::core;
+using namespace snake_autonomy::driver;
 namespace dx = snake_autonomy::dynamixel;
 
 namespace {

@@ -8,7 +8,7 @@
 
 #include "snake_autonomy/core/config_reader.hpp"
 
-namespace snake_autonomy::core {
+namespace snake_autonomy::driver {
 
 const char* to_string(SafeAction action) noexcept {
   switch (action) {
@@ -102,10 +102,10 @@ const std::vector<std::string>& DriverConfig::keys() {
 }
 
 void DriverConfig::apply_yaml(const YAML::Node& doc, std::vector<std::string>* errors, const std::string& prefix) {
-  ConfigReader r(errors);
+  core::ConfigReader r(errors);
   if (!doc.IsMap()) {
     if (doc && !doc.IsNull())
-      r.error(prefix + ": expected a mapping of driver keys, got '" + ConfigReader::dump(doc) + "'");
+      r.error(prefix + ": expected a mapping of driver keys, got '" + core::ConfigReader::dump(doc) + "'");
     return;
   }
   for_each_field(*this, [&](const char* key, auto& field) {
@@ -127,15 +127,15 @@ DriverConfig DriverConfig::from_yaml_string(const std::string& text, const std::
   DriverConfig c;
   std::vector<std::string> errors;
   const YAML::Node doc =
-      text.find_first_not_of(" \t\r\n") == std::string::npos ? YAML::Node() : load_config_yaml(text, source);
+      text.find_first_not_of(" \t\r\n") == std::string::npos ? YAML::Node() : core::load_config_yaml(text, source);
   c.apply_yaml(doc, &errors);
   for (const auto& e : c.validate()) errors.push_back(e);
-  throw_if_errors(errors, source, "driver configuration");
+  core::throw_if_errors(errors, source, "driver configuration");
   return c;
 }
 
 DriverConfig DriverConfig::from_yaml_file(const std::string& path) {
-  return from_yaml_string(read_config_file(path, "driver configuration"), path);
+  return from_yaml_string(core::read_config_file(path, "driver configuration"), path);
 }
 
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver

@@ -3,12 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
-namespace snake_autonomy::core {
+namespace snake_autonomy::driver {
 
 namespace {
 
 // Every problem of the configuration, the robot model and the control table, or the config itself.
-const DriverConfig& checked(const RobotModel& model, const dynamixel::ControlTable& table, const DriverConfig& config) {
+const DriverConfig& checked(const core::RobotModel& model, const dynamixel::ControlTable& table,
+                            const DriverConfig& config) {
   std::vector<std::string> errors = config.validate();
   for (const auto& e : model.validate()) errors.push_back("robot: " + e);
   for (const auto& e : table.validate()) errors.push_back("control table: " + e);
@@ -18,7 +19,7 @@ const DriverConfig& checked(const RobotModel& model, const dynamixel::ControlTab
   if (!errors.empty()) {
     std::string what = "driver configuration:";
     for (const auto& e : errors) what += "\n  " + e;
-    throw ConfigError(what);
+    throw core::ConfigError(what);
   }
   return config;
 }
@@ -26,7 +27,7 @@ const DriverConfig& checked(const RobotModel& model, const dynamixel::ControlTab
 // The trajectory source's limits: the joints' (refined to the goal clamp once the servos are known),
 // a tolerance of one servo tick (the clamp is the joint limits rounded inwards to whole ticks: a point
 // on a joint limit is within a tick of it, and the clamp applies), the slew limit, the capacity.
-driver::TrajectoryLimits trajectory_limits(const RobotModel& model, const dynamixel::ControlTable& table,
+driver::TrajectoryLimits trajectory_limits(const core::RobotModel& model, const dynamixel::ControlTable& table,
                                            const DriverConfig& config) {
   driver::TrajectoryLimits l;
   l.lower_rad = Eigen::VectorXd::Map(model.joint_lower_rad.data(), model.num_joints);
@@ -40,7 +41,7 @@ driver::TrajectoryLimits trajectory_limits(const RobotModel& model, const dynami
 
 }  // namespace
 
-DriverController::DriverController(const RobotModel& model, const GaitLibrary& gaits,
+DriverController::DriverController(const core::RobotModel& model, const core::GaitLibrary& gaits,
                                    const dynamixel::ControlTable& table, dynamixel::ServoBus& bus,
                                    const DriverConfig& config)
     : model_(model),
@@ -61,7 +62,7 @@ void DriverController::start(double t_s) {
   if (!report.problems.empty()) {
     std::string what = "servo bus at start:";
     for (const auto& p : report.problems) what += "\n  " + p;
-    throw ConfigError(what);
+    throw core::ConfigError(what);
   }
   start_notes_ = std::move(report.notes);
   trajectory_.set_joint_limits(chain_.lower_rad(), chain_.upper_rad());  // with the servos' own limits
@@ -223,4 +224,4 @@ void DriverController::take_trajectory(double t_s) noexcept {
   supervisor_.command(trajectory_command_, t_s, pose_fresh_, &was_active);
 }
 
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver

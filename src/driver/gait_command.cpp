@@ -3,7 +3,7 @@
 #include <cmath>
 #include <sstream>
 
-namespace snake_autonomy::core {
+namespace snake_autonomy::driver {
 namespace {
 
 // Bound of |phase| in a command (rad): accepted phases are wrapped to (−π, π]; beyond this a value
@@ -51,20 +51,20 @@ void assign(const std::vector<double>& v, Eigen::VectorXd& out) {
 
 }  // namespace
 
-GaitCommandResolver::GaitCommandResolver(const RobotModel& model, const GaitLibrary& gaits, double max_frequency_hz,
-                                         const std::string& initial_gait)
+GaitCommandResolver::GaitCommandResolver(const core::RobotModel& model, const core::GaitLibrary& gaits,
+                                         double max_frequency_hz, const std::string& initial_gait)
     : model_(model),
       gaits_(gaits),
       steering_(model),
       curvature_(model),
       max_omega_rad_s_(2.0 * M_PI * max_frequency_hz) {
   if (!gaits_.contains(initial_gait))
-    throw ConfigError("initial gait '" + initial_gait + "' is not in the gait library");
+    throw core::ConfigError("initial gait '" + initial_gait + "' is not in the gait library");
   name_ = base_name_ = initial_gait;
   nominal_ = gaits_.parameters(initial_gait, model_);
 }
 
-std::string GaitCommandResolver::resolve(const GaitCommandRequest& command, GaitParameters& out) {
+std::string GaitCommandResolver::resolve(const GaitCommandRequest& command, core::GaitParameters& out) {
   const int n = model_.num_joints;
   std::vector<std::string> errors;
   const bool named = !command.gait.empty();
@@ -108,7 +108,7 @@ std::string GaitCommandResolver::resolve(const GaitCommandRequest& command, Gait
       errors.push_back(s.str());
     }
     const std::string& base = named ? command.gait : base_name_;
-    if (gaits_.contains(base) && gaits_.spec(base).steering != SteeringLaw::kCurvature)
+    if (gaits_.contains(base) && gaits_.spec(base).steering != core::SteeringLaw::kCurvature)
       errors.push_back("kappa: gait '" + base +
                        "' does not steer by curvature (steering: " + to_string(gaits_.spec(base).steering) + ")");
   }
@@ -118,13 +118,13 @@ std::string GaitCommandResolver::resolve(const GaitCommandRequest& command, Gait
     return what;
   }
 
-  GaitParameters nominal = named ? gaits_.parameters(command.gait, model_) : nominal_;
+  core::GaitParameters nominal = named ? gaits_.parameters(command.gait, model_) : nominal_;
   assign(command.amplitude, nominal.amplitude);
   assign(command.omega, nominal.omega);
   assign(command.phase, nominal.phase);
   if (!command.phase.empty()) nominal.phase = nominal.phase.unaryExpr([](double a) { return wrap_pi(a); });
   assign(command.bias, nominal.bias);
-  GaitParameters result = nominal;
+  core::GaitParameters result = nominal;
   if (command.steer && !steering_.modify_amplitudes(nominal.amplitude, command.delta_rad, result.amplitude))
     return "steer: steering refused the amplitudes";  // unreachable after the checks above
   if (command.curve && !curvature_.modify_biases(nominal.bias, command.kappa_per_m, result.bias))
@@ -140,4 +140,4 @@ std::string GaitCommandResolver::resolve(const GaitCommandRequest& command, Gait
   return {};
 }
 
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver

@@ -4,7 +4,7 @@
 
 namespace snake_autonomy::driver {
 
-GaitSource::GaitSource(const core::RobotModel& model, const core::GaitLibrary& gaits, const core::DriverConfig& config)
+GaitSource::GaitSource(const core::RobotModel& model, const core::GaitLibrary& gaits, const DriverConfig& config)
     : cpg_(model),
       zeros_(Eigen::VectorXd::Zero(model.num_joints)),
       require_pose_(config.require_pose),
@@ -17,7 +17,7 @@ GaitSource::GaitSource(const core::RobotModel& model, const core::GaitLibrary& g
 // ---------------------------------------------------------------------------------------------
 // Callers' threads
 
-std::string GaitSource::command(const core::GaitCommandRequest& command, const char* blocked) {
+std::string GaitSource::command(const GaitCommandRequest& command, const char* blocked) {
   std::lock_guard<std::mutex> lock(resolver_mutex_);
   std::string why;
   if (blocked && blocked[0]) {
@@ -89,9 +89,9 @@ bool GaitSource::activate(double /*t_s*/, const JointStateView& state, const Eig
 SourceStatus GaitSource::update(double t_s, double dt_s, const JointStateView& state,
                                 Eigen::Ref<Eigen::VectorXd> goal_rad) noexcept {
   SourceStatus status;
-  if (core::command_expired(t_s, last_command_t_s_, command_timeout_s_)) {
+  if (command_expired(t_s, last_command_t_s_, command_timeout_s_)) {
     status.code = SourceStatus::kHold;
-    status.hold_reason = core::HoldReason::kCommandTimeout;
+    status.hold_reason = HoldReason::kCommandTimeout;
     return status;
   }
   // Stale base pose: hold locomotion (amplitudes to zero), resume when fresh poses return.

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <sstream>
 
-#include "snake_autonomy/core/robot_model.hpp"  // ConfigError
+#include "snake_autonomy/core/robot_model.hpp"  // core::ConfigError
 
-namespace snake_autonomy::core {
+namespace snake_autonomy::driver {
 
 std::vector<std::string> LoopConfig::validate() const {
   std::vector<std::string> errors;
@@ -51,7 +51,7 @@ LoopTimer::LoopTimer(const LoopConfig& config) {
   if (!errors.empty()) {
     std::string what = "loop configuration:";
     for (const auto& e : errors) what += "\n  " + e;
-    throw ConfigError(what);
+    throw core::ConfigError(what);
   }
   period_s_ = 1.0 / config.rate_hz;
   period_ = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(period_s_));
@@ -104,4 +104,4 @@ void LoopTimer::finish(Clock::time_point now) noexcept {
   deadline_ = next;
 }
 
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver

@@ -7,7 +7,7 @@
 #include <cerrno>
 #include <cstring>
 
-namespace snake_autonomy::core {
+namespace snake_autonomy::driver {
 
 namespace {
 
@@ -83,4 +83,4 @@ std::string RealtimeReport::warning() const {
   return out;
 }
 
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-namespace snake_autonomy::core {
+namespace snake_autonomy::driver {
 
 const char* to_string(HoldReason reason) noexcept {
   switch (reason) {
@@ -62,4 +62,4 @@ void describe_pose_refusal(PoseRefusal refusal, double t_s, const Eigen::Vector3
   }
 }
 
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver

@@ -33,7 +33,7 @@ std::vector<std::string> ServoChain::check_table(const dxl::ControlTable& table)
 }
 
 ServoChain::ServoChain(const core::RobotModel& model, const dxl::ControlTable& table, dxl::ServoBus& bus,
-                       const core::DriverConfig& config)
+                       const DriverConfig& config)
     : bus_(bus),
       n_(model.num_joints),
       joint_lower_rad_(model.joint_lower_rad),

@@ -10,8 +10,6 @@
 namespace snake_autonomy::driver {
 
 namespace dxl = snake_autonomy::dynamixel;
-using core::HoldReason;
-using core::SafeAction;
 
 namespace {
 double deg(double rad) { return rad * 180.0 / M_PI; }
@@ -37,7 +35,7 @@ const char* to_string(DriverRequest request) noexcept {
   return "?";
 }
 
-DriverSupervisor::DriverSupervisor(ServoChain& chain, const core::DriverConfig& config)
+DriverSupervisor::DriverSupervisor(ServoChain& chain, const DriverConfig& config)
     : chain_(chain),
       max_failed_cycles_(config.max_failed_cycles),
       fault_action_(config.fault_action),

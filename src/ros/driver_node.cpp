@@ -1,12 +1,12 @@
 // driver_node: the 100 Hz driver of the snake. Wiring only: parameters, topics, services, TF,
-// diagnostics and the loop thread around core::DriverController (the ROS-free step function).
+// diagnostics and the loop thread around driver::DriverController (the ROS-free step function).
 //
 // Threads:
 //  - the loop thread: LoopTimer (absolute deadlines on the steady clock, overruns counted) ->
 //    controller.update() -> snapshot. It never allocates, never logs and never waits on a lock: it
 //    hands the snapshot over with try_lock (a missed handover is simply the next cycle's).
 //    Real-time mode (~realtime_priority > 0): before its first cycle the loop thread asks for SCHED_FIFO
-//    at that priority and locks the process's memory (core::enter_realtime); what it got is logged
+//    at that priority and locks the process's memory (driver::enter_realtime); what it got is logged
 //    (a warning naming what was refused, e.g. EPERM, and the loop carries on with normal scheduling) and
 //    reported in the "loop" diagnostics (realtime, memory_locked).
 //  - the publisher thread: takes each new snapshot and publishes joint_states, TF, com_pose,
@@ -54,6 +54,7 @@
 #include "trajectory_topics.hpp"
 
 namespace core = snake_autonomy::core;
+namespace driver = snake_autonomy::driver;
 namespace dxl = snake_autonomy::dynamixel;
 using snake_autonomy::ros_driver::DriverNodeConfig;
 using Clock = std::chrono::steady_clock;
@@ -62,8 +63,8 @@ namespace {
 
 // What the loop hands to the publisher each cycle.
 struct LoopSnapshot {
-  core::DriverSnapshot driver;
-  core::LoopStats loop;
+  driver::DriverSnapshot driver;
+  driver::LoopStats loop;
   Clock::time_point taken{};
   std::uint64_t seq = 0;
 };
@@ -97,7 +98,7 @@ std::string fixed(double v, int digits) {
 class DriverNode {
  public:
   DriverNode(ros::NodeHandle& nh, const DriverNodeConfig& config, const core::RobotModel& model, dxl::SerialBus& bus,
-             core::DriverController& controller)
+             driver::DriverController& controller)
       : nh_(nh), config_(config), model_(model), bus_(bus), controller_(controller), epoch_(Clock::now()) {
     for (auto* s : {&work_, &shared_, &published_}) s->driver = controller_.make_snapshot();
     joint_states_.name = model_.joint_names();
@@ -141,7 +142,7 @@ class DriverNode {
     if (publisher_thread_.joinable()) publisher_thread_.join();
     const bool ok = controller_.shutdown();
     std::fprintf(stderr, "[driver] shutdown: servos left in '%s'%s\n",
-                 core::to_string(config_.controller.shutdown_action), ok ? "" : " (the bus did not take the write)");
+                 driver::to_string(config_.controller.shutdown_action), ok ? "" : " (the bus did not take the write)");
   }
 
  private:
@@ -149,9 +150,9 @@ class DriverNode {
 
   // ---- the loop thread ----
   void loop() {
-    realtime_ = core::enter_realtime(config_.realtime_priority);
+    realtime_ = driver::enter_realtime(config_.realtime_priority);
     realtime_known_.store(true, std::memory_order_release);
-    core::LoopTimer timer(config_.loop);
+    driver::LoopTimer timer(config_.loop);
     Clock::time_point prev = Clock::now();
     timer.start(prev);
     while (running_.load(std::memory_order_relaxed)) {
@@ -219,7 +220,7 @@ class DriverNode {
   }
 
   void publish(const ros::Time& stamp) {
-    const core::DriverSnapshot& s = published_.driver;
+    const driver::DriverSnapshot& s = published_.driver;
     joint_states_.header.stamp = stamp;
     ++joint_states_.header.seq;
     for (int j = 0; j < model_.num_joints; ++j) {
@@ -264,18 +265,18 @@ class DriverNode {
   }
 
   void log_changes() {
-    const core::DriverSnapshot& s = published_.driver;
+    const driver::DriverSnapshot& s = published_.driver;
     if (s.state != logged_state_ || std::strcmp(s.fault_reason.data(), logged_fault_.c_str()) != 0) {
-      if (s.state == core::DriverState::kFault) {
+      if (s.state == driver::DriverState::kFault) {
         // The core's reasons name no ROS interface: the recovery services are named here.
         ROS_ERROR(
             "driver: locomotion stopped (%s): %s [recover: driver/reboot_servo for a hardware error, then "
             "driver/enable_torque]",
-            core::to_string(config_.controller.fault_action), s.fault_reason.data());
-      } else if (s.hold_reason == core::HoldReason::kCommandTimeout) {
+            driver::to_string(config_.controller.fault_action), s.fault_reason.data());
+      } else if (s.hold_reason == driver::HoldReason::kCommandTimeout) {
         ROS_WARN("driver: %s", command_timeout_text().c_str());
       } else {
-        ROS_INFO("driver: %s", core::to_string(s.state));
+        ROS_INFO("driver: %s", driver::to_string(s.state));
       }
       logged_state_ = s.state;
       logged_fault_ = s.fault_reason.data();
@@ -329,7 +330,7 @@ class DriverNode {
 
   void diagnose_loop(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     using diagnostic_msgs::DiagnosticStatus;
-    const core::LoopStats& l = published_.loop;
+    const driver::LoopStats& l = published_.loop;
     const double rate = l.window_rate_hz();
     const bool rate_ok = std::abs(rate - config_.loop.rate_hz) <= 0.1 * config_.loop.rate_hz;
     const bool ok = l.window_overruns == 0 && rate_ok;
@@ -358,20 +359,20 @@ class DriverNode {
 
   void diagnose_locomotion(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     using diagnostic_msgs::DiagnosticStatus;
-    const core::DriverSnapshot& s = published_.driver;
-    if (s.state == core::DriverState::kFault) {
+    const driver::DriverSnapshot& s = published_.driver;
+    if (s.state == driver::DriverState::kFault) {
       stat.summary(DiagnosticStatus::ERROR, std::string("fault: ") + s.fault_reason.data());
-    } else if (s.state == core::DriverState::kStopped) {
+    } else if (s.state == driver::DriverState::kStopped) {
       stat.summary(DiagnosticStatus::WARN, "torque off");
-    } else if (s.hold_reason == core::HoldReason::kCommandTimeout) {
+    } else if (s.hold_reason == driver::HoldReason::kCommandTimeout) {
       stat.summary(DiagnosticStatus::WARN, command_timeout_text());
     } else if (s.locomotion_gated) {
       stat.summary(DiagnosticStatus::WARN,
                    s.pose_received ? "base pose stale: locomotion held" : "no base pose yet: locomotion held");
     } else {
-      stat.summary(DiagnosticStatus::OK, core::to_string(s.state));
+      stat.summary(DiagnosticStatus::OK, driver::to_string(s.state));
     }
-    stat.values = {kv("state", core::to_string(s.state)),
+    stat.values = {kv("state", driver::to_string(s.state)),
                    kv("gait", s.gait.data()),
                    kv("fault", s.fault_reason.data()),
                    kv("last_fault", s.last_fault.data()),
@@ -384,17 +385,17 @@ class DriverNode {
                    kv("last_refusal", controller_.last_refusal()),
                    kv("poses_refused", str(s.poses_refused)),
                    kv("last_pose_refusal", s.pose_refusal.data()),
-                   kv("hold_reason", core::to_string(s.hold_reason)),
+                   kv("hold_reason", driver::to_string(s.hold_reason)),
                    kv("command_age_s", fixed(s.command_age_s, 2)),
                    kv("command_timeout_s", fixed(config_.controller.command_timeout_s, 2)),
-                   kv("fault_action", core::to_string(config_.controller.fault_action)),
+                   kv("fault_action", driver::to_string(config_.controller.fault_action)),
                    kv("effort_unit", torque_constant_ > 0.0 ? "N*m (current x " + fixed(torque_constant_, 3) + " N*m/A)"
                                                             : "none (no torque constant in the control table)")};
   }
 
   void diagnose_bus(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     using diagnostic_msgs::DiagnosticStatus;
-    const core::DriverSnapshot& s = published_.driver;
+    const driver::DriverSnapshot& s = published_.driver;
     stat.hardware_id = config_.serial.device;
     stat.summary(
         s.consecutive_failed_cycles > 0 ? DiagnosticStatus::WARN : DiagnosticStatus::OK,
@@ -414,9 +415,9 @@ class DriverNode {
 
   void diagnose_servo(std::size_t j, diagnostic_updater::DiagnosticStatusWrapper& stat) {
     using diagnostic_msgs::DiagnosticStatus;
-    const core::DriverSnapshot& s = published_.driver;
+    const driver::DriverSnapshot& s = published_.driver;
     if (j >= s.servos.size()) return;
-    const core::ServoDiagnostics& d = s.servos[j];
+    const driver::ServoDiagnostics& d = s.servos[j];
     stat.hardware_id = "dynamixel " + str(model_.servos.ids[j]);
     const std::string bits = controller_.table().describe_hardware_error(d.hardware_error_bits);
     if (d.hardware_error) {
@@ -460,7 +461,7 @@ class DriverNode {
   }
 
   void on_gait_command(const snake_autonomy::GaitCommand::ConstPtr& msg) {
-    core::GaitCommandRequest c;
+    driver::GaitCommandRequest c;
     c.gait = msg->gait;
     c.amplitude = msg->amplitude;
     c.omega = msg->omega;
@@ -474,31 +475,31 @@ class DriverNode {
     if (why.empty()) {
       ROS_DEBUG("gait command accepted: %s", controller_.commanded_gait().c_str());
     } else {
-      const core::DriverState state = controller_.state();
-      const bool blocked = state == core::DriverState::kStopped || state == core::DriverState::kFault;
+      const driver::DriverState state = controller_.state();
+      const bool blocked = state == driver::DriverState::kStopped || state == driver::DriverState::kFault;
       ROS_WARN("gait command refused, the running gait is unchanged:\n%s%s", why.c_str(),
                blocked ? " (driver/enable_torque; see /diagnostics)" : "");
     }
   }
 
   bool on_enable_torque(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
-    return answer(req.data ? core::DriverRequest::kEnableTorque : core::DriverRequest::kDisableTorque, 0, res);
+    return answer(req.data ? driver::DriverRequest::kEnableTorque : driver::DriverRequest::kDisableTorque, 0, res);
   }
   bool on_hold(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-    return answer(core::DriverRequest::kHold, 0, res);
+    return answer(driver::DriverRequest::kHold, 0, res);
   }
   bool on_reboot(snake_autonomy::RebootServo::Request& req, snake_autonomy::RebootServo::Response& res) {
-    return answer(core::DriverRequest::kRebootServo, req.id, res);
+    return answer(driver::DriverRequest::kRebootServo, req.id, res);
   }
   template <typename Response>
-  bool answer(core::DriverRequest request, std::uint8_t id, Response& res) {
-    const core::RequestResult r = controller_.call(request, id, config_.service_timeout_s);
+  bool answer(driver::DriverRequest request, std::uint8_t id, Response& res) {
+    const driver::RequestResult r = controller_.call(request, id, config_.service_timeout_s);
     res.success = r.success;
     res.message = r.message;
     if (r.success) {
-      ROS_INFO("driver/%s: %s", core::to_string(request), r.message.c_str());
+      ROS_INFO("driver/%s: %s", driver::to_string(request), r.message.c_str());
     } else {
-      ROS_WARN("driver/%s refused: %s", core::to_string(request), r.message.c_str());
+      ROS_WARN("driver/%s refused: %s", driver::to_string(request), r.message.c_str());
     }
     return true;
   }
@@ -507,12 +508,12 @@ class DriverNode {
   const DriverNodeConfig& config_;
   const core::RobotModel& model_;
   dxl::SerialBus& bus_;
-  core::DriverController& controller_;
+  driver::DriverController& controller_;
   const Clock::time_point epoch_;
 
   std::atomic<bool> running_{false};
   std::atomic<bool> reset_window_{false};
-  core::RealtimeReport realtime_;           // written by the loop thread before realtime_known_
+  driver::RealtimeReport realtime_;           // written by the loop thread before realtime_known_
   std::atomic<bool> realtime_known_{false};
   std::thread loop_thread_, publisher_thread_;
   LoopSnapshot work_;       // loop thread only
@@ -529,7 +530,7 @@ class DriverNode {
   snake_autonomy::BoundState bound_state_;
   tf2_ros::TransformBroadcaster tf_;
   double torque_constant_ = 0.0;  // N*m/A
-  core::DriverState logged_state_ = core::DriverState::kStopped;
+  driver::DriverState logged_state_ = driver::DriverState::kStopped;
   std::string logged_fault_;
   bool logged_stale_ = false;
   std::uint64_t logged_overruns_ = 0;
@@ -574,13 +575,13 @@ int main(int argc, char** argv) {
   // connect_timeout_s, then give up naming the last problem.
   const auto give_up = Clock::now() + std::chrono::duration<double>(config.connect_timeout_s);
   std::unique_ptr<dxl::SerialBus> bus;
-  std::unique_ptr<core::DriverController> controller;
+  std::unique_ptr<driver::DriverController> controller;
   std::string last_problem;
   while (ros::ok()) {
     try {
       if (!bus) bus = std::make_unique<dxl::SerialBus>(config.serial);
       if (!controller)
-        controller = std::make_unique<core::DriverController>(*model, *gaits, *table, *bus, config.controller);
+        controller = std::make_unique<driver::DriverController>(*model, *gaits, *table, *bus, config.controller);
       controller->start(0.0);
       break;
     } catch (const dxl::SerialError& e) {
@@ -612,8 +613,8 @@ int main(int argc, char** argv) {
   for (const auto& note : controller->start_notes()) ROS_WARN("driver: %s", note.c_str());
   ROS_INFO("driver: %d servos on %s at %d baud, loop %.0f Hz, state %s%s%s", model->num_joints,
            config.serial.device.c_str(), config.serial.baud_bps, config.loop.rate_hz,
-           core::to_string(controller->state()), controller->state() == core::DriverState::kFault ? ": " : "",
-           controller->state() == core::DriverState::kFault ? controller->fault_reason() : "");
+           driver::to_string(controller->state()), controller->state() == driver::DriverState::kFault ? ": " : "",
+           controller->state() == driver::DriverState::kFault ? controller->fault_reason() : "");
 
   DriverNode node(nh, config, *model, *bus, *controller);
   ros::AsyncSpinner spinner(2);

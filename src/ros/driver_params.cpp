@@ -64,7 +64,7 @@ class ParamReader {
 // The rosparams named like DriverConfig's keys, as the YAML mapping the core's loader reads.
 YAML::Node controller_params_as_yaml(const ros::NodeHandle& nh) {
   YAML::Node doc(YAML::NodeType::Map);
-  for (const auto& key : core::DriverConfig::keys()) {
+  for (const auto& key : driver::DriverConfig::keys()) {
     XmlRpc::XmlRpcValue v;
     if (!nh.getParam(key, v)) continue;
     switch (v.getType()) {
@@ -141,7 +141,7 @@ DriverNodeConfig read_driver_params(const ros::NodeHandle& pnh, std::vector<std:
   r.get("driver_config_file", &controller_file);
   if (!controller_file.empty()) {
     try {
-      c.controller = core::DriverConfig::from_yaml_file(controller_file);
+      c.controller = driver::DriverConfig::from_yaml_file(controller_file);
     } catch (const std::exception& e) {
       errors.push_back(std::string("~driver_config_file: ") + e.what());
     }

@@ -21,8 +21,8 @@ struct DriverNodeConfig {
   std::string gaits_file;           // default: config_dir/gaits.yaml
   std::string control_table_file;   // default: config_dir/dynamixel/<servos.model>.yaml
   dynamixel::SerialConfig serial;   // port, baud, low_latency, bus timing
-  core::LoopConfig loop;            // rate_hz
-  core::DriverConfig controller;
+  driver::LoopConfig loop;            // rate_hz
+  driver::DriverConfig controller;
   int realtime_priority = 0;        // SCHED_FIFO priority of the loop thread (1-99), 0: normal scheduling
   std::string world_frame = "odom";
   std::string base_frame = "base_link";

@@ -34,7 +34,7 @@ driver::JointTrajectoryRequest to_request(const trajectory_msgs::JointTrajectory
   return r;
 }
 
-TrajectoryTopics::TrajectoryTopics(ros::NodeHandle& nh, core::DriverController& controller,
+TrajectoryTopics::TrajectoryTopics(ros::NodeHandle& nh, driver::DriverController& controller,
                                    diagnostic_updater::Updater& updater)
     : controller_(controller) {
   // The status queue holds a burst of final statuses (kQueueSize trajectories superseded at once).

@@ -45,7 +45,7 @@ class TrajectoryTopics {
  public:
   static constexpr std::uint32_t kQueueSize = 100;  // driver/joint_trajectory's subscriber queue
 
-  TrajectoryTopics(ros::NodeHandle& nh, core::DriverController& controller, diagnostic_updater::Updater& updater);
+  TrajectoryTopics(ros::NodeHandle& nh, driver::DriverController& controller, diagnostic_updater::Updater& updater);
   // Publisher thread: the loop's latest progress (a "running" status when it changed), then every
   // final status the loop queued.
   void publish(const driver::TrajectoryProgress& progress, const ros::Time& stamp);
@@ -57,7 +57,7 @@ class TrajectoryTopics {
   void fill(const driver::TrajectoryProgress& p, const ros::Time& stamp);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
 
-  core::DriverController& controller_;
+  driver::DriverController& controller_;
   ros::Subscriber sub_;
   ros::Publisher status_pub_;
   std::atomic<std::uint64_t> received_{0};

@@ -15,13 +15,13 @@
 
 namespace snake_autonomy::test {
 
-using core::DriverConfig;
-using core::DriverController;
-using core::DriverRequest;
-using core::GaitCommandRequest;
 using core::GaitLibrary;
-using core::RequestResult;
 using core::RobotModel;
+using driver::DriverConfig;
+using driver::DriverController;
+using driver::DriverRequest;
+using driver::GaitCommandRequest;
+using driver::RequestResult;
 using dynamixel::ControlTable;
 using dynamixel::FakeServoBus;
 

@@ -9,8 +9,8 @@
 #include "snake_autonomy/driver/driver_config.hpp"
 
 using snake_autonomy::core::ConfigError;
-using snake_autonomy::core::DriverConfig;
-using snake_autonomy::core::SafeAction;
+using snake_autonomy::driver::DriverConfig;
+using snake_autonomy::driver::SafeAction;
 
 TEST(DriverConfigYaml, ReadsTheControllersKeysAndIgnoresTheNodesOwn) {
   const DriverConfig c = DriverConfig::from_yaml_string(

@@ -13,6 +13,7 @@
 #include "snake_autonomy/driver/driver_controller.hpp"
 
 using namespace snake_autonomy::core;
+using namespace snake_autonomy::driver;
 using snake_autonomy::dynamixel::FakeServoBus;
 namespace dx = snake_autonomy::dynamixel;
 using snake_autonomy::test::kDeg;

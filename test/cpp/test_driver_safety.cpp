@@ -10,14 +10,15 @@
 #include "snake_autonomy/driver/safety_rules.hpp"
 #include "test_access.hpp"
 
-namespace snake_autonomy::core {
+namespace snake_autonomy::driver {
 // Test hook (friend of DriverController): reaches the gait source's CPG (test_access.hpp).
 struct DriverControllerTestAccess {
-  static Cpg& cpg(DriverController& d) { return driver::GaitSourceTestAccess::cpg(d.gait_); }
+  static core::Cpg& cpg(DriverController& d) { return GaitSourceTestAccess::cpg(d.gait_); }
 };
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver
 
 using namespace snake_autonomy::core;
+using namespace snake_autonomy::driver;
 using snake_autonomy::test::kDeg;
 using snake_autonomy::test::Rig;
 

@@ -10,15 +10,15 @@
 #include "snake_autonomy/driver/servo_chain.hpp"
 #include "snake_autonomy/driver/supervisor.hpp"
 
-using snake_autonomy::core::DriverConfig;
-using snake_autonomy::core::HoldReason;
-using snake_autonomy::core::SafeAction;
+using snake_autonomy::driver::DriverConfig;
 using snake_autonomy::driver::DriverRequest;
 using snake_autonomy::driver::DriverState;
 using snake_autonomy::driver::DriverSupervisor;
+using snake_autonomy::driver::HoldReason;
 using snake_autonomy::driver::JointCommandSource;
 using snake_autonomy::driver::JointStateView;
 using snake_autonomy::driver::RequestResult;
+using snake_autonomy::driver::SafeAction;
 using snake_autonomy::driver::ServoChain;
 using snake_autonomy::driver::SourceStatus;
 using snake_autonomy::driver::StopCause;

@@ -4,6 +4,7 @@
 #include "test_helpers.hpp"
 
 using namespace snake_autonomy::core;
+using namespace snake_autonomy::driver;
 using snake_autonomy::test::cobra;
 using snake_autonomy::test::source_path;
 

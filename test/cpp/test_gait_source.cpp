@@ -11,11 +11,11 @@
 #include "test_access.hpp"
 
 using snake_autonomy::core::CpgTestAccess;
-using snake_autonomy::core::DriverConfig;
-using snake_autonomy::core::GaitCommandRequest;
-using snake_autonomy::core::HoldReason;
+using snake_autonomy::driver::DriverConfig;
+using snake_autonomy::driver::GaitCommandRequest;
 using snake_autonomy::driver::GaitSource;
 using snake_autonomy::driver::GaitSourceTestAccess;
+using snake_autonomy::driver::HoldReason;
 using snake_autonomy::driver::JointStateView;
 using snake_autonomy::driver::SourceStatus;
 using snake_autonomy::test::kDeg;

@@ -9,6 +9,7 @@
 #include "test_helpers.hpp"
 
 using namespace snake_autonomy::core;
+using namespace snake_autonomy::driver;
 using snake_autonomy::test::cobra;
 using snake_autonomy::test::source_path;
 
@@ -162,9 +163,9 @@ TEST(SteeringLaw, ASteeringValueTheGaitDoesNotAcceptIsRefusedWithTheReason) {
       "lag_deg: 30}}\n"
       "  rect: {frequency_hz: 0.3, steering: curvature, pitch: {amplitude_deg: 0}, yaw: {amplitude_deg: 10, lag_deg: "
       "30}}\n");
-  snake_autonomy::core::GaitCommandResolver r(model, lib, 2.0);
+  snake_autonomy::driver::GaitCommandResolver r(model, lib, 2.0);
   snake_autonomy::core::GaitParameters out = snake_autonomy::core::GaitParameters::zeros(model.num_joints);
-  snake_autonomy::core::GaitCommandRequest c;
+  snake_autonomy::driver::GaitCommandRequest c;
   c.gait = "am";
   c.curve = true;
   c.kappa_per_m = 1.0;

@@ -6,6 +6,7 @@
 #include "snake_autonomy/driver/loop_timer.hpp"
 
 using namespace snake_autonomy::core;
+using namespace snake_autonomy::driver;
 using Clock = LoopTimer::Clock;
 
 TEST(LoopTimer, ValidatesTheRate) {

@@ -1,4 +1,4 @@
-// core::enter_realtime: SCHED_FIFO and locked memory when permitted, a report naming what was refused
+// driver::enter_realtime: SCHED_FIFO and locked memory when permitted, a report naming what was refused
 // otherwise. Each case runs in a forked child: the mode (a thread priority, the process's memory
 // lock) and the dropped rights must not leak into the other tests.
 #include <gtest/gtest.h>
@@ -12,8 +12,8 @@
 
 #include "snake_autonomy/driver/realtime.hpp"
 
-using snake_autonomy::core::enter_realtime;
-using snake_autonomy::core::RealtimeReport;
+using snake_autonomy::driver::enter_realtime;
+using snake_autonomy::driver::RealtimeReport;
 
 namespace {
 

@@ -16,6 +16,7 @@ using snake_autonomy::test::kDeg;
 using snake_autonomy::test::Rig;
 namespace dx = snake_autonomy::dynamixel;
 namespace core = snake_autonomy::core;
+namespace driver = snake_autonomy::driver;
 
 namespace {
 
@@ -44,7 +45,7 @@ Rig limited_rig() {
 
 TEST(ServoChain, GoalClampIsTheJointLimitsWithinTheServoLimits) {
   Rig rig = limited_rig();
-  ServoChain chain(rig.model, rig.table, *rig.bus, core::DriverConfig{});
+  ServoChain chain(rig.model, rig.table, *rig.bus, driver::DriverConfig{});
   const ChainStartReport report = chain.start();
   ASSERT_TRUE(report.problems.empty()) << joined(report.problems);
   // The joint limits in ticks, rounded inwards (-227.6 and +284.4 ticks from the centre).
@@ -74,7 +75,7 @@ TEST(ServoChain, StartNamesEveryServoThatIsNotUsable) {
     b.servos().set_silent(5, true);
     b.servos().set(2, "operating_mode", 1);
   });
-  ServoChain chain(rig.model, rig.table, *rig.bus, core::DriverConfig{});
+  ServoChain chain(rig.model, rig.table, *rig.bus, driver::DriverConfig{});
   const std::string problems = joined(chain.start().problems);
   EXPECT_TRUE(contains(problems, "servo 5 (joint_5): no answer to ping")) << problems;
   EXPECT_TRUE(contains(problems, "servo 2 (joint_2): operating_mode 1, the driver needs 3")) << problems;
@@ -83,7 +84,7 @@ TEST(ServoChain, StartNamesEveryServoThatIsNotUsable) {
 
 TEST(ServoChain, ADroppedReplyMarksTheServoStaleAndKeepsItsLastGoodState) {
   Rig rig;
-  ServoChain chain(rig.model, rig.table, *rig.bus, core::DriverConfig{});
+  ServoChain chain(rig.model, rig.table, *rig.bus, driver::DriverConfig{});
   ASSERT_TRUE(chain.start().problems.empty());
   rig.bus->set_follow_goal(false);
   rig.bus->servos().set(3, "present_position", 2048 + 200);
@@ -110,7 +111,7 @@ TEST(ServoChain, ADroppedReplyMarksTheServoStaleAndKeepsItsLastGoodState) {
 
 TEST(ServoChain, CorruptAndImplausibleRepliesAreCountedAndNeverUsed) {
   Rig rig;
-  ServoChain chain(rig.model, rig.table, *rig.bus, core::DriverConfig{});
+  ServoChain chain(rig.model, rig.table, *rig.bus, driver::DriverConfig{});
   ASSERT_TRUE(chain.start().problems.empty());
   ASSERT_TRUE(chain.read());
   const double before = chain.position_rad()[6];
@@ -127,7 +128,7 @@ TEST(ServoChain, CorruptAndImplausibleRepliesAreCountedAndNeverUsed) {
 
 TEST(ServoChain, TorqueIsWrittenAndConfirmedServoByServo) {
   Rig rig;
-  ServoChain chain(rig.model, rig.table, *rig.bus, core::DriverConfig{});
+  ServoChain chain(rig.model, rig.table, *rig.bus, driver::DriverConfig{});
   ASSERT_TRUE(chain.start().problems.empty());
   ASSERT_TRUE(chain.write_torque(true));
   for (int id = 1; id <= 11; ++id) EXPECT_EQ(rig.torque(id), 1) << id;
@@ -142,7 +143,7 @@ TEST(ServoChain, TorqueIsWrittenAndConfirmedServoByServo) {
 
 TEST(ServoChain, HardwareErrorBitsAreReadAndRebootClearsThem) {
   Rig rig;
-  ServoChain chain(rig.model, rig.table, *rig.bus, core::DriverConfig{});
+  ServoChain chain(rig.model, rig.table, *rig.bus, driver::DriverConfig{});
   ASSERT_TRUE(chain.start().problems.empty());
   EXPECT_FALSE(chain.read_hardware_errors());
   rig.bus->servos().set_hardware_error(6, (1 << 5) | (1 << 2));  // overload, overheating
@@ -163,7 +164,7 @@ TEST(ServoChain, HardwareErrorBitsAreReadAndRebootClearsThem) {
 }
 
 TEST(ServoChain, StartSetsTheReturnDelayTimeAndReportsIt) {
-  core::DriverConfig cfg;
+  driver::DriverConfig cfg;
   cfg.return_delay_time_us = 100;
   Rig rig;
   ServoChain chain(rig.model, rig.table, *rig.bus, cfg);

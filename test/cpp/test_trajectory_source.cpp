@@ -10,11 +10,11 @@
 #include "snake_autonomy/driver/trajectory_source.hpp"
 
 using namespace snake_autonomy::driver;
-using snake_autonomy::core::DriverConfig;
-using snake_autonomy::core::DriverRequest;
-using snake_autonomy::core::DriverSnapshot;
-using snake_autonomy::core::DriverState;
-using snake_autonomy::core::HoldReason;
+using snake_autonomy::driver::DriverConfig;
+using snake_autonomy::driver::DriverRequest;
+using snake_autonomy::driver::DriverSnapshot;
+using snake_autonomy::driver::DriverState;
+using snake_autonomy::driver::HoldReason;
 using snake_autonomy::dynamixel::ReplyFault;
 using snake_autonomy::test::kDeg;
 using snake_autonomy::test::kDt;
@@ -432,7 +432,7 @@ TEST(DriverTrajectory, EndsOnAHoldRequestAGaitCommandTorqueOffOrAFault) {
     ASSERT_EQ(rig.ctl->command_trajectory(cobra_pose(40 * kDeg, 3.0, "late")), "");
     const auto ticket = rig.ctl->post(DriverRequest::kDisableTorque, 0);
     rig.step();  // the request runs before the trajectory is taken
-    snake_autonomy::core::RequestResult result;
+    snake_autonomy::driver::RequestResult result;
     ASSERT_TRUE(rig.ctl->take_result(ticket, &result));
     EXPECT_EQ(rig.ctl->trajectory_progress().phase, TrajectoryPhase::kAborted);
     EXPECT_EQ(rig.ctl->trajectory_progress().abort, TrajectoryAbort::kNotAllowed);

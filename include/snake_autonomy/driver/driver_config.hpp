@@ -11,7 +11,7 @@ namespace YAML {
 class Node;
 }
 
-namespace snake_autonomy::core {
+namespace snake_autonomy::driver {
 
 // What the servos are left doing when locomotion stops for a fault, or when the driver exits.
 enum class SafeAction {
@@ -73,4 +73,4 @@ struct DriverConfig {
   static DriverConfig from_yaml_file(const std::string& path);
 };
 
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver

@@ -60,15 +60,7 @@
 #include "snake_autonomy/dynamixel/control_table.hpp"
 #include "snake_autonomy/dynamixel/servo_bus.hpp"
 
-namespace snake_autonomy::core {
-
-// The layers' types under the names the node, the bindings and the tests use.
-using driver::DriverRequest;
-using driver::DriverState;
-using driver::Message;
-using driver::RequestResult;
-using driver::ServoDiagnostics;
-using driver::to_string;
+namespace snake_autonomy::driver {
 
 // What the loop publishes: a copy made by fill_snapshot() into storage sized by make_snapshot().
 struct DriverSnapshot {
@@ -104,7 +96,7 @@ class DriverController {
  public:
   // Checks the configuration, the robot model and the servo mapping against the control table;
   // throws ConfigError listing every problem. The bus must outlive the controller.
-  DriverController(const RobotModel& model, const GaitLibrary& gaits, const dynamixel::ControlTable& table,
+  DriverController(const core::RobotModel& model, const core::GaitLibrary& gaits, const dynamixel::ControlTable& table,
                    dynamixel::ServoBus& bus, const DriverConfig& config);
 
   // --- loop thread (or before the loop starts / after it stopped) ---
@@ -168,7 +160,7 @@ class DriverController {
   std::string last_refusal() const { return gait_.last_refusal(); }
   std::string commanded_gait() const { return gait_.commanded_gait(); }
 
-  const RobotModel& model() const noexcept { return model_; }
+  const core::RobotModel& model() const noexcept { return model_; }
   const DriverConfig& config() const noexcept { return config_; }
   const dynamixel::ControlTable& table() const noexcept { return table_; }
   const std::vector<std::uint8_t>& ids() const noexcept { return chain_.ids(); }
@@ -176,8 +168,8 @@ class DriverController {
   const Eigen::VectorXd& position_rad() const noexcept { return chain_.position_rad(); }
   const Eigen::VectorXd& goal_rad() const noexcept { return supervisor_.goal_rad(); }
   const std::vector<ServoDiagnostics>& servos() const noexcept { return chain_.servos(); }
-  const KinematicState& kinematics() const noexcept { return kin_state_; }
-  const Cpg& cpg() const noexcept { return gait_.cpg(); }
+  const core::KinematicState& kinematics() const noexcept { return kin_state_; }
+  const core::Cpg& cpg() const noexcept { return gait_.cpg(); }
   bool pose_fresh() const noexcept { return pose_fresh_; }
   bool locomotion_gated() const noexcept { return gait_.gated(); }
   const char* fault_reason() const noexcept { return supervisor_.fault_reason().data(); }
@@ -201,7 +193,7 @@ class DriverController {
   void take_pose(double t_s) noexcept;
   void take_trajectory(double t_s) noexcept;  // a pending trajectory becomes the active source
 
-  RobotModel model_;
+  core::RobotModel model_;
   dynamixel::ControlTable table_;
   DriverConfig config_;
   driver::ServoChain chain_;
@@ -218,8 +210,8 @@ class DriverController {
   double t_s_ = 0.0;
 
   // Base pose and kinematics.
-  Kinematics kinematics_;
-  KinematicState kin_state_;
+  core::Kinematics kinematics_;
+  core::KinematicState kin_state_;
   Eigen::Vector3d base_p_ = Eigen::Vector3d::Zero();
   Eigen::Quaterniond base_q_ = Eigen::Quaterniond::Identity();
   double pose_t_s_ = 0.0;
@@ -236,4 +228,4 @@ class DriverController {
   Message pending_pose_refusal_{}, pose_refusal_{};  // under pose_mutex_ / the loop's copy
 };
 
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver

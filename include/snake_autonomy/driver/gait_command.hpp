@@ -29,7 +29,7 @@
 #include "snake_autonomy/core/robot_model.hpp"
 #include "snake_autonomy/core/steering.hpp"
 
-namespace snake_autonomy::core {
+namespace snake_autonomy::driver {
 
 struct GaitCommandRequest {
   std::string gait;                // empty: keep the current gait's parameters
@@ -47,25 +47,25 @@ class GaitCommandResolver {
  public:
   // max_frequency_hz: |ω| / 2π above it is refused. The current gait starts as `initial_gait`
   // (which must exist in the library: ConfigError otherwise).
-  GaitCommandResolver(const RobotModel& model, const GaitLibrary& gaits, double max_frequency_hz,
+  GaitCommandResolver(const core::RobotModel& model, const core::GaitLibrary& gaits, double max_frequency_hz,
                       const std::string& initial_gait = "hold");
 
   // Empty when accepted: `out` holds the CPG targets (steering applied) and the resolver the new
   // nominal gait. Otherwise every reason, one per line, and nothing is changed (`out` included).
-  std::string resolve(const GaitCommandRequest& command, GaitParameters& out);
+  std::string resolve(const GaitCommandRequest& command, core::GaitParameters& out);
   // The name of the current gait; explicit vectors on top of a gait are "NAME+custom".
   const std::string& current_gait() const { return name_; }
-  const GaitParameters& nominal() const { return nominal_; }
+  const core::GaitParameters& nominal() const { return nominal_; }
 
  private:
-  RobotModel model_;
-  GaitLibrary gaits_;
-  Steering steering_;
-  CurvatureSteering curvature_;
+  core::RobotModel model_;
+  core::GaitLibrary gaits_;
+  core::Steering steering_;
+  core::CurvatureSteering curvature_;
   double max_omega_rad_s_;
   std::string name_;
   std::string base_name_;  // the library gait under the custom vectors
-  GaitParameters nominal_;
+  core::GaitParameters nominal_;
 };
 
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver

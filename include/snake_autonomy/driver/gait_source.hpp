@@ -38,12 +38,12 @@ namespace snake_autonomy::driver {
 
 class GaitSource : public JointCommandSource {
  public:
-  GaitSource(const core::RobotModel& model, const core::GaitLibrary& gaits, const core::DriverConfig& config);
+  GaitSource(const core::RobotModel& model, const core::GaitLibrary& gaits, const DriverConfig& config);
 
   // --- any thread ---
   // "" when accepted, else every reason. `blocked`: when not empty, the command is refused with it
   // (the supervisor's reason: torque off, a fault) and not resolved.
-  std::string command(const core::GaitCommandRequest& command, const char* blocked);
+  std::string command(const GaitCommandRequest& command, const char* blocked);
   std::uint64_t commands_accepted() const noexcept { return accepted_.load(); }
   std::uint64_t commands_refused() const noexcept { return refused_.load(); }
   std::string last_refusal() const;
@@ -84,7 +84,7 @@ class GaitSource : public JointCommandSource {
   bool pending_set_ = false;
 
   mutable std::mutex resolver_mutex_;  // callers' threads only
-  core::GaitCommandResolver resolver_;
+  GaitCommandResolver resolver_;
   std::string last_refusal_;
   std::atomic<std::uint64_t> accepted_{0}, refused_{0};
 };

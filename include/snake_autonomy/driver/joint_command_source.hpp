@@ -34,7 +34,7 @@ struct SourceStatus {
     kFault,   // the source cannot go on (reason, a static text): the supervisor faults
   };
   Code code = kActive;
-  core::HoldReason hold_reason = core::HoldReason::kNone;
+  HoldReason hold_reason = HoldReason::kNone;
   // kHold: hold at this cycle's goal_rad (a trajectory's last point) instead of the measured posture.
   bool hold_at_goal = false;
   const char* reason = "";

@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-namespace snake_autonomy::core {
+namespace snake_autonomy::driver {
 
 struct LoopConfig {
   double rate_hz = 100.0;  // cycles per second, 1 .. 10000
@@ -82,4 +82,4 @@ class LoopTimer {
   LoopStats stats_;
 };
 
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver

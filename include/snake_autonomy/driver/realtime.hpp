@@ -16,7 +16,7 @@
 #include <cstddef>
 #include <string>
 
-namespace snake_autonomy::core {
+namespace snake_autonomy::driver {
 
 struct RealtimeReport {
   int requested_priority = 0;  // 0: real-time mode not requested (normal scheduling)
@@ -45,4 +45,4 @@ RealtimeReport enter_realtime(int priority) noexcept;
 // "EPERM", "ENOMEM", ... for the errors above; "errno N" otherwise (a static text).
 const char* errno_name(int error) noexcept;
 
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver

@@ -18,7 +18,7 @@
 #include <cstddef>
 #include <cstdint>
 
-namespace snake_autonomy::core {
+namespace snake_autonomy::driver {
 
 // Why the driver is Holding (kNone while it is not).
 enum class HoldReason : std::uint8_t {
@@ -52,4 +52,4 @@ void describe_pose_refusal(PoseRefusal refusal, double t_s, const Eigen::Vector3
                            const Eigen::Quaterniond& orientation, double workspace_m, double quaternion_norm_tolerance,
                            char* out, std::size_t size) noexcept;
 
-}  // namespace snake_autonomy::core
+}  // namespace snake_autonomy::driver

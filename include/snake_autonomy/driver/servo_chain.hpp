@@ -72,7 +72,7 @@ class ServoChain {
   // The model, table and config must have been validated (DriverController does). Keeps a reference
   // to the bus.
   ServoChain(const core::RobotModel& model, const dynamixel::ControlTable& table, dynamixel::ServoBus& bus,
-             const core::DriverConfig& config);
+             const DriverConfig& config);
 
   ChainStartReport start();
 

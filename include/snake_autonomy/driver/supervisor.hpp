@@ -52,7 +52,7 @@ struct RequestResult {
 class DriverSupervisor {
  public:
   // The chain must outlive the supervisor.
-  DriverSupervisor(ServoChain& chain, const core::DriverConfig& config);
+  DriverSupervisor(ServoChain& chain, const DriverConfig& config);
 
   // After ServoChain::start() found no problem: holds the measured posture, then kFault when a
   // servo reports a hardware error, else torque on and kHolding (torque_on_start) or kStopped.
@@ -85,7 +85,7 @@ class DriverSupervisor {
   RequestResult call(DriverRequest request, std::uint8_t servo_id, double timeout_s);
 
   DriverState state() const noexcept { return state_.load(std::memory_order_acquire); }
-  core::HoldReason hold_reason() const noexcept { return hold_reason_; }
+  HoldReason hold_reason() const noexcept { return hold_reason_; }
   const Message& fault_reason() const noexcept { return fault_reason_; }
   const Message& last_fault() const noexcept { return last_fault_; }
   const JointCommandSource* active() const noexcept { return active_; }
@@ -94,7 +94,7 @@ class DriverSupervisor {
   std::uint32_t consecutive_failed_cycles() const noexcept { return consecutive_failed_; }
 
   // Loop thread: hold the measured posture (kHolding, with the reason); fault with the reason.
-  void hold(core::HoldReason reason) noexcept;
+  void hold(HoldReason reason) noexcept;
   void enter_fault(const char* reason) noexcept;
 
  private:
@@ -116,11 +116,11 @@ class DriverSupervisor {
 
   ServoChain& chain_;
   int max_failed_cycles_;
-  core::SafeAction fault_action_, shutdown_action_;
+  SafeAction fault_action_, shutdown_action_;
   bool torque_on_start_;
   double max_joint_velocity_rad_s_;
   std::atomic<DriverState> state_{DriverState::kStopped};
-  core::HoldReason hold_reason_ = core::HoldReason::kNone;
+  HoldReason hold_reason_ = HoldReason::kNone;
   Message fault_reason_{}, last_fault_{};
   JointCommandSource* active_ = nullptr;
   Eigen::VectorXd hold_, goal_, target_;

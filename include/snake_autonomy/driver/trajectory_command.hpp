@@ -35,7 +35,7 @@ class TrajectoryCommand : public JointCommandSource {
     SourceStatus status;
     if (running) return status;
     status.code = SourceStatus::kHold;
-    status.hold_reason = core::HoldReason::kTrajectoryDone;
+    status.hold_reason = HoldReason::kTrajectoryDone;
     status.hold_at_goal = trajectory_.progress().phase == TrajectoryPhase::kDone;  // goal_ = the last point
     return status;
   }
