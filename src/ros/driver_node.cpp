@@ -43,6 +43,7 @@
 #include <sstream>
 #include <thread>
 
+#include "driver_diagnostics.hpp"
 #include "driver_params.hpp"
 #include "snake_autonomy/core/gait_library.hpp"
 #include "snake_autonomy/core/robot_model.hpp"
@@ -57,6 +58,9 @@ namespace core = snake_autonomy::core;
 namespace driver = snake_autonomy::driver;
 namespace dxl = snake_autonomy::dynamixel;
 using snake_autonomy::ros_driver::DriverNodeConfig;
+using snake_autonomy::ros_driver::fixed;
+using snake_autonomy::ros_driver::kv;
+using snake_autonomy::ros_driver::str;
 using Clock = std::chrono::steady_clock;
 
 namespace {
@@ -73,26 +77,6 @@ std::string join(const std::vector<std::string>& lines) {
   std::string out;
   for (const auto& l : lines) out += "\n  " + l;
   return out;
-}
-
-diagnostic_msgs::KeyValue kv(const std::string& key, const std::string& value) {
-  diagnostic_msgs::KeyValue k;
-  k.key = key;
-  k.value = value;
-  return k;
-}
-
-template <typename T>
-std::string str(T v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
-std::string fixed(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
 }
 
 class DriverNode {
@@ -394,55 +378,11 @@ class DriverNode {
   }
 
   void diagnose_bus(diagnostic_updater::DiagnosticStatusWrapper& stat) {
-    using diagnostic_msgs::DiagnosticStatus;
-    const driver::DriverSnapshot& s = published_.driver;
-    stat.hardware_id = config_.serial.device;
-    stat.summary(
-        s.consecutive_failed_cycles > 0 ? DiagnosticStatus::WARN : DiagnosticStatus::OK,
-        s.consecutive_failed_cycles > 0 ? str(s.consecutive_failed_cycles) + " consecutive failed cycles" : "ok");
-    const auto& c = s.bus;
-    stat.values = {
-        kv("port", config_.serial.device),           kv("baud", str(config_.serial.baud_bps)),
-        kv("transactions", str(c.transactions)),     kv("bytes_sent", str(c.bytes_sent)),
-        kv("bytes_received", str(c.bytes_received)), kv("packets_received", str(c.packets_received)),
-        kv("crc_errors", str(c.crc_errors)),         kv("timeouts", str(c.timeouts)),
-        kv("malformed", str(c.malformed)),           kv("hardware_error_alerts", str(c.hardware_error_alerts)),
-        kv("servo_errors", str(c.servo_errors)),     kv("unexpected_packets", str(c.unexpected_packets)),
-        kv("io_errors", str(c.io_errors)),           kv("drains", str(c.drains)),
-        kv("late_bytes", str(c.late_bytes)),         kv("verify_mismatches", str(c.verify_mismatches)),
-        kv("failed_cycles", str(s.failed_cycles)),   kv("consecutive_failed_cycles", str(s.consecutive_failed_cycles))};
+    snake_autonomy::ros_driver::diagnose_bus(published_.driver, config_.serial.device, config_.serial.baud_bps, stat);
   }
 
   void diagnose_servo(std::size_t j, diagnostic_updater::DiagnosticStatusWrapper& stat) {
-    using diagnostic_msgs::DiagnosticStatus;
-    const driver::DriverSnapshot& s = published_.driver;
-    if (j >= s.servos.size()) return;
-    const driver::ServoDiagnostics& d = s.servos[j];
-    stat.hardware_id = "dynamixel " + str(model_.servos.ids[j]);
-    const std::string bits = controller_.table().describe_hardware_error(d.hardware_error_bits);
-    if (d.hardware_error) {
-      stat.summary(DiagnosticStatus::ERROR, "hardware error: " + bits);
-    } else if (d.stale) {
-      stat.summary(DiagnosticStatus::WARN, "no reply for " + str(d.consecutive_misses) + " cycles");
-    } else {
-      stat.summary(DiagnosticStatus::OK, "ok");
-    }
-    stat.values = {kv("id", str(int(d.id))),
-                   kv("temperature_c", std::isnan(d.temperature_c) ? "unknown" : fixed(d.temperature_c, 0)),
-                   kv("voltage_v", std::isnan(d.voltage_v) ? "unknown" : fixed(d.voltage_v, 1)),
-                   kv("hardware_error", d.hardware_error ? "true" : "false"),
-                   kv("hardware_error_bits", str(int(d.hardware_error_bits))),
-                   kv("hardware_error_names", bits),
-                   kv("stale", d.stale ? "true" : "false"),
-                   kv("consecutive_misses", str(d.consecutive_misses)),
-                   kv("timeouts", str(d.timeouts)),
-                   kv("crc_errors", str(d.crc_errors)),
-                   kv("implausible", str(d.implausible)),
-                   kv("other_errors", str(d.other_errors)),
-                   kv("present_ticks", str(d.present_ticks)),
-                   kv("goal_ticks", str(d.goal_ticks)),
-                   kv("goal_min_ticks", str(d.min_ticks)),
-                   kv("goal_max_ticks", str(d.max_ticks))};
+    snake_autonomy::ros_driver::diagnose_servo(published_.driver, controller_.table(), j, stat);
   }
 
   // ---- callbacks (spinner threads) ----
