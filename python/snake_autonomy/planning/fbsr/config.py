@@ -1,9 +1,10 @@
 """config/scout.yaml: the planner's parameters and each robot's lying posture, validated.
 
 Every problem is collected and reported at once, naming the key and the value; unknown keys are
-refused.
+refused. Every number must be finite; gains, margins, lengths and counts have ranges (problems()).
 """
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict
@@ -81,20 +82,35 @@ class ScoutConfig:
     def problems(self) -> list:
         out = []
         p = self.planner
-        for key in ("stage_duration_s", "sample_period_s", "k2", "ks_per_m2", "k_out_per_m2"):
-            if not getattr(p, key) > 0:
-                out.append(f"planner.{key}: must be > 0, got {getattr(p, key)}")
-        for key in ("k1", "k3", "k_torque", "k_wall_per_m2", "margin_m", "joint_margin_deg", "max_restarts",
-                    "max_shift_replans", "shift_restarts", "max_backtracks",
-                    "max_final_cycles", "head_height_tol_m",
-                    "target_tol_m", "k1_step"):
-            if getattr(p, key) < 0:
-                out.append(f"planner.{key}: must be >= 0, got {getattr(p, key)}")
-        if p.sample_period_s > 0.05:
-            out.append(f"planner.sample_period_s: the contract allows at most 0.05, got {p.sample_period_s}")
-        if p.cost_samples < 2:
-            out.append(f"planner.cost_samples: must be >= 2, got {p.cost_samples}")
+        bad = _non_finite(p, "planner", out)
+        ranges = (
+            # key, lowest, whether the lowest itself is allowed, highest, unit of the message
+            ("stage_duration_s", 0, False, 60, " s"), ("sample_period_s", 0, False, 0.05, " s"),
+            ("cost_samples", 2, True, 200, ""),
+            ("k1", 0, True, None, ""), ("k2", 0, False, None, ""), ("k3", 0, True, None, ""),
+            ("k_torque", 0, True, None, ""), ("k_wall_per_m2", 0, True, None, ""),
+            ("k1_step", 0, True, None, ""), ("ks_per_m2", 0, False, None, ""),
+            ("k_out_per_m2", 0, False, None, ""),
+            ("margin_m", 0, True, 0.5, " m"), ("joint_margin_deg", 0, True, 45, ""),
+            ("max_restarts", 0, True, 100, ""), ("max_shift_replans", 0, True, 100, ""),
+            ("shift_restarts", 0, True, 100, ""), ("max_backtracks", 0, True, 100, ""),
+            ("max_final_cycles", 0, True, 100, ""),
+            ("head_height_tol_m", 0, False, 0.5, " m"), ("target_tol_m", 0, False, 0.5, " m"))
+        for key, low, low_ok, high, unit in ranges:
+            value = getattr(p, key)
+            if key in bad:
+                continue
+            if value < low or (value == low and not low_ok):
+                out.append(f"planner.{key}: must be {'>=' if low_ok else '>'} {low}, got {value}")
+            elif high is not None and value > high:
+                out.append(f"planner.{key}: must be at most {high}{unit}, got {value}")
         for name, r in self.robots.items():
+            bad = _non_finite(r, f"robots.{name}", out)
+            for key in ("pitch_offset_deg", "yaw_body_deg", "yaw_tail_deg"):
+                if key not in bad and abs(getattr(r, key)) > 180:
+                    out.append(f"robots.{name}.{key}: must be within +-180, got {getattr(r, key)}")
+            if r.tail_curl_joints < 0:
+                out.append(f"robots.{name}.tail_curl_joints: must be >= 0, got {r.tail_curl_joints}")
             if r.initial_active < 1:
                 out.append(f"robots.{name}.initial_active: must be >= 1, got {r.initial_active}")
             if r.max_active < r.initial_active:
@@ -105,6 +121,14 @@ class ScoutConfig:
     def posture(self, robot_name: str) -> RobotPosture:
         """The robot's section, or the defaults for a robot the file does not name."""
         return self.robots.get(robot_name, RobotPosture())
+
+
+def _non_finite(section, prefix, out) -> set:
+    """The float fields of `section` that are NaN or infinite, each reported in `out`."""
+    bad = {f.name for f in dataclasses.fields(section)
+           if isinstance(getattr(section, f.name), float) and not math.isfinite(getattr(section, f.name))}
+    out += [f"{prefix}.{key}: must be a finite number, got {getattr(section, key)}" for key in sorted(bad)]
+    return bad
 
 
 def _parse(cls, raw, prefix, errors):
