@@ -170,3 +170,24 @@ def test_a_robot_name_resolves_only_inside_config_robots(tmp_path, command):
     """A name is config/robots/NAME.yaml and nothing else: ../../../../etc/passwd is not read."""
     proc = run_cli(*command, "../../../../etc/passwd", *(("--out", tmp_path / "out") if len(command) > 1 else ()))
     assert_refused(proc, "'../../../../etc/passwd': neither the name of a provided file (config/robots/NAME.yaml")
+
+
+SCOUT_CONFIG_INPUTS = {"binary": (BINARY, "not a text file"), "utf16": (COBRA.encode("utf-16"), "not UTF-8 text"),
+                       "billion_laughs": (BILLION_LAUGHS, "anchor &a refused"),
+                       "nan_gain": (b"planner:\n  k1: .nan\n", "planner.k1: must be a finite number, got nan")}
+
+
+@pytest.mark.parametrize("case", sorted(SCOUT_CONFIG_INPUTS))
+def test_scout_config(tmp_path, case):
+    data, message = SCOUT_CONFIG_INPUTS[case]
+    path = write(tmp_path, "scout.yaml", data)
+    proc = run_cli("scout", "plan", "--robot", "cobra", "--max-active", "2", "--config", path,
+                   "--out", tmp_path / "out")
+    assert_refused(proc, f"scout plan: {path}: ", message)
+    assert len(proc.stderr.strip().splitlines()) == 1 and len(proc.stderr) < 500
+
+
+@pytest.mark.parametrize("option", ["--seed", "--sim-seed"])
+def test_scout_seeds_are_non_negative_integers(tmp_path, option):
+    proc = run_cli("scout", "run", "--robot", "cobra", "--max-active", "2", option, "-1", "--out", tmp_path / "out")
+    assert_refused(proc, f"scout run: {option} -1: must be an integer in 0..4294967295")

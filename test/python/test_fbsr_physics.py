@@ -46,7 +46,7 @@ def test_cli_run_writes_metrics_with_the_contract_keys(tmp_path):
     assert cli.main(["scout", "run", "--robot", "unified_snake", "--max-active", "2",
                      "--out", str(out)]) == 0
     m = json.loads((out / "metrics.json").read_text())
-    assert set(m) == {"tipped", "cop_inside_fraction", "final_head_height_m",
+    assert set(m) == {"tipped", "outcome", "cop_inside_fraction", "final_head_height_m",
                       "planned_head_height_m", "max_torque_ratio", "active_modules"}
-    assert m["tipped"] is False and m["active_modules"] == 2
+    assert m["tipped"] is False and m["outcome"] == "ok" and m["active_modules"] == 2
     assert (out / "plan.json").is_file()

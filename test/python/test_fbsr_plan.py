@@ -76,6 +76,14 @@ def test_cli_plan_writes_the_contract_and_figures(tmp_path):
     (["--robot", "unified_snake", "--pipe=-0.3,0.27,0.05"], "the pipe is inside the lying robot"),
     (["--robot", "unified_snake", "--pipe", "1,2"], "expected X,Y,R"),
     (["--robot", "unified_snake", "--max-active", "40"], "--max-active 40"),
+    (["--robot", "unified_snake", "--pipe=1e9,0,0.07"],
+     "--pipe 1e9,0,0.07: the axis must be within 2 m of the tail in x and y, got x 1e+09"),
+    (["--robot", "unified_snake", "--pipe=0.05,nan,0.07"], "--pipe 0.05,nan,0.07: X, Y and R must be finite"),
+    (["--robot", "unified_snake", "--pipe=0.05,-0.1,5"], "--pipe 0.05,-0.1,5: R must be in (0, 0.5] m, got 5"),
+    (["--robot", "unified_snake", "--pipe=1.5,1.5,0.07"],
+     "--pipe 1.5,1.5,0.07: the axis is 2.12 m from the tail, beyond the 1.09 m length of unified_snake"),
+    (["--robot", "unified_snake", "--seed", "-1"], "--seed -1: must be an integer in 0..4294967295"),
+    (["--robot", "unified_snake", "--seed", "1.5"], "--seed 1.5: must be an integer in 0..4294967295"),
 ])
 def test_cli_bad_options_one_message_exit_1(tmp_path, capsys, argv, message):
     assert cli.main(["scout", "plan", *argv, "--out", str(tmp_path / "x")]) == 1

@@ -10,9 +10,15 @@ these are the inverse plan's, from the raised posture back down to the lying one
 `run` also executes the plan in the MuJoCo plant (execute.py) and writes DIR/metrics.json, plus
 DIR/run.json (head position, base lift, pipe distance). Without --height-m the head goes as high as
 the active portion allows; with it, planning stops once the head reaches H. Bad options (unknown
-robot, a height no plan reaches, a pipe inside the robot) end with one message and exit 1.
+robot, a height no plan reaches, a pipe inside the robot or out of reach, a negative seed, a bad
+--config file) end with one message and exit 1, before planning.
+
+Exit status (EXIT_STATUS): 0 done and, for `run`, metrics.json's outcome "ok"; 1 bad options or
+files; 2 usage; 3 `run` executed the plan but the robot tipped in physics or the head ended outside
+the pipe's bore (outcome "tipped" / "missed_pipe"; the reason on one line, metrics.json written).
 """
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -28,26 +34,54 @@ from snake_autonomy.runs.scout_execute import run_plan
 from snake_autonomy.sim.config import servo_torque_limit_nm
 
 
+EXIT_STATUS = ("exit status: 0 the run is ok; 1 bad options or files; 2 usage; 3 the robot tipped or missed "
+               "the pipe in physics (metrics.json outcome tipped / missed_pipe, the reason on one line)")
+OUTCOME_NOT_OK = 3
+PIPE_REACH_M = 2.0          # |x|, |y| of the pipe's axis: no robot of config/robots/ is longer
+PIPE_RADIUS_MAX_M = 0.5
+SEED_MAX = 2 ** 32 - 1
+
+
 def _pipe(text):
+    """The --pipe option as a Pipe: three finite numbers, the axis within PIPE_REACH_M of the tail in
+    x and y, the radius in (0, PIPE_RADIUS_MAX_M]; ValueError naming the option and value."""
     try:
         x, y, r = (float(v) for v in text.split(","))
     except ValueError:
         raise ValueError(f"--pipe: expected X,Y,R in metres (e.g. 0.1,0.3,0.06), got {text!r}") from None
+    if not all(math.isfinite(v) for v in (x, y, r)):
+        raise ValueError(f"--pipe {text}: X, Y and R must be finite numbers of metres")
+    if max(abs(x), abs(y)) > PIPE_REACH_M:
+        raise ValueError(f"--pipe {text}: the axis must be within {PIPE_REACH_M:g} m of the tail in x and y, "
+                         f"got x {x:g}, y {y:g}")
+    if not 0 < r <= PIPE_RADIUS_MAX_M:
+        raise ValueError(f"--pipe {text}: R must be in (0, {PIPE_RADIUS_MAX_M:g}] m, got {r:g}")
     return Pipe(x, y, r)
+
+
+def _seed(option, text):
+    """A seed option's value: an integer in 0..SEED_MAX; ValueError naming the option otherwise."""
+    try:
+        value = int(text)
+    except (TypeError, ValueError):
+        value = -1
+    if not 0 <= value <= SEED_MAX:
+        raise ValueError(f"{option} {text}: must be an integer in 0..{SEED_MAX}")
+    return value
 
 
 def add_arguments(parser):
     sub = parser.add_subparsers(dest="scout_command", metavar="SCOUT_COMMAND")
     for name, help_text in (("plan", "plan a head-raising trajectory (plan.json + figures)"),
                             ("run", "plan, then execute it in the MuJoCo plant (metrics.json)")):
-        p = sub.add_parser(name, help=help_text, description=help_text)
+        p = sub.add_parser(name, help=help_text, description=help_text, epilog=EXIT_STATUS)
         p.add_argument("--robot", required=True, help="robot name under config/robots/ or a YAML path")
         p.add_argument("--height-m", type=float, metavar="H", help="end condition: head height (m)")
         p.add_argument("--max-active", type=int, metavar="N",
                        help="most active modules (default: the robot's in config/scout.yaml)")
         p.add_argument("--pipe", metavar="X,Y,R",
                        help="vertical pipe: axis x, y and inner radius (m); a negative x: --pipe=-0.1,0.3,0.06")
-        p.add_argument("--seed", type=int, default=0, help="planner seed (default 0)")
+        p.add_argument("--seed", default="0", metavar="S", help=f"planner seed, 0..{SEED_MAX} (default 0)")
         p.add_argument("--out", required=True, metavar="DIR", help="results folder")
         p.add_argument("--no-restarts", action="store_true", help="no random restarts (benchmarks)")
         p.add_argument("--config", metavar="YAML", help="planner configuration (default config/scout.yaml)")
@@ -55,7 +89,8 @@ def add_arguments(parser):
             p.add_argument("--lower", action="store_true",
                            help="write the inverse: from the raised posture back to the lying one")
         if name == "run":
-            p.add_argument("--sim-seed", type=int, default=0, help="physics draws of config/sim.yaml")
+            p.add_argument("--sim-seed", default="0", metavar="S",
+                           help=f"physics draws of config/sim.yaml, 0..{SEED_MAX} (default 0)")
 
 
 def main(args) -> int:
@@ -64,6 +99,8 @@ def main(args) -> int:
         return 2
     try:
         pipe = _pipe(args.pipe) if args.pipe else None
+        seed = _seed("--seed", args.seed)
+        sim_seed = _seed("--sim-seed", args.sim_seed) if args.scout_command == "run" else 0
         if args.height_m is not None and not args.height_m > 0:
             raise ValueError(f"--height-m {args.height_m}: must be > 0")
         planner, cfg = build_planner(args.robot, args.config, torque_limit_nm=servo_torque_limit_nm())
@@ -71,9 +108,12 @@ def main(args) -> int:
         if args.height_m is not None and args.height_m > reach:
             raise ValueError(f"--height-m {args.height_m}: no plan reaches it, {planner.robot.name} "
                              f"is {reach:.2f} m long")
+        if pipe is not None and math.hypot(pipe.x_m, pipe.y_m) > reach:
+            raise ValueError(f"--pipe {args.pipe}: the axis is {math.hypot(pipe.x_m, pipe.y_m):.2f} m from the "
+                             f"tail, beyond the {reach:.2f} m length of {planner.robot.name}")
         try:
             plan = planner.plan(max_active=args.max_active, height_m=args.height_m, pipe=pipe,
-                                seed=args.seed, restarts=not args.no_restarts)
+                                seed=seed, restarts=not args.no_restarts)
         except PlanningError as err:
             if args.height_m is None or str(err).startswith("--height-m"):
                 raise
@@ -108,15 +148,18 @@ def main(args) -> int:
     if args.scout_command != "run":
         return 0
 
-
-    result = run_plan(plan, config_path("sim.yaml"), args.sim_seed, pipe, period)
+    result = run_plan(plan, config_path("sim.yaml"), sim_seed, pipe, period)
     (out / "metrics.json").write_text(json.dumps(result["metrics"], indent=2) + "\n")
     (out / "run.json").write_text(json.dumps(result["extra"], indent=2) + "\n")
     m = result["metrics"]
-    line = (f"physics: tipped {m['tipped']}, CoP inside {m['cop_inside_fraction']:.3f}, head "
+    line = (f"physics: {m['outcome']}, tipped {m['tipped']}, CoP inside {m['cop_inside_fraction']:.3f}, head "
             f"{m['final_head_height_m']:.3f} m (planned {m['planned_head_height_m']:.3f}), "
             f"max torque {100 * m['max_torque_ratio']:.0f} % of the limit")
     if pipe is not None:
-        line += f", head {result['extra']['head_to_pipe_axis_m']:.3f} m from the pipe axis"
+        line += (f", head {result['extra']['head_to_pipe_axis_m']:.3f} m from the pipe axis "
+                 f"(bore {result['extra']['bore_limit_m']:.3f} m)")
     print(line + f" -> {out / 'metrics.json'}")
+    if m["outcome"] != "ok":
+        print(f"scout run: {result['extra']['reason']}", file=sys.stderr)
+        return OUTCOME_NOT_OK
     return 0

@@ -1,7 +1,8 @@
 """A plan run in the MuJoCo plant, checked from the contact forces: metrics.json of the contract
 
-    {"tipped": bool, "cop_inside_fraction": float, "final_head_height_m": float,
-     "planned_head_height_m": float, "max_torque_ratio": float, "active_modules": int}
+    {"tipped": bool, "outcome": "ok" | "tipped" | "missed_pipe", "cop_inside_fraction": float,
+     "final_head_height_m": float, "planned_head_height_m": float, "max_torque_ratio": float,
+     "active_modules": int}
 
 - The start: the plant's robot lying in the plan's first posture (q0_rad, its head placed where
   the planner's world puts it), left to settle with the servos holding it.
@@ -24,8 +25,11 @@
 - tipped: a frame of the planned base rose more than LIFT_TIPPED_M off the floor (a base module
   lifting off unplanned), or the CoP left the contacts' polygon (or the floor carried nothing) for
   more than 0.1 s in a row.
+- outcome (verdict()): "tipped" as above; else "missed_pipe" when a pipe was given and the head
+  ended farther from its axis than the pipe's radius less a module's radius (the bore the planner
+  aims the head into); else "ok". run.json's `reason` says why in one line ("" when ok).
 """
-from typing import Callable, Optional
+from typing import Callable, NamedTuple, Optional
 
 import mujoco
 import numpy as np
@@ -49,6 +53,37 @@ COP_TOLERANCE_M = 1e-6
 LIFT_TIPPED_M = 0.02
 MIN_NORMAL_FORCE_N = 0.05
 CONTACT_GAP_M = 0.001
+TIPPED_AFTER_S = 0.1
+
+
+class Verdict(NamedTuple):
+    tipped: bool
+    outcome: str        # "ok", "tipped" or "missed_pipe"
+    reason: str         # one line; "" when ok
+
+
+def verdict(max_lift_m: float, longest_outside_s: float, longest_no_pressure_s: float,
+            head_to_axis_m: Optional[float] = None, bore_limit_m: Optional[float] = None) -> Verdict:
+    """How a run ended, from what the monitor measured: tipped when the planned base lifted more than
+    LIFT_TIPPED_M or the support was lost (CoP outside the contacts, or no floor pressure) for more
+    than TIPPED_AFTER_S; missed_pipe when a pipe was given (head_to_axis_m not None) and the head
+    is not within bore_limit_m of its axis. Tipping wins when both happened; the reason names both."""
+    why = []
+    if max_lift_m > LIFT_TIPPED_M:
+        why.append(f"a base module lifted {1000 * max_lift_m:.0f} mm off the floor "
+                   f"(limit {1000 * LIFT_TIPPED_M:.0f} mm)")
+    if longest_outside_s > TIPPED_AFTER_S:
+        why.append(f"the centre of pressure left the contacts' polygon for {longest_outside_s:.2f} s "
+                   f"(limit {TIPPED_AFTER_S} s)")
+    if longest_no_pressure_s > TIPPED_AFTER_S:
+        why.append(f"the floor carried no weight for {longest_no_pressure_s:.2f} s (limit {TIPPED_AFTER_S} s)")
+    reasons = ["the robot tipped: " + ", ".join(why)] if why else []
+    missed = head_to_axis_m is not None and not head_to_axis_m <= bore_limit_m
+    if missed:
+        reasons.append(f"missed the pipe: the head ended {head_to_axis_m:.3f} m from the pipe's axis, "
+                       f"outside the bore ({bore_limit_m:.3f} m: the pipe's radius less a module's radius)")
+    outcome = "tipped" if why else "missed_pipe" if missed else "ok"
+    return Verdict(bool(why), outcome, "; ".join(reasons))
 
 
 def send_through_driver(plant: Plant, plan: Plan, sample_period_s: float,
@@ -163,10 +198,15 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
         plant.step(DRIVER_PERIOD_S)
         monitor()
     head = plant.frame_positions()[0]
-    tipped = (monitor.max_lift_m > LIFT_TIPPED_M or monitor.longest_outside_s() > 0.1
-              or monitor.longest_no_pressure * DRIVER_PERIOD_S > 0.1)
+    head_to_axis_m = bore_limit_m = None
+    if pipe is not None:
+        head_to_axis_m = float(np.hypot(head[0] - pipe.x_m, head[1] - pipe.y_m))
+        bore_limit_m = float(pipe.radius_m - chain.radius_m)   # the planner's "under the mouth" rule
+    v = verdict(monitor.max_lift_m, monitor.longest_outside_s(), monitor.longest_no_pressure * DRIVER_PERIOD_S,
+                head_to_axis_m, bore_limit_m)
     metrics = {
-        "tipped": bool(tipped),
+        "tipped": v.tipped,
+        "outcome": v.outcome,
         "cop_inside_fraction": float(np.mean(monitor.inside)),
         "final_head_height_m": float(head[2]),
         "planned_head_height_m": float(plan.final_head_height_m),
@@ -175,7 +215,7 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
     }
     extra = {"head_xy_m": head[:2].tolist(), "max_base_lift_m": monitor.max_lift_m,
              "no_pressure_steps": monitor.no_pressure_steps,
-             "limit_violations": int(plant.limit_violations)}
+             "limit_violations": int(plant.limit_violations), "reason": v.reason}
     if pipe is not None:
-        extra["head_to_pipe_axis_m"] = float(np.hypot(head[0] - pipe.x_m, head[1] - pipe.y_m))
+        extra.update(head_to_pipe_axis_m=head_to_axis_m, bore_limit_m=bore_limit_m)
     return {"metrics": metrics, "extra": extra}

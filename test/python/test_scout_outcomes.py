@@ -1,0 +1,116 @@
+"""`scout run` says how the run ended: metrics.json's `outcome` ("ok", "tipped", "missed_pipe"), and
+an exit status of 3 with a one-line reason when the robot tipped in physics or the head ended
+outside the pipe's bore (runs/scout_execute.verdict)."""
+import json
+
+import pytest
+
+from snake_autonomy import cli
+from snake_autonomy.cli import scout as scout_cli
+from snake_autonomy.planning.fbsr.build import build_planner
+from snake_autonomy.runs import scout_execute
+from snake_autonomy.runs.scout_execute import verdict
+from snake_autonomy.sim.config import servo_torque_limit_nm
+
+
+def test_a_run_that_stayed_down_and_reached_the_bore_is_ok():
+    v = verdict(max_lift_m=0.001, longest_outside_s=0.0, longest_no_pressure_s=0.02,
+                head_to_axis_m=0.025, bore_limit_m=0.0446)
+    assert (v.tipped, v.outcome, v.reason) == (False, "ok", "")
+    assert verdict(0.0, 0.0, 0.0).outcome == "ok"          # no pipe given: nothing to miss
+
+
+@pytest.mark.parametrize("lift, outside, no_pressure, words", [
+    (0.150, 0.0, 0.0, "a base module lifted 150 mm off the floor (limit 20 mm)"),
+    (0.0, 0.3, 0.0, "the centre of pressure left the contacts' polygon for 0.30 s (limit 0.1 s)"),
+    (0.0, 0.0, 0.2, "the floor carried no weight for 0.20 s (limit 0.1 s)"),
+])
+def test_a_base_lift_or_a_lost_support_is_tipped_with_the_figure_and_the_limit(lift, outside, no_pressure, words):
+    v = verdict(lift, outside, no_pressure)
+    assert v.tipped is True and v.outcome == "tipped"
+    assert v.reason.startswith("the robot tipped: ") and words in v.reason
+
+
+def test_a_head_outside_the_bore_is_missed_pipe_with_the_distance_and_the_limit():
+    v = verdict(0.0, 0.0, 0.0, head_to_axis_m=0.106, bore_limit_m=0.0446)
+    assert (v.tipped, v.outcome) == (False, "missed_pipe")
+    assert v.reason == "missed the pipe: the head ended 0.106 m from the pipe's axis, outside the bore " \
+                       "(0.045 m: the pipe's radius less a module's radius)"
+
+
+def test_a_head_at_a_nan_distance_is_not_in_the_bore():
+    assert verdict(0.0, 0.0, 0.0, head_to_axis_m=float("nan"), bore_limit_m=0.0446).outcome == "missed_pipe"
+
+
+def test_tipping_is_the_outcome_when_both_happened_and_the_reason_names_both():
+    v = verdict(0.15, 0.0, 0.0, head_to_axis_m=0.2, bore_limit_m=0.0446)
+    assert v.outcome == "tipped" and "lifted 150 mm" in v.reason and "missed the pipe" in v.reason
+
+
+def fake_run_plan(max_lift_m, head_to_axis_m=None):
+    """run_plan as the CLI calls it, its physics replaced by the given figures."""
+    def run(plan, sim_yaml, seed, pipe, period):
+        bore = pipe.radius_m - plan.chain.radius_m if pipe is not None else None
+        v = verdict(max_lift_m, 0.0, 0.0, head_to_axis_m, bore)
+        metrics = {"tipped": v.tipped, "outcome": v.outcome, "cop_inside_fraction": 1.0,
+                   "final_head_height_m": 0.1, "planned_head_height_m": 0.1, "max_torque_ratio": 0.2,
+                   "active_modules": plan.active_modules}
+        extra = {"head_xy_m": [0.0, 0.0], "max_base_lift_m": max_lift_m, "reason": v.reason}
+        if pipe is not None:
+            extra.update(head_to_pipe_axis_m=head_to_axis_m, bore_limit_m=bore)
+        return {"metrics": metrics, "extra": extra}
+    return run
+
+
+@pytest.mark.parametrize("fake, pipe, outcome, status, words", [
+    (fake_run_plan(0.0), [], "ok", 0, None),
+    (fake_run_plan(0.150), [], "tipped", 3, "scout run: the robot tipped: a base module lifted 150 mm"),
+    (fake_run_plan(0.0, head_to_axis_m=0.106), ["--pipe", "0.05,-0.10,0.07"], "missed_pipe", 3,
+     "scout run: missed the pipe: the head ended 0.106 m from the pipe's axis, outside the bore (0.045 m"),
+])
+def test_cli_run_exit_status_and_metrics_outcome(tmp_path, capsys, monkeypatch, fake, pipe, outcome, status, words):
+    monkeypatch.setattr(scout_cli, "run_plan", fake)
+    out = tmp_path / "run"
+    assert cli.main(["scout", "run", "--robot", "unified_snake", "--max-active", "2", *pipe,
+                     "--out", str(out)]) == status
+    assert json.loads((out / "metrics.json").read_text())["outcome"] == outcome
+    err = capsys.readouterr().err
+    if words is None:
+        assert err == ""
+    else:
+        assert words in err and len(err.strip().splitlines()) == 1
+
+
+def test_cli_run_help_documents_the_exit_status(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["scout", "run", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "exit status: 0 the run is ok; 1 bad options or files; 2 usage; 3 the robot tipped or missed the pipe" \
+        in text
+
+
+def test_run_plan_records_the_outcome_of_a_plan_in_physics(root, monkeypatch):
+    """The verdict run_plan writes comes from its monitor: a base lift over the limit is tipped."""
+    planner = build_planner("unified_snake", torque_limit_nm=servo_torque_limit_nm())[0]
+    plan = planner.plan(max_active=2, seed=0, restarts=False)
+    real_call = scout_execute.Monitor.__call__
+
+    def lifting(self, _t=None):
+        real_call(self, _t)
+        self.max_lift_m = max(self.max_lift_m, 0.150)
+    monkeypatch.setattr(scout_execute.Monitor, "__call__", lifting)
+    m = scout_execute.run_plan(plan, root / "config/sim.yaml", seed=0)["metrics"]
+    assert m["tipped"] is True and m["outcome"] == "tipped"
+
+
+def test_cli_run_of_a_plan_that_tips_in_physics_exits_3(tmp_path, capsys):
+    """14 active modules on the unified snake, seed 1: the plan passes the planner's checks, but in
+    physics the base lifts 150 mm off the floor (the planner's module masses sit at the rear joints,
+    the plant's mid-module). About 30 s."""
+    out = tmp_path / "tip"
+    assert cli.main(["scout", "run", "--robot", "unified_snake", "--max-active", "14", "--seed", "1",
+                     "--out", str(out)]) == 3
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["tipped"] is True and m["outcome"] == "tipped"
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("scout run: the robot tipped: a base module lifted 1") and "mm off the floor" in err
