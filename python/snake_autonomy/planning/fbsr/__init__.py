@@ -4,6 +4,7 @@ config.py     config/scout.yaml: planner parameters and each robot's lying postu
 chain.py      kinematics with the world fixed at the tail, the lying posture, ground contacts
 batch_kinematics.py  the same FK with numpy on a batch of postures (the cost and its gradient)
 support.py    support polygons, the ZMP's distance to their edges (shapely)
+collision.py  self-collision: capsule-capsule clearance of non-adjacent modules
 spline.py     the one-parameter cubic of eq. 3-8
 cost.py       C = K1 Cd + K2 Cs + K3 Cp (+ torque, ground and clearance terms), eq. 9-15
 stage.py      one optimised stage (scipy) with its global checks and random restarts
