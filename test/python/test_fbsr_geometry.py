@@ -55,22 +55,28 @@ def test_active_joints_move_only_the_active_frames_the_base_stays_put(chain):
     assert np.abs(after.positions[:12] - before.positions[:12]).max() > 0.05
 
 
-def test_zmp_is_the_centre_of_gravity_projected_on_the_floor(chain):
+def test_zmp_is_the_centre_of_gravity_with_each_module_mass_at_its_centre(chain):
+    """As the MJCF and the URDF place them: the head module (base + head mass) midway between
+    frames 0 and 1, link_i's mass midway between frames i and i + 1."""
     q = chain.q_lying.copy()
     q[0], q[2] = 0.8, -0.4
     pose = chain.pose(q)
-    cog = (chain.masses[:, None] * pose.positions).sum(axis=0) / chain.masses.sum()
+    m = chain.masses
+    module_kg = np.concatenate([[m[0] + m[1]], m[2:]])
+    centres = 0.5 * (pose.positions[:-1] + pose.positions[1:])
+    cog = (module_kg[:, None] * centres).sum(axis=0) / module_kg.sum()
     np.testing.assert_allclose(pose.zmp, cog[:2], atol=1e-12)
+    np.testing.assert_allclose(chain.positions_com(q)[1], cog, atol=1e-12)
 
 
 def test_gravity_torque_of_the_horizontal_head_is_its_weight_times_lever(chain):
-    """The straight robot: joint 1 (pitch) holds the head tip's mass at lever H."""
+    """The straight robot: joint 1 (pitch) holds the head module's mass at lever H / 2."""
     q = np.zeros(chain.num_joints)
     pose = chain.pose(q)
     tau = chain.gravity_torques(pose, 2)
-    # joint 1 at frame 1: the head tip mass m0 at lever H, horizontal, about a horizontal axis
+    # joint 1 at frame 1: the head module (m0 + m1) at its centre, lever H / 2, about a horizontal axis
     h = chain.robot.head_length_m
-    assert abs(tau[0]) == pytest.approx(chain.masses[0] * 9.81 * h, rel=1e-9)
+    assert abs(tau[0]) == pytest.approx((chain.masses[0] + chain.masses[1]) * 9.81 * h / 2, rel=1e-9)
     # joint 2 is a yaw joint (vertical axis when flat): gravity gives it no torque
     assert abs(tau[1]) < 1e-12
 

@@ -103,12 +103,18 @@ def test_run_plan_records_the_outcome_of_a_plan_in_physics(root, monkeypatch):
     assert m["tipped"] is True and m["outcome"] == "tipped"
 
 
-def test_cli_run_of_a_plan_that_tips_in_physics_exits_3(tmp_path, capsys):
-    """14 active modules on the unified snake, seed 1: the plan passes the planner's checks, but in
-    physics the base lifts 150 mm off the floor (the planner's module masses sit at the rear joints,
-    the plant's mid-module). About 30 s."""
+def test_cli_run_of_a_plan_that_tips_in_physics_exits_3(tmp_path, capsys, monkeypatch):
+    """A run whose monitor measures a base lift of 150 mm (injected: the planner's mass model is
+    the plant's, so no plan it accepts is known to tip) ends with exit 3, metrics.json's tipped
+    outcome and the reason on stderr."""
+    real_call = scout_execute.Monitor.__call__
+
+    def lifting(self, _t=None):
+        real_call(self, _t)
+        self.max_lift_m = max(self.max_lift_m, 0.150)
+    monkeypatch.setattr(scout_execute.Monitor, "__call__", lifting)
     out = tmp_path / "tip"
-    assert cli.main(["scout", "run", "--robot", "unified_snake", "--max-active", "14", "--seed", "1",
+    assert cli.main(["scout", "run", "--robot", "unified_snake", "--max-active", "2", "--seed", "1",
                      "--out", str(out)]) == 3
     m = json.loads((out / "metrics.json").read_text())
     assert m["tipped"] is True and m["outcome"] == "tipped"

@@ -71,8 +71,25 @@ def lying_posture(robot, pitch_offset_rad: float, yaw_body_rad: float, yaw_tail_
     return q
 
 
+def module_frame_weights(masses_kg) -> np.ndarray:
+    """The robot's mass model as weights on the frames: the robot YAML's masses per frame (base,
+    head, link_1..link_N) placed as the MJCF and the URDF place them, each module's at its centre
+    (the head module carries base + head, module i = link_i carries link_i's), and each module's
+    mass split half and half onto its two end frames (the centre of a segment is the mean of its
+    ends, so the CoG and the gravity torques about any joint are the same)."""
+    m = np.asarray(masses_kg, float)
+    modules = np.concatenate([[m[0] + m[1]], m[2:]])     # module 0 = frames 0-1, i = frames i, i+1
+    w = np.zeros(len(m))
+    w[:-1] += 0.5 * modules
+    w[1:] += 0.5 * modules
+    return w
+
+
 class Chain:
-    """Forward kinematics in the tail-fixed world, the masses, the base's ground contacts."""
+    """Forward kinematics in the tail-fixed world, the masses, the base's ground contacts.
+
+    Masses: `module_frame_weights` (each module's mass at its centre, as in the MJCF and the
+    URDF), not the robot YAML's per-frame masses at the frames: the CoG, the ZMP and the torques."""
 
     def __init__(self, robot, q_lying):
         self.robot = robot
@@ -82,7 +99,9 @@ class Chain:
         self.num_modules = robot.num_joints + 1
         self.frame_names = list(robot.frame_names)
         self.joint_names = list(robot.joint_names)
-        self.masses = np.asarray(robot.masses_kg, float)
+        self.masses = np.asarray(robot.masses_kg, float)      # the robot YAML's, per frame
+        self.frame_weights_kg = module_frame_weights(self.masses)
+        self._mass_fraction = self.frame_weights_kg / self.frame_weights_kg.sum()
         self.radius_m = float(robot.link_radius_m)
         self.lower = np.asarray(robot.joint_lower_rad, float)
         self.upper = np.asarray(robot.joint_upper_rad, float)
@@ -97,7 +116,8 @@ class Chain:
     # ---- kinematics ----------------------------------------------------------------------------
     def _relative(self, q):
         s = self.kin.compute([0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0], q)
-        return s.link_positions, s.link_rotations, s.com
+        p = np.asarray(s.link_positions, float)
+        return p, s.link_rotations, self._mass_fraction @ p
 
     def pose(self, q) -> Pose:
         """Every frame in the world whose tail frame stays where the lying posture put it."""
@@ -123,7 +143,7 @@ class Chain:
         r_nominal = rot0[-1]
         pts = (p - p[-1]) @ rot[-1]           # frames in the tail frame
         pts = pts @ r_nominal.T               # ... rotated as the straight robot's tail
-        com = (self.masses[:, None] * pts).sum(axis=0) / self.masses.sum()
+        com = self._mass_fraction @ pts
         fix = _resting_rotation(pts, com)
         r_tail = fix @ r_nominal
         pts = pts @ fix.T
@@ -137,7 +157,7 @@ class Chain:
         """Batched FK of the postures that move only the first `active_modules` joints from
         q_start (batch_kinematics.py; the same chain as pose(), computed with numpy)."""
         if self._batch_model is None:
-            self._batch_model = ChainModel(self._relative, self.num_joints, self.masses)
+            self._batch_model = ChainModel(self._relative, self.num_joints, self.frame_weights_kg)
         pose = self.pose(q_start)
         return StageKinematics(self._batch_model, pose.positions, pose.rotations, active_modules)
 
@@ -157,7 +177,7 @@ class Chain:
         g = np.array([0.0, 0.0, -9.81])
         p, rot = pose.positions, pose.rotations
         out = np.empty(active_modules)
-        weights = self.masses[:, None] * g
+        weights = self.frame_weights_kg[:, None] * g
         moments = np.cross(p, weights)                   # r x F about the origin, per frame
         cum_m = np.cumsum(moments, axis=0)
         cum_f = np.cumsum(weights, axis=0)

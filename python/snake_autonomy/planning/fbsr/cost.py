@@ -1,6 +1,8 @@
 """The stage cost C = K1 Cd + K2 Cs + K3 Cp (paper eq. 9), plus the optional torque term the paper
 suggests (III.D, last paragraph) and two penalties the paper's robot did not need written down:
-no module below the floor, no module through another.
+no module below the floor, no module through another (collision.py: capsules of non-adjacent
+modules kept the self-collision margin apart, plus COST_CLEARANCE_EXTRA_M, since the cost sees
+only its few samples and the check every 50 ms).
 
 - Cd, the directive (eq. 10-12): -z of the head at t_end; or the target forms: |z - H| for a
   head height H, |p - target| for a head position.
@@ -21,7 +23,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from . import spline
+from . import collision, spline
 from .chain import Chain
 from .support import Support
 
@@ -35,8 +37,13 @@ class Weights:
     ks_per_m2: float = 1.0e4  # Ks of eq. 13 (l in metres)
     k_out_per_m2: float = 1.0e3   # the rise outside the polygon
     k_ground_per_m2: float = 1.0e4
-    k_clearance_per_m2: float = 1.0e3
+    k_clearance_per_m2: float = 1.0e5   # self-collision
+    self_margin_m: float = 0.0          # capsule clearance kept between non-adjacent modules
     k_wall_per_m2: float = 1.0e4     # the pipe's wall (0: ignored, the pipe only attracts)
+
+
+#: The cost keeps capsules this much farther apart than the margin the checks require.
+COST_CLEARANCE_EXTRA_M = 0.003
 
 
 @dataclass
@@ -116,10 +123,7 @@ class StageCost:
         self._trapezoid[[0, -1]] *= 0.5
         self.pipe = pipe
         self.torque_limit_nm = float(torque_limit_nm)
-        n_f = chain.num_frames
-        i, j = np.meshgrid(np.arange(n_f), np.arange(n_f), indexing="ij")
-        moving = (i < self.m) | (j < self.m)
-        self._pairs = np.argwhere((j - i >= 3) & moving)
+        self._pairs = collision.module_pairs(chain.num_modules, moving_below=self.m)
         self.kin = chain.stage_kinematics(self.q_start, self.m)
 
     # ---- trajectory ----------------------------------------------------------------------------
@@ -168,9 +172,9 @@ class StageCost:
                        for x in row] for row in qq]
             out["Ct"] = self._integrate(np.asarray(ratios))
         out["ground"] = self._integrate(np.sum(np.clip(r - pos[:, :, :m, 2], 0.0, None) ** 2, axis=2))
-        pa, pb = pos[:, :, self._pairs[:, 0]], pos[:, :, self._pairs[:, 1]]
-        gap = np.clip(2.0 * r - np.linalg.norm(pa - pb, axis=3), 0.0, None)
-        out["clearance"] = self._integrate(np.sum(gap ** 2, axis=2))
+        short = np.clip(w.self_margin_m + COST_CLEARANCE_EXTRA_M
+                        - collision.clearances(pos, r, self._pairs), 0.0, None)
+        out["clearance"] = self._integrate(np.sum(short ** 2, axis=2))
         return out
 
     def totals(self, deltas) -> np.ndarray:

@@ -6,7 +6,8 @@
      "final_head_height_m": float, "restarts": int, "planning_time_s": float}
 
 Samples at most 50 ms apart (the stages' sample grids, concatenated); frames in the kinematics
-binding's order (base_link, head_link, link_1 ... link_N) with its masses; support_polygon_m is U,
+binding's order (base_link, head_link, link_1 ... link_N) with the robot YAML's masses; zmp_m is the
+CoG with each module's mass at its centre, as in the MJCF (chain.module_frame_weights); support_polygon_m is U,
 the hull of the contacts of the base at that sample (not shrunk by the planner's margin).
 """
 import json

@@ -6,6 +6,12 @@ Yaw joints: every joint of the active portion is optimised, pitch or yaw. Lying 
 pitch joints can lift a module (a yaw joint then turns about the vertical); the yaw joints of the
 active portion move the ZMP sideways and, once their module is tilted, add to the height. The
 base's joints, pitch and yaw, keep the lying posture's angles.
+
+Self-collision: the lying posture and every sample of every stage keep the capsules of
+non-adjacent modules self_collision_margin_m apart (collision.py; a cost term pushes, the stage
+check refuses); a plan that cannot is refused with the modules and the distance. The last raise
+(every module active) runs all its restarts and keeps the best that passes: its first local
+optimum often leaves the head well below what the same modules reach.
 """
 import time
 from dataclasses import dataclass, field
@@ -14,10 +20,11 @@ from typing import List, Optional
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from . import collision
 from .chain import Chain, lying_posture
 from .config import PlannerConfig, RobotPosture
 from .cost import Directive, Pipe, StageCost, Weights
-from .stage import Checks, PlanningError, Stage, optimise
+from .stage import Checks, PlanningError, Stage, optimise, self_collision_problem
 from .support import Support, convex_hull
 
 
@@ -102,6 +109,10 @@ class FbsrPlanner:
         if not self.support(m).contains_point(self.chain.pose(q).zmp):
             raise PlanningError(f"{self.robot.name}: the lying posture's ZMP is not inside the "
                                 f"support polygon of {m} active modules")
+        clearance, pair = collision.worst_clearance(self.chain.pose(q).positions, self.chain.radius_m)
+        if clearance < cfg.self_collision_margin_m:
+            raise PlanningError(f"{self.robot.name}: the lying posture: "
+                                + self_collision_problem(clearance, pair, cfg.self_collision_margin_m))
         plan = Plan(self.robot.name, self.chain, [])
         started = time.perf_counter()
         head_before = self.chain.pose(q).head[2]
@@ -128,8 +139,9 @@ class FbsrPlanner:
                 floor = max(head_before, raised) if m >= max_active else head_before
                 stage = self._stage("raise", m, q, u, Checks(
                     u, head_above_m=floor if transferred else None,
-                    period_s=cfg.sample_period_s), directive, pipe, rng, cfg.k1, restarts,
-                    random_first=reseed)
+                    period_s=cfg.sample_period_s, self_margin_m=cfg.self_collision_margin_m),
+                    directive, pipe, rng, cfg.k1, restarts, random_first=reseed,
+                    keep_best=m >= max_active)
             except PlanningError:
                 # No raise from here passes the checks: re-plan the previous raise (and the
                 # transfer after it) from a random start, at most max_backtracks times.
@@ -193,7 +205,8 @@ class FbsrPlanner:
             if target.contains_point(self.chain.pose(q).zmp):
                 return q
             k1 = max(0.0, k1 - cfg.k1_step)
-            checks = Checks(u, end_within=target, period_s=cfg.sample_period_s)
+            checks = Checks(u, end_within=target, period_s=cfg.sample_period_s,
+                            self_margin_m=cfg.self_collision_margin_m)
             started = time.perf_counter()
             try:
                 stage = self._stage("shift", m, q, target, checks, directive, pipe, rng, k1,
@@ -212,19 +225,21 @@ class FbsrPlanner:
                             f"{m_next} active modules (K1 lowered to {k1:.2f})")
 
     def _stage(self, kind, m, q, support, checks, directive, pipe, rng, k1, restarts,
-               next_contacts=None, max_restarts=None, random_first=False) -> Stage:
+               next_contacts=None, max_restarts=None, random_first=False, keep_best=False) -> Stage:
         cfg = self.cfg
         # The pipe's pull is a directive too: a shift lowers K3 in proportion with K1.
         k3 = cfg.k3 * (k1 / cfg.k1 if cfg.k1 > 0 else 1.0) if pipe is not None else 0.0
         weights = Weights(k1=k1, k2=cfg.k2, k3=k3,
                           k_torque=cfg.k_torque, ks_per_m2=cfg.ks_per_m2,
-                          k_out_per_m2=cfg.k_out_per_m2, k_wall_per_m2=cfg.k_wall_per_m2)
+                          k_out_per_m2=cfg.k_out_per_m2, k_wall_per_m2=cfg.k_wall_per_m2,
+                          k_clearance_per_m2=cfg.k_self_collision_per_m2,
+                          self_margin_m=cfg.self_collision_margin_m)
         cost = StageCost(self.chain, q, m, support, weights, directive, cfg.stage_duration_s,
                          cfg.cost_samples, pipe, self.torque_limit_nm)
         max_restarts = cfg.max_restarts if max_restarts is None else max_restarts
         return optimise(cost, checks, rng, max_restarts, np.radians(cfg.joint_margin_deg),
                         kind, self.chain.base_contacts(m), next_contacts, k1, restarts,
-                        random_first)
+                        random_first, keep_best)
 
     @staticmethod
     def _add(plan: Plan, stage: Stage) -> None:

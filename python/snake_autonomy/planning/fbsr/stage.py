@@ -9,7 +9,7 @@ from typing import Optional
 import numpy as np
 from scipy.optimize import minimize
 
-from . import spline
+from . import collision, spline
 from .cost import StageCost, pipe_wall_overlap
 from .support import Support
 
@@ -67,6 +67,7 @@ class Checks:
     head_above_m: Optional[float] = None  # the head ends higher than this (after a transfer)
     ground_tol_m: float = 0.002
     period_s: float = 0.05
+    self_margin_m: float = 0.0            # capsules of non-adjacent modules at least this far apart
 
     def failures(self, cost: StageCost, delta) -> list:
         pos, com = cost.positions_com(delta, sample_times(cost.t_end_s, self.period_s))
@@ -85,17 +86,31 @@ class Checks:
             wall = float(pipe_wall_overlap(pos[:, :cost.m], cost.pipe, r).max())
             if wall > self.ground_tol_m:
                 out.append(f"a module goes {1e3 * wall:.1f} mm into the pipe's wall")
+        clearance, pair = collision.worst_clearance(pos, r)
+        if clearance < self.self_margin_m:
+            out.append(self_collision_problem(clearance, pair, self.self_margin_m))
         head_z = float(pos[-1, 0, 2])
         if self.head_above_m is not None and head_z <= self.head_above_m:
             out.append(f"head ends at {head_z:.3f} m, not above {self.head_above_m:.3f} m")
         return out
 
 
+def self_collision_problem(clearance_m: float, pair, margin_m: float) -> str:
+    """The reason a posture's modules are too close, in words."""
+    how = (f"overlap by {-1e3 * clearance_m:.1f} mm" if clearance_m < 0
+           else f"come {1e3 * clearance_m:.1f} mm apart")
+    return (f"modules {pair[0]} and {pair[1]} {how} (self-collision: capsules at least "
+            f"{1e3 * margin_m:.1f} mm apart)")
+
+
 def optimise(cost: StageCost, checks: Checks, rng: np.random.Generator, max_restarts: int,
              joint_margin_rad: float, kind: str, contacts_xy, next_contacts_xy=None,
-             k1: float = 1.0, restarts_enabled: bool = True, random_first: bool = False) -> Stage:
+             k1: float = 1.0, restarts_enabled: bool = True, random_first: bool = False,
+             keep_best: bool = False) -> Stage:
     """The best stage for `cost` that passes `checks`, with random restarts; PlanningError if
-    none does within max_restarts. random_first: the first attempt starts at random too."""
+    none does within max_restarts. random_first: the first attempt starts at random too.
+    keep_best: every attempt runs and the passing one of least cost wins (else the first that
+    passes)."""
     m = cost.m
     chain = cost.chain
     lo, hi = spline.delta_bounds(cost.q_start[:m], chain.lower[:m], chain.upper[:m],
@@ -103,6 +118,7 @@ def optimise(cost: StageCost, checks: Checks, rng: np.random.Generator, max_rest
     bounds = list(zip(lo, hi))
     started = time.perf_counter()
     problems = []
+    best = None
     attempts = 1 + (max_restarts if restarts_enabled else 0)
     for attempt in range(attempts):
         if attempt == 0 and not random_first:
@@ -113,9 +129,13 @@ def optimise(cost: StageCost, checks: Checks, rng: np.random.Generator, max_rest
         res = minimize(cost.value_and_gradient, x0, args=(GRADIENT_STEP_RAD, lo, hi), jac=True,
                        method="L-BFGS-B", bounds=bounds, options={"maxiter": 200})
         problems = checks.failures(cost, res.x)
-        if not problems:
-            return Stage(kind, m, cost.q_start.copy(), np.asarray(res.x, float), cost.t_end_s,
-                         np.asarray(contacts_xy, float), next_contacts_xy, k1, attempt,
-                         time.perf_counter() - started, cost.terms(res.x))
+        if not problems and (best is None or res.fun < best[0]):
+            best = (float(res.fun), np.asarray(res.x, float), attempt)
+        if best is not None and not keep_best:
+            break
+    if best is not None:
+        _, x, attempt = best
+        return Stage(kind, m, cost.q_start.copy(), x, cost.t_end_s, np.asarray(contacts_xy, float),
+                     next_contacts_xy, k1, attempt, time.perf_counter() - started, cost.terms(x))
     raise PlanningError(f"{kind} stage with {m} active modules: no trajectory passes the checks "
                         f"after {attempts} attempts ({'; '.join(problems)})")
