@@ -1,12 +1,14 @@
 """FBSR in physics (MuJoCo plant): the centre of pressure of a robot at rest is its CoG, and a short
 plan executed as servo goals does not tip the robot and reaches the planned head height."""
+import dataclasses
+
 import mujoco
 import numpy as np
 import pytest
 
 from snake_autonomy import _core
 from snake_autonomy.planning.fbsr.build import build_planner
-from snake_autonomy.runs.scout_execute import centre_of_pressure, run_plan
+from snake_autonomy.runs.scout_execute import centre_of_pressure, run_plan, self_contacts
 from snake_autonomy.sim.config import SimConfig, servo_torque_limit_nm
 from snake_autonomy.sim.plant import Plant
 
@@ -35,6 +37,30 @@ def test_short_plan_executed_in_physics_does_not_tip(root):
     assert m["final_head_height_m"] == pytest.approx(m["planned_head_height_m"], abs=0.02)
     assert 0 < m["max_torque_ratio"] < 1.0
     assert result["extra"]["limit_violations"] == 0
+    assert result["extra"]["self_contact_steps"] == 0
+
+
+def test_links_that_are_not_neighbours_collide_in_the_scout_plant(root):
+    """physics.self_collision (on for scout runs): joints 2-6 at 1.2 rad coil the body so that the
+    head's capsule reaches 17 mm into link_7's (collision.py): a contact with it on, none with it
+    off; neighbours, which share a joint and touch there, never make one."""
+    robot = _core.RobotModel.from_yaml(str(root / "config/robots/unified_snake.yaml"))
+    sim = SimConfig.from_yaml(root / "config/sim.yaml")
+    q0 = np.zeros(robot.num_joints)
+    q0[1:6] = 1.2
+    counts = {}
+    for on in (False, True):
+        cfg = dataclasses.replace(sim, physics=dataclasses.replace(sim.physics, self_collision=on))
+        plant = Plant(robot, cfg.draw(0, num_joints=robot.num_joints), q0_rad=q0)
+        model, data = plant.model, plant.data
+        mujoco.mj_forward(model, data)
+        counts[on] = self_contacts(model, data)
+        body = model.geom_bodyid
+        pairs = [(body[c.geom1], body[c.geom2]) for c in data.contact[:data.ncon]]
+        robot_pairs = [(a, b) for a, b in pairs if a and b]
+        assert len(robot_pairs) == counts[on]
+        assert not any(model.body_parentid[a] == b or model.body_parentid[b] == a for a, b in robot_pairs)
+    assert counts[False] == 0 and counts[True] > 0
 
 
 def test_cli_run_writes_metrics_with_the_contract_keys(tmp_path):

@@ -25,10 +25,14 @@
 - tipped: a frame of the planned base rose more than LIFT_TIPPED_M off the floor (a base module
   lifting off unplanned), or the CoP left the contacts' polygon (or the floor carried nothing) for
   more than 0.1 s in a row.
+- Self-collision is on in the plant (physics.self_collision, whatever sim.yaml says): links that
+  are not neighbours collide. Steps with a contact between two links are counted
+  (run.json's self_contact_steps); the planner keeps the modules apart, so this should be 0.
 - outcome (verdict()): "tipped" as above; else "missed_pipe" when a pipe was given and the head
   ended farther from its axis than the pipe's radius less a module's radius (the bore the planner
   aims the head into); else "ok". run.json's `reason` says why in one line ("" when ok).
 """
+import dataclasses
 from typing import Callable, NamedTuple, Optional
 
 import mujoco
@@ -132,6 +136,13 @@ def centre_of_pressure(model, data, floor_geom: int):
     return (f[:, None] * p).sum(axis=0) / f.sum(), p
 
 
+def self_contacts(model, data) -> int:
+    """Contacts between two geoms of the robot (both on a body other than the world)."""
+    body = model.geom_bodyid
+    return sum(1 for i in range(data.ncon)
+               if body[data.contact[i].geom1] != 0 and body[data.contact[i].geom2] != 0)
+
+
 class Monitor:
     """What one run measures at every driver step."""
 
@@ -144,9 +155,12 @@ class Monitor:
         self.no_pressure_steps = 0    # steps with no floor contact pushing up: no CoP to check
         self.longest_no_pressure, self._no_pressure_run = 0, 0
         self.base_from = plant.robot.num_frames   # frames >= this index are the planned base
+        self.self_contact_steps = 0   # steps with a contact between two of the robot's links
 
     def __call__(self, _t=None) -> None:
         cop, contacts = centre_of_pressure(self.plant.model, self.plant.data, self.floor)
+        if self_contacts(self.plant.model, self.plant.data):
+            self.self_contact_steps += 1
         frames = self.plant.frame_positions()
         touching = frames[frames[:, 2] - self.radius_m < CONTACT_GAP_M, :2]
         contacts = np.vstack([contacts, touching])
@@ -179,7 +193,9 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
     """Execute `plan` in a fresh plant (sim.yaml's physics, seed's draws); metrics.json's dict."""
     chain = plan.chain
     robot = chain.robot
-    params = SimConfig.from_yaml(sim_yaml).draw(seed, num_joints=robot.num_joints)
+    sim = SimConfig.from_yaml(sim_yaml)
+    sim = dataclasses.replace(sim, physics=dataclasses.replace(sim.physics, self_collision=True))
+    params = sim.draw(seed, num_joints=robot.num_joints)
     samples = stage_samples(plan, sample_period_s)
     q = np.array([qq for _, _, qq in samples])
     start_pose = chain.pose(q[0])
@@ -215,6 +231,7 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
     }
     extra = {"head_xy_m": head[:2].tolist(), "max_base_lift_m": monitor.max_lift_m,
              "no_pressure_steps": monitor.no_pressure_steps,
+             "self_contact_steps": monitor.self_contact_steps,
              "limit_violations": int(plant.limit_violations), "reason": v.reason}
     if pipe is not None:
         extra.update(head_to_pipe_axis_m=head_to_axis_m, bore_limit_m=bore_limit_m)

@@ -17,6 +17,8 @@ Bodies and sites:
 - body `link_i` has its origin at joint i, oriented as Rz(-q_i) of the previous frame, and carries
   a capsule of length L along its -x axis with link i's mass. Site `link_i` (at the capsule's far
   end, twisted by twist_i) is the kinematic frame link_i of eq. 3.4.
+- physics.self_collision: links collide with each other too (contype 1, conaffinity 3), except
+  neighbours (a `<contact><exclude>` per joint).
 - actuator `servo_i`: the position servo of joint i. Its internal state (act) is the setpoint,
   integrated from a velocity command bounded by the joint speed limit and clamped to the joint's
   limits; force = kp (setpoint - q) - kv q', saturated at the torque limit.
@@ -136,7 +138,15 @@ def build_mjcf(robot, params: SimParams, scene_xml: str = "", assets_xml: str = 
     for _ in range(n):
         indent = indent[:-2]
         lines.append(f"{indent}</body>")
-    lines += ['    </body>', '  </worldbody>', '  <actuator>']
+    lines += ['    </body>', '  </worldbody>']
+    if phys.self_collision:
+        # Neighbours share a joint and always touch there: excluded explicitly (MuJoCo's parent
+        # filter would too); every other pair of links collides.
+        bodies = ["base_link"] + [f"link_{i + 1}" for i in range(n)]
+        lines += ['  <contact>',
+                  *[f'    <exclude body1="{a}" body2="{b}"/>' for a, b in zip(bodies, bodies[1:])],
+                  '  </contact>']
+    lines += ['  <actuator>']
     for i in range(n):
         kp, kv = params.kp_nm_per_rad[i], params.kv_nm_s_per_rad[i]
         lines.append(
