@@ -10,8 +10,9 @@ base's joints, pitch and yaw, keep the lying posture's angles.
 Self-collision: the lying posture and every sample of every stage keep the capsules of
 non-adjacent modules self_collision_margin_m apart (collision.py; a cost term pushes, the stage
 check refuses); a plan that cannot is refused with the modules and the distance. The last raise
-(every module active) runs all its restarts and keeps the best that passes: its first local
-optimum often leaves the head well below what the same modules reach.
+to the highest head (every module active, no height or target asked) runs all its restarts and
+keeps the best that passes: its first local optimum often leaves the head well below what the
+same modules reach.
 """
 import time
 from dataclasses import dataclass, field
@@ -141,7 +142,7 @@ class FbsrPlanner:
                     u, head_above_m=floor if transferred else None,
                     period_s=cfg.sample_period_s, self_margin_m=cfg.self_collision_margin_m),
                     directive, pipe, rng, cfg.k1, restarts, random_first=reseed,
-                    keep_best=m >= max_active)
+                    keep_best=m >= max_active and target_m is None and height_m is None)
             except PlanningError:
                 # No raise from here passes the checks: re-plan the previous raise (and the
                 # transfer after it) from a random start, at most max_backtracks times.
