@@ -33,6 +33,7 @@ def test_every_problem_is_listed_with_its_key_its_value_and_the_file(tmp_path):
     ("self_collision_margin_m", -0.001, "planner.self_collision_margin_m: must be >= 0, got -0.001"),
     ("self_collision_margin_m", 0.2, "planner.self_collision_margin_m: must be at most 0.05 m, got 0.2"),
     ("k_self_collision_per_m2", 0, "planner.k_self_collision_per_m2: must be > 0, got 0.0"),
+    ("self_collision_push_m", 1, "planner.self_collision_push_m: must be at most 0.1 m, got 1.0"),
     ("max_restarts", 10 ** 9, "planner.max_restarts: must be at most 100, got 1000000000"),
     ("cost_samples", 10 ** 8, "planner.cost_samples: must be at most 200, got 100000000"),
     ("head_height_tol_m", 0, "planner.head_height_tol_m: must be > 0, got 0.0"),

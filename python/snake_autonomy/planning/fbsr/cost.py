@@ -1,8 +1,9 @@
 """The stage cost C = K1 Cd + K2 Cs + K3 Cp (paper eq. 9), plus the optional torque term the paper
 suggests (III.D, last paragraph) and two penalties the paper's robot did not need written down:
 no module below the floor, no module through another (collision.py: capsules of non-adjacent
-modules kept the self-collision margin apart, plus COST_CLEARANCE_EXTRA_M, since the cost sees
-only its few samples and the check every 50 ms).
+modules pushed apart to the self-collision margin plus a push, which covers the servos' sag in
+physics and the cost's few samples against the check's 50 ms; a pair that starts the stage
+closer than that is pushed only to where it started).
 
 - Cd, the directive (eq. 10-12): -z of the head at t_end; or the target forms: |z - H| for a
   head height H, |p - target| for a head position.
@@ -39,11 +40,8 @@ class Weights:
     k_ground_per_m2: float = 1.0e4
     k_clearance_per_m2: float = 1.0e5   # self-collision
     self_margin_m: float = 0.0          # capsule clearance kept between non-adjacent modules
+    self_push_m: float = 0.003          # ... and pushed this much beyond it
     k_wall_per_m2: float = 1.0e4     # the pipe's wall (0: ignored, the pipe only attracts)
-
-
-#: The cost keeps capsules this much farther apart than the margin the checks require.
-COST_CLEARANCE_EXTRA_M = 0.003
 
 
 @dataclass
@@ -125,6 +123,10 @@ class StageCost:
         self.torque_limit_nm = float(torque_limit_nm)
         self._pairs = collision.module_pairs(chain.num_modules, moving_below=self.m)
         self.kin = chain.stage_kinematics(self.q_start, self.m)
+        start = collision.clearances(self.kin.positions(self.q_start[None, :self.m])[0], chain.radius_m,
+                                     self._pairs)
+        self._push_to_m = weights.self_margin_m + np.clip(start - weights.self_margin_m, 0.0,
+                                                          weights.self_push_m)
 
     # ---- trajectory ----------------------------------------------------------------------------
     def joints(self, delta, t_s) -> np.ndarray:
@@ -172,8 +174,7 @@ class StageCost:
                        for x in row] for row in qq]
             out["Ct"] = self._integrate(np.asarray(ratios))
         out["ground"] = self._integrate(np.sum(np.clip(r - pos[:, :, :m, 2], 0.0, None) ** 2, axis=2))
-        short = np.clip(w.self_margin_m + COST_CLEARANCE_EXTRA_M
-                        - collision.clearances(pos, r, self._pairs), 0.0, None)
+        short = np.clip(self._push_to_m - collision.clearances(pos, r, self._pairs), 0.0, None)
         out["clearance"] = self._integrate(np.sum(short ** 2, axis=2))
         return out
 

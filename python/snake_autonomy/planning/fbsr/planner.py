@@ -234,7 +234,8 @@ class FbsrPlanner:
                           k_torque=cfg.k_torque, ks_per_m2=cfg.ks_per_m2,
                           k_out_per_m2=cfg.k_out_per_m2, k_wall_per_m2=cfg.k_wall_per_m2,
                           k_clearance_per_m2=cfg.k_self_collision_per_m2,
-                          self_margin_m=cfg.self_collision_margin_m)
+                          self_margin_m=cfg.self_collision_margin_m,
+                          self_push_m=cfg.self_collision_push_m)
         cost = StageCost(self.chain, q, m, support, weights, directive, cfg.stage_duration_s,
                          cfg.cost_samples, pipe, self.torque_limit_nm)
         max_restarts = cfg.max_restarts if max_restarts is None else max_restarts
