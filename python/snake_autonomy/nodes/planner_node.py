@@ -33,6 +33,7 @@ Inputs      every message is checked before it is used: camera_info (size, fx, f
 """
 import dataclasses
 import math
+from collections import Counter
 
 import diagnostic_updater
 import numpy as np
@@ -53,7 +54,7 @@ from snake_autonomy.perception.depth_traversability import DepthTraversability
 from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m
-from snake_autonomy.planning.rectilinear.nav_loop import NavLoop
+from snake_autonomy.planning.rectilinear.nav_loop import ERROR, GOAL_REACHED, NO_FREE_ARC, STALE, WAITING, NavLoop
 from snake_autonomy.planning.rectilinear.overlay import overlay
 from snake_autonomy.planning.rectilinear.planner import to_world
 from snake_autonomy.sim.world_file import load_world
@@ -92,12 +93,11 @@ class PlannerNode:
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{key}: must be a finite number > 0, got {v!r}")
         self.world_frame = rospy.get_param("~world_frame", "")
-        self._replace = dataclasses.replace
         self.loop = None
         self.rgb = None
         self.last_tick = None
         self.intrinsics = None            # of the camera_info the loop was built with
-        self.refused_before_loop = {}     # inputs refused before the first good camera_info
+        self.refused = Counter()          # input kind -> refused by this node (the loop counts its own)
         self.last_refusal = ""
         self.warned = {}                  # input kind -> time of its last warning
         self.node_errors = 0              # exceptions in this node's own code (publishing, overlay)
@@ -138,13 +138,13 @@ class PlannerNode:
 
     # -- inputs ---------------------------------------------------------------------------------------
     def refuse(self, kind: str, reason: str) -> None:
-        """Counts and reports an input that was dropped (the loop keeps what it had)."""
-        if self.loop is not None:
-            self.loop.refuse(kind, reason)
-            self.last_refusal = self.loop.last_refusal
-        else:
-            self.refused_before_loop[kind] = self.refused_before_loop.get(kind, 0) + 1
-            self.last_refusal = f"{kind}: {reason}"
+        """Counts and reports an input this node dropped (the loop keeps what it had)."""
+        self.refused[kind] += 1
+        self.report_refusal(kind, reason)
+
+    def report_refusal(self, kind: str, reason: str) -> None:
+        """Names a dropped input on /diagnostics and in a throttled warning (counted by whoever dropped it)."""
+        self.last_refusal = f"{kind}: {reason}"
         self.warn_throttled(kind, f"planner: {kind} dropped: {reason}")
 
     def warn_throttled(self, kind: str, text: str) -> None:
@@ -180,18 +180,16 @@ class PlannerNode:
                                            f"({self.intrinsics.width}x{self.intrinsics.height} fx "
                                            f"{self.intrinsics.fx:g}): restart the planner to change cameras")
             return
-        cfg = self._replace(self.cfg, intrinsics=intr)
+        cfg = dataclasses.replace(self.cfg, intrinsics=intr)
+        robot = _core.RobotModel.from_yaml(self.robot_yaml)
         if self.perception == "depth":
-            radius = _core.RobotModel.from_yaml(self.robot_yaml).link_radius_m
-            perceive = DepthTraversability(intr, T_ground_camera(cfg.mount, radius), cfg.depth)
+            perceive = DepthTraversability(intr, T_ground_camera(cfg.mount, robot.link_radius_m), cfg.depth)
         else:
             clf, margin = BlockClassifier.load(self.classifier), cfg.classifier.ground_margin
             perceive = lambda rgb: clf.traversable(rgb, margin)
         loop = NavLoop(cfg, self.head_width_m, perceive, self.goal, self.goal_radius_m,
                        self.on_no_free_arc, self.pose_timeout_s,
-                       BodyGeometry.of_robot(_core.RobotModel.from_yaml(self.robot_yaml)),
-                       frame_timeout_s=self.frame_timeout_s)
-        loop.refused.update(self.refused_before_loop)
+                       BodyGeometry.of_robot(robot), frame_timeout_s=self.frame_timeout_s)
         self.intrinsics, self.loop = intr, loop
         rospy.loginfo(f"planner: camera {intr.width}x{intr.height}, fx {intr.fx:g} (camera_info)")
 
@@ -210,12 +208,7 @@ class PlannerNode:
         if self.loop is not None:
             why = self.loop.on_pose(msg.header.stamp.to_sec(), pose_to_matrix(xyz, [v / norm for v in xyzw]))
             if why is not None:
-                self.refuse_logged("pose", why)
-
-    def refuse_logged(self, kind: str, reason: str) -> None:
-        """A refusal the loop has counted already: report it."""
-        self.last_refusal = self.loop.last_refusal
-        self.warn_throttled(kind, f"planner: {kind} dropped: {reason}")
+                self.report_refusal("pose", why)
 
     def on_image(self, msg, kind: str):
         try:
@@ -226,7 +219,7 @@ class PlannerNode:
         if self.loop is not None and (kind == "depth") == (self.perception == "depth"):
             why = self.loop.on_frame(msg.header.stamp.to_sec(), image)
             if why is not None:
-                self.refuse_logged(kind, why)
+                self.report_refusal(kind, why)
         return image
 
     def on_colour(self, msg):
@@ -260,7 +253,7 @@ class PlannerNode:
         now = rospy.Time.now()
         tick = self.loop.tick(now.to_sec())      # never raises: a failed tick holds (state error)
         previous, self.last_tick = self.last_tick, tick
-        if tick.state != (previous.state if previous else None) and tick.state in ("stale", "error"):
+        if tick.state != (previous.state if previous else None) and tick.state in (STALE, ERROR):
             rospy.logwarn(f"planner: {tick.message}")
         self.publish_command(tick.hold, tick.kappa_per_m, tick.backwards)
         if tick.replan is not None:
@@ -273,7 +266,7 @@ class PlannerNode:
             else:
                 d = self.loop.distance_to_goal_m()
                 rospy.loginfo(f"planner: replan {self.loop.replans}: {tick.message}; goal {d:.2f} m away")
-        if tick.state == "goal_reached" and (previous is None or previous.state != "goal_reached"):
+        if tick.state == GOAL_REACHED and (previous is None or previous.state != GOAL_REACHED):
             rospy.loginfo(f"planner: {tick.message}")
 
     def publish_command(self, hold: bool, kappa_per_m: float, backwards: bool = False):
@@ -337,7 +330,7 @@ class PlannerNode:
 
     def diagnose(self, stat):
         t, loop = self.last_tick, self.loop
-        refused = dict(loop.refused) if loop is not None else dict(self.refused_before_loop)
+        refused = self.refused + (loop.refused if loop is not None else Counter())
         for kind in ("camera_info", "pose", "depth", "colour", "frame"):
             stat.add(f"refused_{kind}", str(refused.get(kind, 0)))
         stat.add("last_refusal", self.last_refusal or "none")
@@ -348,8 +341,8 @@ class PlannerNode:
         if t is None or loop is None:
             stat.summary(DiagnosticStatus.WARN, "waiting for camera_info" if loop is None else "starting")
             return stat
-        level = {"error": DiagnosticStatus.ERROR, "stale": DiagnosticStatus.WARN, "no_free_arc": DiagnosticStatus.WARN,
-                 "waiting": DiagnosticStatus.WARN}.get(t.state, DiagnosticStatus.OK)
+        level = {ERROR: DiagnosticStatus.ERROR, STALE: DiagnosticStatus.WARN, NO_FREE_ARC: DiagnosticStatus.WARN,
+                 WAITING: DiagnosticStatus.WARN}.get(t.state, DiagnosticStatus.OK)
         stat.summary(level, f"{t.state}: {t.message}")
         d = loop.distance_to_goal_m()
         stat.add("state", t.state)

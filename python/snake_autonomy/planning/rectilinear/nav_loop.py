@@ -108,7 +108,7 @@ class NavLoop:
 
     # ---- inputs ------------------------------------------------------------------------------------
     def refuse(self, kind: str, reason: str) -> str:
-        """Counts a refused input (also for the node's own checks: encodings, camera_info); the reason."""
+        """Counts a refused input and keeps its reason as last_refusal; returns the reason."""
         self.refused[kind] += 1
         self.last_refusal = f"{kind}: {reason}"
         return reason
