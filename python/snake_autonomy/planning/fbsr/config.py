@@ -33,7 +33,7 @@ class PlannerConfig:
     k_out_per_m2: float = 1.0e3
     margin_m: float = 0.012
     self_collision_margin_m: float = 0.002
-    self_collision_push_m: float = 0.003
+    self_collision_push_m: float = 0.025
     k_self_collision_per_m2: float = 1.0e5
     joint_margin_deg: float = 3.0
     max_restarts: int = 8
