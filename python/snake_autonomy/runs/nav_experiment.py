@@ -8,8 +8,9 @@ success rate, collisions and time in a table.
         rows = run_tasks(ex, run_nav_task, tasks)
     print(markdown_table(summarise(rows)))
 
-A random corridor (random_corridor(k), a pure function of k): 1-3 cylinders between the start
-and the goal, pairwise gaps >= 2 x the body width, one on the straight line.
+The world families (sim/nav_worlds.py, each world a pure function of its index): random_corridor(k),
+1-3 cylinders between the start and the goal, pairwise gaps >= 2 x the body width, one on the
+straight line; barn_world(k), a BARN-like cluttered field with a path for the robot's footprint.
 """
 import math
 import time
@@ -21,42 +22,8 @@ import numpy as np
 
 from snake_autonomy.planning.rectilinear.follower import MODES
 from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+from snake_autonomy.sim.nav_worlds import min_gap_m, random_corridor  # noqa: F401 (their home before sim/nav_worlds.py)
 from snake_autonomy.sim.world_file import World
-
-
-def random_corridor(index: int, body_width_m: float = 0.09, gap_factor: float = 2.0,
-                    length_m: float = 1.4, half_width_m: float = 0.35, base_seed: int = 1300) -> World:
-    """World `index` (a pure function of it): start at the origin heading +x, the goal length_m
-    ahead, 1-3 cylinders (radius 5-9 cm) in the corridor x in [0.45, length - 0.35], |y| <=
-    half_width; the first within 5 cm of the straight line (the robot must go round it); every
-    pair's free gap >= gap_factor x body width (rejection sampling), so a way round exists on the
-    open floor beside the corridor too. No walls: the rectilinear gait bends the whole 1.5 m body
-    with kappa (the tail swings sideways, it does not follow the head's path), so walls along
-    the corridor would be hit by the tail, not by what the planner steers."""
-    rng = np.random.default_rng(base_seed + index)
-    gap = gap_factor * body_width_m
-    n = int(rng.integers(1, 4))
-    cyl = []
-    for k in range(n):
-        for _ in range(200):
-            r = float(rng.uniform(0.05, 0.09))
-            x = float(rng.uniform(0.45, length_m - 0.35))
-            y = float(rng.uniform(-0.05, 0.05)) if k == 0 else float(rng.uniform(-half_width_m, half_width_m))
-            if all(math.hypot(x - c[0], y - c[1]) - r - c[2] >= gap for c in cyl):
-                cyl.append((x, y, r))
-                break
-    obstacles = [{"type": "cylinder", "x": x, "y": y, "radius_m": r, "height_m": 0.3} for x, y, r in cyl]
-    data = {"name": f"corridor_{index:03d}", "start": [0.0, 0.0, 0.0], "goal": [length_m, 0.0],
-            "goal_radius_m": 0.2, "floor_texture": ["plain", "checker", "carpet", "tiles", "concrete"][index % 5],
-            "obstacles": obstacles}
-    return World.from_dict(data, f"random_corridor({index})")
-
-
-def min_gap_m(world: World) -> float:
-    """The smallest free gap between two cylinders (inf with one)."""
-    c = [(o.x_m, o.y_m, o.radius_m) for o in world.obstacles if o.kind == "cylinder"]
-    gaps = [math.hypot(a[0] - b[0], a[1] - b[1]) - a[2] - b[2] for i, a in enumerate(c) for b in c[i + 1:]]
-    return min(gaps) if gaps else math.inf
 
 
 TIME_FACTOR = 3.0
