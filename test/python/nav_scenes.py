@@ -56,9 +56,9 @@ def walled_planner(**follower_kw):
 
 def planner_with(obstacle, kappa_per_m, guard_m=0.2, dead_band=0.35, keep_centroid=False, tail_m=0.0, **keys):
     """COBRA at the origin heading +x, bent to kappa_per_m, one disc (x, y, r) in the obstacle map;
-    by default the middle kept, no tail or body guard, the crawl guard forcing and no backing off
-    a blocked crawl: each guard alone, as its single runs were measured. keys: further sampler keys."""
-    single_guard = dict(swing_guard_body=False, crawl_blocked_backs_off=False, crawl_guard_forces=True)
+    by default the middle kept, no tail or body guard and no backing off a blocked crawl: each guard
+    alone, as its single runs were measured. keys: further sampler keys."""
+    single_guard = dict(swing_guard_body=False, crawl_blocked_backs_off=False)
     sp = dataclasses.replace(CFG.sampler, swing_guard_m=0.2, crawl_guard_m=guard_m,
                              crawl_dead_band_per_m=dead_band, reshape_keeps_centroid=keep_centroid,
                              swing_guard_tail_m=tail_m, **{**single_guard, **keys})

@@ -1,30 +1,32 @@
 """The crawl guard (sampler.crawl_guard_m, planner._crawl_bounds): below about 0.4 /m COBRA does not
 turn, its bent body crawls along its middle's tangent; a curvature whose crawl would bring the body
-nearer the obstacle map than its clearance is not allowed. The guard forces the nearest passing
-curvature (crawl_guard_forces), or only one on the chosen arc's side (crawl_forces_toward_arc), and
-backs off when none passes (crawl_blocked_backs_off)."""
+nearer the obstacle map than its clearance is not allowed. When the current one is not, the guard
+forces the nearest passing curvature on the chosen arc's side (crawl_forces_toward_arc), and backs off
+when none passes there (crawl_blocked_backs_off)."""
 import dataclasses
+import math
 
 import numpy as np
 import pytest
 
 from nav_scenes import CFG, T_GC, drawn_mask, planner_with, swing_bounds
-from snake_autonomy.planning.rectilinear.config import NavConfig, NavConfigError
 
 
-def crawl_bounds(obstacle, kappa_per_m, **kw):
-    """(the swing guard's bounds, the crawl guard's)."""
+def crawl_bounds(obstacle, kappa_per_m, toward=None, **kw):
+    """(the swing guard's bounds, the crawl guard's; toward: the chosen arc's kappa, by default
+    kappa_per_m's side at the gait's range)."""
     p = planner_with(obstacle, kappa_per_m, **kw)
     swing = swing_bounds(p)
-    return swing, p._crawl_bounds(swing, np.eye(4))
+    toward = math.copysign(CFG.follower.kappa_max_per_m, kappa_per_m) if toward is None else toward
+    return swing, p._crawl_bounds(swing, np.eye(4), toward)
 
 
 def test_the_crawl_guard_forces_a_turn_away_when_the_held_curvature_crawls_into_the_map():
     """Bent left at 0.36 /m (inside the dead band) the body moves along its middle's tangent, 15.6 deg
     right of the head's heading; a cylinder 0.5 m behind the head, 3 cm below the body's side, is in
-    its way: the current kappa is not allowed, the nearest that is (0.61 /m: the middle turns left) is
-    forced. With the linear turn rate of the follower (no dead band) the middle would curve away at
-    0.36 /m and it would pass; with the guard off the swing guard's bounds stand."""
+    its way: the current kappa is not allowed, the nearest that is on the arc's side (0.61 /m: the
+    middle turns left) is forced. With the linear turn rate of the follower (no dead band) the middle
+    would curve away at 0.36 /m and it would pass; with the guard off the swing guard's bounds stand."""
     kmax = CFG.follower.kappa_max_per_m
     swing, crawl = crawl_bounds((-0.5, -0.11, 0.08), 0.36)
     assert swing == pytest.approx((-kmax, kmax))
@@ -38,14 +40,9 @@ def test_the_crawl_guard_forces_a_turn_away_when_the_held_curvature_crawls_into_
     assert crawl_bounds((-0.5, -0.8, 0.08), 0.36)[1] == pytest.approx((-kmax, kmax))
 
 
-def test_the_replan_hands_the_crawl_guards_bounds_to_the_follower_and_says_so():
-    p = planner_with((-0.5, -0.11, 0.08), 0.36)
-    r = p.replan(0.0, drawn_mask(), T_GC, (0.0, 0.0, 0.0), None)
-    assert r.path_world is not None
-    assert "(crawl guard)" in r.reason and "+0.61..+2.00" in r.reason, r.reason
-    assert p.follower._bounds == pytest.approx((0.61, 2.0))
+def test_without_the_crawl_guard_the_swing_guards_bounds_stand():
     off = planner_with((-0.5, -0.11, 0.08), 0.36, guard_m=0.0)
-    r = off.replan(0.0, drawn_mask(), T_GC, (0.0, 0.0, 0.0), None)
+    r = off.replan(0.0, drawn_mask(), T_GC, (0.0, 0.0, 0.0), (1.0, 1.0))
     assert "crawl guard" not in r.reason and off.follower._bounds == pytest.approx((-2.0, 2.0))
 
 
@@ -72,23 +69,19 @@ def test_when_every_allowed_curvature_crawls_into_the_map_the_robot_backs_off():
     assert r.path_world is not None and p.follower._bounds == pytest.approx((0.36, 0.36))
 
 
-def test_the_crawl_guard_may_back_off_instead_of_forcing_a_curvature():
-    """sampler.crawl_guard_forces false: when the current kappa crawls into the map the
-    crawl guard forces nothing (None, as when no kappa passes), so the replan backs off. Forcing the
-    nearest passing kappa fought the planner's arcs: depth w1 s0 was forced from -0.8 to -2 /m in
-    steps, 0.3 m from the goal, while every chosen arc turned left, and circled away to the time limit
-    (reached at 183 s without forcing)."""
+def test_the_crawl_guard_forces_nothing_without_the_arcs_side():
+    """When the current kappa crawls into the map and no arc's side is given, the crawl guard
+    forces nothing (None, as when no kappa passes), so the replan backs off. Forcing the nearest
+    passing kappa on either side fought the planner's arcs (a run forced from -0.8 to -2 /m in steps,
+    0.3 m from the goal, while every chosen arc turned left, circled away to the time limit): measured
+    and dropped."""
     kmax = CFG.follower.kappa_max_per_m
-    forcing = planner_with((-0.5, -0.11, 0.08), 0.36)
-    assert forcing._crawl_bounds((-kmax, kmax), np.eye(4)) == pytest.approx((0.61, kmax))
-    p = planner_with((-0.5, -0.11, 0.08), 0.36, crawl_guard_forces=False)
+    p = planner_with((-0.5, -0.11, 0.08), 0.36)
     assert p._crawl_bounds((-kmax, kmax), np.eye(4)) is None
-    # the current kappa passing, the bounds narrow as before
-    far = planner_with((-0.5, -0.25, 0.08), 0.36, crawl_guard_forces=False)
+    # the current kappa passing, the bounds narrow round it
+    far = planner_with((-0.5, -0.25, 0.08), 0.36)
     lo, hi = far._crawl_bounds((-kmax, kmax), np.eye(4))
     assert -kmax < lo < 0.0 and hi == pytest.approx(kmax)
-    with pytest.raises(NavConfigError, match=r"sampler.crawl_guard_forces: must be true or false, got 0"):
-        NavConfig.from_dict({"sampler": {"crawl_guard_forces": 0}})
 
 
 KMAX = CFG.follower.kappa_max_per_m
@@ -98,7 +91,7 @@ BESIDE = (-0.5, -0.11, 0.08)
 
 
 def toward_planner(on=True, **keys):
-    return planner_with(BESIDE, 0.36, crawl_guard_forces=False, crawl_forces_toward_arc=on, **keys)
+    return planner_with(BESIDE, 0.36, crawl_forces_toward_arc=on, **keys)
 
 
 def test_the_crawl_guard_forces_a_passing_kappa_only_on_the_arcs_side():
@@ -111,7 +104,7 @@ def test_the_crawl_guard_forces_a_passing_kappa_only_on_the_arcs_side():
     # off: None whatever the arc
     assert toward_planner(on=False)._crawl_bounds((-KMAX, KMAX), np.eye(4), 1.0) is None
     # the current kappa passing: unchanged
-    lo, hi = planner_with((-0.5, -0.25, 0.08), 0.36, crawl_guard_forces=False,
+    lo, hi = planner_with((-0.5, -0.25, 0.08), 0.36,
                           crawl_forces_toward_arc=True)._crawl_bounds((-KMAX, KMAX), np.eye(4), -KMAX)
     assert -KMAX < lo < 0.0 and hi == pytest.approx(KMAX)
 

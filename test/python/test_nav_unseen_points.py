@@ -1,10 +1,9 @@
 """What the planner's checks make of points the current image does not show (collision_check.py):
 floor beyond the commit distance that the view has not reached yet is not an obstacle
 (sampler.known_free_m), the near field behind and beside the camera counts as free only as far as the
-view shows floor (sampler.near_field_max_m caps it), and earlier views answer for hidden points: an
-obstacle in one of them wins (sampler.blocked_wins) unless it is only the shadow behind a face that a
-newer view shows as floor (sampler.blocked_wins_depth_m), and an earlier view's non-ground far from its
-camera may be left unknown (sampler.view_obstacle_range_m)."""
+view shows floor, and earlier views answer for hidden points: an obstacle in one of them wins
+(sampler.blocked_wins) unless it is only the shadow behind a face that a newer view shows as floor
+(sampler.blocked_wins_depth_m)."""
 import dataclasses
 import math
 
@@ -12,7 +11,7 @@ import numpy as np
 import pytest
 
 from nav_scenes import CFG, COBRA, K, T_GC, drawn_mask, shifted
-from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker, _View, near_field
+from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker, near_field
 from snake_autonomy.planning.rectilinear.config import CameraMount, NavConfig, NavConfigError, T_ground_camera
 from snake_autonomy.planning.rectilinear.follower import RecedingHorizonFollower
 from snake_autonomy.planning.rectilinear.planner import NavPlanner
@@ -84,24 +83,15 @@ def test_a_view_never_as_wide_as_the_footprint_does_not_free_every_unseen_point(
     assert c.point_free(behind, ground)[0]
 
 
-def test_near_field_max_m_caps_where_unseen_floor_counts_as_free():
-    """An option, off in nav.yaml: the near field is 0.5 m ahead of the camera for COBRA's
-    0.5 m footprint, sideways too, so a sharp arc's floor no view showed counted as free (COBRA
-    mono world 15 seed 9 turned into a cylinder 37-86 deg off the camera's axis). Capped, floor
-    0.3 m ahead and 0.3 m to the side that no view shows is unknown; behind the camera it stays free."""
-    from snake_autonomy.planning.rectilinear.follower import RecedingHorizonFollower
-    from snake_autonomy.planning.rectilinear.planner import NavPlanner
+def test_the_near_field_counts_unseen_floor_beside_and_behind_the_camera_as_free():
+    """The near field is 0.5 m ahead of the camera for COBRA's 0.5 m footprint, sideways too: floor
+    0.3 m to the side that no view shows counts as free, ahead of and behind the camera (capping it
+    was measured and dropped)."""
     beside, behind = np.array([[0.35, 0.3, 0.0]]), np.array([[-0.3, 0.3, 0.0]])
-    state = {}
-    for cap in (float("inf"), 0.24):
-        p = NavPlanner(K, 0.09, dataclasses.replace(CFG.sampler, near_field_max_m=cap),
-                       RecedingHorizonFollower(CFG.follower), COBRA)
-        checker = p._checker(T_GC, np.eye(4), CFG.sampler.obstacle_depth_m)
-        state[cap] = [bool(checker.point_free(pt, drawn_mask())[0]) for pt in (beside, behind)]
-        assert checker.near_field_m == pytest.approx(min(cap, 0.495), abs=0.01)
-    assert state == {float("inf"): [True, True], 0.24: [False, True]}
-    with pytest.raises(NavConfigError, match=r"sampler.near_field_max_m: must be >= 0, got -0.1"):
-        NavConfig.from_dict({"sampler": {"near_field_max_m": -0.1}})
+    p = NavPlanner(K, 0.09, CFG.sampler, RecedingHorizonFollower(CFG.follower), COBRA)
+    checker = p._checker(T_GC, np.eye(4), CFG.sampler.obstacle_depth_m)
+    assert checker.near_field_m == pytest.approx(0.495, abs=0.01)
+    assert [bool(checker.point_free(pt, drawn_mask())[0]) for pt in (beside, behind)] == [True, True]
 
 
 def test_a_hidden_point_one_earlier_view_shows_as_an_obstacle_is_blocked_with_blocked_wins():
@@ -166,46 +156,3 @@ def test_the_planner_passes_blocked_wins_depth_m_and_it_is_validated():
     assert p._checker(T_GC, np.eye(4), sp.obstacle_depth_m).blocked_wins_depth_m == pytest.approx(0.1)
     with pytest.raises(NavConfigError, match=r"sampler.blocked_wins_depth_m: must be >= 0, got -1"):
         NavConfig.from_dict({"sampler": {"blocked_wins_depth_m": -1}})
-
-
-NONE = np.zeros((K.height, K.width), bool)
-
-
-AHEAD = np.array([[0.5, 0.0, 0.0], [1.0, 0.0, 0.0]])
-
-
-def test_a_views_far_non_ground_is_not_shown():
-    shown, ground = _View(K.K(), NONE, T_GC).look(AHEAD)
-    assert shown.tolist() == [True, True] and not ground.any()
-    shown, ground = _View(K.K(), NONE, T_GC, obstacle_range_m=0.8).look(AHEAD)
-    assert shown.tolist() == [True, False]
-    # ground is shown however far (the range is about obstacles)
-    shown, ground = _View(K.K(), ~NONE, T_GC, obstacle_range_m=0.8).look(AHEAD)
-    assert shown.all() and ground.all()
-
-
-def test_an_old_views_far_shadow_no_longer_blocks_the_floor_beside_the_head():
-    """The view of a camera 1 m behind the current one, a cylinder (r 0.05 m) 0.1 m before the current
-    camera and 0.1 m to the left: the floor beside the head behind it (1.05 m from that camera) is
-    non-ground in that view; the current image does not show it. With view_obstacle_range_m 0.8 it is
-    not known (and the near field counts it free): the pose at the head is free, as w19 s5 needed;
-    the floor 0.85 m from that camera, before the cylinder, is still judged by the view (ground)."""
-    T_back = T_GC.copy()
-    T_back[0, 3] -= 1.0
-    old = drawn_mask(discs=[(0.9, 0.1, 0.05)])             # drawn for a camera at the origin
-
-    def checker(range_m):
-        c = PerceptionCollisionChecker(K, T_GC, 0.25, blocked_wins=True, blocked_wins_depth_m=0.1,
-                                       view_obstacle_range_m=range_m)
-        c.add_view(old, T_back, 1.2, 0.25)
-        return c
-
-    beside, before = [0.05, 0.1, 0.0], [-0.15, 0.1, 0.0]
-    free, known = checker(np.inf).point_state(np.array([beside, before]), drawn_mask())
-    assert known.tolist() == [True, True] and free.tolist() == [False, True]
-    free, known = checker(0.8).point_state(np.array([beside, before]), drawn_mask())
-    assert known.tolist() == [False, True] and free.tolist() == [False, True]
-    head = np.zeros((1, 3))
-    assert checker(np.inf).pose_state(head, drawn_mask())[0].all()           # blocked
-    blocked, unknown = checker(0.8).pose_state(head, drawn_mask())
-    assert not blocked.any() and not unknown.any()

@@ -32,10 +32,8 @@ class _View:
     """One traversability image and the projection of ground points into it."""
 
     def __init__(self, K, ground: np.ndarray, T_ground_camera: np.ndarray, max_depth_m: float = math.inf,
-                 obstacle_depth_m: float = math.inf, face_depth_m: float = math.inf,
-                 obstacle_range_m: float = math.inf):
+                 obstacle_depth_m: float = math.inf, face_depth_m: float = math.inf):
         self.max_depth_m = max_depth_m
-        self.obstacle_range_m = obstacle_range_m
         T_cam_ground = np.linalg.inv(np.asarray(T_ground_camera, float))
         self.R, self.t = T_cam_ground[:3, :3], T_cam_ground[:3, 3]
         self.K, self.ground = K, ground
@@ -67,7 +65,6 @@ class _View:
         if self.edge_depth is not None:
             idx = np.flatnonzero(shown & ~free)
             shown[idx[z[idx] > self.edge_depth[u[idx]]]] = False
-        shown &= free | (z <= self.obstacle_range_m)
         if not faces:
             return shown, free
         face = shown & ~free
@@ -80,27 +77,17 @@ class _View:
 class PerceptionCollisionChecker:
     def __init__(self, intrinsics, T_ground_camera: np.ndarray, head_width_m: float,
                  footprint_points: int = 5, point_spacing_m: float = 0.04, blocked_wins: bool = False,
-                 hidden_obstacles=None, near_field_max_m: float = math.inf,
-                 blocked_wins_depth_m: float = math.inf, view_obstacle_range_m: float = math.inf):
+                 hidden_obstacles=None, blocked_wins_depth_m: float = math.inf):
         """head_width_m: the checked footprint's width (the head's, or the body's swept width).
         blocked_wins: a hidden point one earlier view shows as an obstacle is blocked whatever the
         others show (False: ground in any of them frees it). hidden_obstacles: None, or a callable
         (M, 2) ground-frame points -> (M,) bool: a point the current image does not show is blocked
-        where it says so, whatever the earlier views show (obstacle_map.py). near_field_max_m: caps
-        the near field (sampler.near_field_max_m). blocked_wins_depth_m: with
+        where it says so, whatever the earlier views show (obstacle_map.py). blocked_wins_depth_m: with
         blocked_wins, only non-ground within this of a view's ground edge (the obstacle's face) wins
         over ground other views show; further (the shadow behind the face, up to the view's
-        obstacle_depth_m) is freed by a view showing ground there (inf: every obstacle wins).
-        view_obstacle_range_m: an earlier view's non-ground further than this from its
-        camera (depth along its optical axis) is not shown (not known to be an obstacle): far away it
-        is mostly an obstacle's upper part hiding the floor behind it, as the map knows (it takes
-        faces within 0.8 m only, config/nav.yaml map max_range_m). On COBRA with depth the floor
-        beside the head, 0.8-1.0 m from the view that marked it while passing a cylinder, could block
-        every arc in open floor for the rest of a run (an option, measured at 0.8 m and
-        not set)."""
+        obstacle_depth_m) is freed by a view showing ground there (inf: every obstacle wins)."""
         self.blocked_wins = bool(blocked_wins)
         self.blocked_wins_depth_m = float(blocked_wins_depth_m)
-        self.view_obstacle_range_m = float(view_obstacle_range_m)
         self.hidden_obstacles = hidden_obstacles
         import cv2  # lazy: OpenCV is heavy and only this path needs it
         self.k = intrinsics
@@ -117,7 +104,7 @@ class PerceptionCollisionChecker:
         self._cam_xy = T[:2, 3]
         fwd = T[:2, 2] / max(1e-9, np.linalg.norm(T[:2, 2]))
         self._cam_fwd = fwd
-        self.near_field_m = min(near_field(intrinsics, T, fwd, 0.5 * head_width_m), near_field_max_m)
+        self.near_field_m = near_field(intrinsics, T, fwd, 0.5 * head_width_m)
         n = max(footprint_points, int(math.ceil(head_width_m / point_spacing_m - 1e-9)) + 1)
         self.width_m = float(head_width_m)
         self.offsets = np.linspace(-0.5 * head_width_m, 0.5 * head_width_m, n)
@@ -134,7 +121,7 @@ class PerceptionCollisionChecker:
         than obstacle_depth_m beyond the ground region's edge in its column is not shown there
         (hidden behind the obstacle at the edge, not known to be one)."""
         self._earlier.append(_View(self.K, ground, T_ground_camera, max_depth_m, obstacle_depth_m,
-                                   self.blocked_wins_depth_m, self.view_obstacle_range_m))
+                                   self.blocked_wins_depth_m))
 
     def footprint_points(self, poses: np.ndarray, scale: Optional[np.ndarray] = None) -> np.ndarray:
         """(N, 3) poses -> (N, P, 3) ground points of the footprint at each; scale (N,): each

@@ -11,17 +11,14 @@ Sources (config/nav.yaml map.source):
   within max_range_m, each grown into a disc of prior_radius_m behind it along the view's ray (a
   prior on the unseen extent: a cylinder's face tells where its near side is, not how far it reaches
   to the sides); the floor a later view shows clears the map there first (view_on_floor,
-  add_view), so a far edge the depth test once marked unsure does not stay an obstacle. With
-  prior_normal_window_m > 0 the disc lies behind the face along the surface's normal fitted to
-  the view's neighbouring faces (face_normals), not along the ray. With prior_shape shadow
-  the prior is the floor behind each run of faces, between the run's outermost rays (face_shadows),
-  not a disc per face: a disc behind a face where the ray grazes the obstacle's side reached its
-  radius beside the obstacle, onto floor where COBRA's body later passed;
+  add_view), so a far edge the depth test once marked unsure does not stay an obstacle. Two other
+  priors were measured on COBRA and dropped: the disc along the surface's normal fitted to the
+  view's neighbouring faces (with depth it lost as many runs on one set of seeds as it gained on
+  another), and the floor behind each run of faces between the run's outermost rays;
 - truth: the simulated world's obstacles as they are (a diagnostic upper bound: what a perfect map
   gives the planner; simulation only).
 Geometry is shapely's (a prepared polygon, contains_xy).
 """
-import math
 from dataclasses import dataclass
 from typing import Iterable, List
 
@@ -32,8 +29,6 @@ from shapely.geometry import Point, Polygon
 from .collision_check import floor_rays
 
 MAP_SOURCES = ("none", "faces", "truth")
-PRIOR_SHAPES = ("disc", "shadow")
-RUN_JUMP_M = 0.05       # neighbouring faces further apart in range than this belong to different runs (obstacles)
 
 
 @dataclass(frozen=True)
@@ -60,15 +55,6 @@ class MapParams:
                                   # start-goal box is refused naming its extent (route.grid_shape)
     priors_off_own_floor: bool = False   # a view's prior discs are not laid on the floor
                                   # the same view shows (ObstacleMap.add_view)
-    prior_normal_window_m: float = 0.0   # > 0: each disc lies behind its face along the
-                                  # surface's normal, fitted to the view's faces within this distance
-                                  # (face_normals), not along the view's ray; 0: along the ray
-                                  # (measured on COBRA, not set: face_normals)
-    prior_shape: str = "disc"     # disc (each face's disc of prior_radius_m, as before) | shadow
-                                  # (the floor behind each run of faces, between its outermost rays, 2
-                                  # prior_radius_m deep: face_shadows)
-    prior_pad_m: float = 0.01     # shadow: grown by this (the silhouette lies up to a column step beyond
-                                  # the run's outermost face)
 
     def validate(self) -> List[str]:
         p = []
@@ -77,8 +63,6 @@ class MapParams:
         for key in ("prior_radius_m", "max_range_m", "cell_m", "pad_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
-        if not self.prior_normal_window_m >= 0:
-            p.append(f"prior_normal_window_m: must be >= 0, got {self.prior_normal_window_m}")
         if (not isinstance(self.route_max_cells, int) or isinstance(self.route_max_cells, bool)
                 or not 1 <= self.route_max_cells <= 10_000_000):
             p.append(f"route_max_cells: must be an integer in 1..10000000, got {self.route_max_cells!r}")
@@ -88,10 +72,6 @@ class MapParams:
             p.append(f"edge_px: must be an integer >= 0, got {self.edge_px!r}")
         if not isinstance(self.column_step_px, int) or self.column_step_px < 1:
             p.append(f"column_step_px: must be an integer >= 1, got {self.column_step_px!r}")
-        if self.prior_shape not in PRIOR_SHAPES:
-            p.append(f"prior_shape: expected one of {', '.join(PRIOR_SHAPES)}, got {self.prior_shape!r}")
-        if not self.prior_pad_m >= 0:
-            p.append(f"prior_pad_m: must be >= 0, got {self.prior_pad_m}")
         if not isinstance(self.priors_off_own_floor, bool):
             p.append(f"priors_off_own_floor: must be true or false, got {self.priors_off_own_floor!r}")
         if not isinstance(self.route, bool):
@@ -102,14 +82,12 @@ class MapParams:
 
 
 def view_on_floor(ground: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray, max_range_m: float,
-                  column_step_px: int = 1, edge_px: int = 0, with_runs: bool = False):
+                  column_step_px: int = 1, edge_px: int = 0):
     """What a traversability image shows on the floor (z = 0 of the world frame), per column (every
     column_step_px): its ground region from the bottom row up to edge_px rows below the region's top
     edge, at most max_range_m from the camera. -> (faces (M, 2), their rays' unit directions on the
     floor (M, 2), the floor seen (a shapely polygon)). A face is that edge where a non-ground pixel
-    lies above it, nearer than max_range_m. with_runs: a fourth item, (run id per face (M,): faces in
-    neighbouring sampled columns whose ranges differ by at most RUN_JUMP_M share one, in column order;
-    whether the face is in the image's first or last sampled column (M,)): face_shadows' input."""
+    lies above it, nearer than max_range_m."""
     ground = np.asarray(ground, bool)
     h, w = ground.shape
     cols = np.arange(0, w, column_step_px)
@@ -122,90 +100,14 @@ def view_on_floor(ground: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray,
     near, _, _, _ = _on_floor(cols, np.full(len(cols), h - 0.5), K, T, max_range_m)
     is_face = has & (top > 0) & down & (rng < max_range_m)
     floor = Polygon(np.vstack([near, edge[::-1]])).buffer(0)
-    if not with_runs:
-        return edge[is_face], dirs[is_face], floor
-    # a run starts at each face whose left neighbour is no face or lies more than RUN_JUMP_M nearer or further
-    face_rng = np.where(is_face, rng, 0.0)         # (a ray above the horizon has no finite range)
-    joined = is_face[:-1] & is_face[1:] & (np.abs(np.diff(face_rng)) <= RUN_JUMP_M)
-    starts = is_face & ~np.concatenate([[False], joined])
-    side = np.zeros(len(cols), bool)
-    side[[0, -1]] = True
-    return edge[is_face], dirs[is_face], floor, ((np.cumsum(starts) - 1)[is_face], side[is_face])
-
-
-def face_shadows(faces_xy: np.ndarray, dirs: np.ndarray, runs: np.ndarray, at_side: np.ndarray,
-                 depth_m: float, pad_m: float, side_disc_m: float):
-    """map.prior_shape shadow: the prior on an obstacle's unseen extent as the floor behind a
-    run of faces, between the run's outermost rays, depth_m deep along each ray, grown by pad_m. A convex
-    obstacle lies between the rays that graze its silhouette, so the shadow covers it (to depth_m) and
-    reaches no further beside it than pad_m; a disc behind the outermost face reached its radius beyond
-    the silhouette, onto floor where COBRA's body later passed. A face in the image's
-    first or last column (at_side) may belong to an obstacle that goes on beyond the image: it also gets
-    the disc of radius side_disc_m behind it (the disc prior). -> a shapely geometry (empty without
-    faces)."""
-    faces_xy = np.asarray(faces_xy, float).reshape(-1, 2)
-    dirs = np.asarray(dirs, float).reshape(-1, 2)
-    runs = np.asarray(runs)
-    parts = []
-    for r in np.unique(runs):
-        i = np.nonzero(runs == r)[0]
-        near, far = faces_xy[i], faces_xy[i] + depth_m * dirs[i]
-        if len(i) == 1:
-            parts.append(shapely.linestrings(np.vstack([near, far])))
-        else:
-            quads = np.stack([near[:-1], near[1:], far[1:], far[:-1], near[:-1]], axis=1)
-            parts.extend(shapely.polygons(quads))
-    side = np.asarray(at_side, bool)
-    if side.any():
-        parts.append(face_discs(faces_xy[side], dirs[side], side_disc_m))
-    if not parts:
-        return Polygon()
-    return shapely.union_all(shapely.buffer(np.asarray(parts, dtype=object), max(pad_m, 1e-4), quad_segs=2))
+    return edge[is_face], dirs[is_face], floor
 
 
 def face_discs(faces_xy: np.ndarray, dirs: np.ndarray, radius_m: float):
-    """The disc prior: each face grown into the disc of radius_m behind it along its direction
-    (the ray, or the surface's normal from face_normals); their union."""
+    """The disc prior: each face grown into the disc of radius_m behind it along its ray; their
+    union."""
     centres = np.asarray(faces_xy, float).reshape(-1, 2) + radius_m * np.asarray(dirs, float).reshape(-1, 2)
     return shapely.union_all(shapely.buffer(shapely.points(centres), radius_m, quad_segs=4))
-
-
-def face_normals(faces_xy: np.ndarray, dirs: np.ndarray, window_m: float,
-                 max_angle_deg: float = 60.0) -> np.ndarray:
-    """map.prior_normal_window_m: one view's faces (view_on_floor) -> (M, 2) unit directions
-    from each face into its obstacle: the normal of the line fitted (principal axis) to the view's
-    faces within window_m of it, on the far side from the camera (dirs: the rays), turned towards the
-    ray to at most max_angle_deg from it (where the ray grazes the surface, the fitted line cannot
-    tell the obstacle's side); a face with fewer than 3 faces within window_m keeps its ray.
-    Along the ray, the disc behind a face at the end of a cylinder's row of faces (its side at the
-    image's edge, or its silhouette) lies 0.1 m beyond the cylinder's side, and such a disc can block
-    every arc at a stop's start about 9 cm off the real surface. Measured on COBRA and not set (with
-    depth it lost as many runs on one set of seeds as it gained on another; mono's staircase of faces
-    fits poorer normals)."""
-    faces = np.asarray(faces_xy, float).reshape(-1, 2)
-    rays = np.asarray(dirs, float).reshape(-1, 2)
-    out = rays.copy()
-    if len(faces) < 3 or window_m <= 0:
-        return out
-    near = np.hypot(faces[:, None, 0] - faces[None, :, 0], faces[:, None, 1] - faces[None, :, 1]) <= window_m
-    cos_max, sin_max = math.cos(math.radians(max_angle_deg)), math.sin(math.radians(max_angle_deg))
-    for i in range(len(faces)):
-        pts = faces[near[i]]
-        if len(pts) < 3:
-            continue
-        d = pts - pts.mean(axis=0)
-        _, v = np.linalg.eigh(d.T @ d)                    # eigenvalues ascending
-        n = np.array([-v[1, 1], v[0, 1]])                 # normal to the principal axis (the last)
-        ray = rays[i]
-        c = float(n @ ray)
-        if c < 0:
-            n, c = -n, -c
-        if c < cos_max:                                   # grazing: at most max_angle_deg off the ray
-            side = n - c * ray
-            side /= max(np.hypot(*side), 1e-12)
-            n = cos_max * ray + sin_max * side
-        out[i] = n / max(np.hypot(*n), 1e-12)
-    return out
 
 
 def _on_floor(cols, rows, K, T, max_range_m):
@@ -224,20 +126,17 @@ class ObstacleMap:
         self._prepared = False
 
     def add_view(self, faces_xy: np.ndarray, dirs: np.ndarray, floor, prior_radius_m: float,
-                 priors_off_own_floor: bool = False, prior=None) -> None:
+                 priors_off_own_floor: bool = False) -> None:
         """One view (view_on_floor): the floor it shows clears what the map held there (an older view's
         face behind which this one sees floor: a cylinder's prior where its side is not, a far edge
         the depth test marked unsure), then each face point is grown into the disc of
         prior_radius_m behind it along its ray. priors_off_own_floor (MapParams): the discs
         are not laid on floor this same view shows: a disc behind a cylinder's outermost face
-        reaches prior_radius_m beyond the cylinder's side, onto floor the view shows beside it.
-        prior (map.prior_shape shadow): the view's prior as a geometry (face_shadows) instead
-        of the discs."""
+        reaches prior_radius_m beyond the cylinder's side, onto floor the view shows beside it."""
         seen = floor is not None and not floor.is_empty
         geom = self._geom.difference(floor) if seen else self._geom
         faces_xy = np.asarray(faces_xy, float).reshape(-1, 2)
-        if prior is None and len(faces_xy):
-            prior = face_discs(faces_xy, dirs, prior_radius_m)
+        prior = face_discs(faces_xy, dirs, prior_radius_m) if len(faces_xy) else None
         if prior is not None and not prior.is_empty:
             if priors_off_own_floor and seen:
                 prior = prior.difference(floor)

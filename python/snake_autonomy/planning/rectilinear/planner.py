@@ -23,7 +23,8 @@ about its centroid (sampler.reshape_keeps_centroid), so the guard also keeps the
 front and its tail off the obstacle map (sampler.swing_guard_body), and the crawl guard
 (_crawl_bounds, sampler.crawl_guard_m) predicts the side-step of the measured crawl; when the crawl
 of the current or every allowed curvature runs into the map the robot backs off
-(sampler.crawl_blocked_backs_off, crawl_guard_forces false).
+(sampler.crawl_blocked_backs_off), unless a curvature on the chosen arc's side passes
+(sampler.crawl_forces_toward_arc).
 
 Obstacle map and route (config/nav.yaml map:): each replan adds its view to a world-frame
 map (obstacle_map.py: the floor it shows clears the map, its faces are grown into prior discs); the
@@ -44,7 +45,7 @@ import numpy as np
 from .body_model import BodyGeometry, body_poses, middle_path, middle_pose
 from .collision_check import PerceptionCollisionChecker
 from .follower import Command, RecedingHorizonFollower
-from .obstacle_map import MapParams, ObstacleMap, face_normals, face_shadows, view_on_floor
+from .obstacle_map import MapParams, ObstacleMap, view_on_floor
 from .route import Route
 from .sampler import Selection, TrajectorySampler
 from .unicycle import arc_poses
@@ -154,16 +155,9 @@ class NavPlanner:
             self._views.appendleft((ground_image, T_world_camera))
         if self.map_params.source == "faces":
             mp = self.map_params
-            faces, dirs, floor, (runs, at_side) = view_on_floor(
-                ground_image, self.intrinsics.K(), T_world_camera, mp.max_range_m, mp.column_step_px, mp.edge_px,
-                with_runs=True)
-            prior = None
-            if mp.prior_shape == "shadow":                # the floor behind each run of faces
-                prior = face_shadows(faces, dirs, runs, at_side, 2.0 * mp.prior_radius_m, mp.prior_pad_m,
-                                     mp.prior_radius_m)
-            if mp.prior_normal_window_m > 0:            # the discs along the surface's normal
-                dirs = face_normals(faces, dirs, mp.prior_normal_window_m)
-            self.obstacle_map.add_view(faces, dirs, floor, mp.prior_radius_m, mp.priors_off_own_floor, prior)
+            faces, dirs, floor = view_on_floor(ground_image, self.intrinsics.K(), T_world_camera, mp.max_range_m,
+                                               mp.column_step_px, mp.edge_px)
+            self.obstacle_map.add_view(faces, dirs, floor, mp.prior_radius_m, mp.priors_off_own_floor)
         sampler = TrajectorySampler(checker, self.sampler_params, self._width_with_margins(None))
         goal_g = None
         cost_to_go = route_path = None
@@ -255,9 +249,7 @@ class NavPlanner:
         checker = PerceptionCollisionChecker(self.intrinsics, T_ground_camera, self.footprint_width_m,
                                              blocked_wins=self.sampler_params.blocked_wins,
                                              hidden_obstacles=hidden,
-                                             near_field_max_m=self.sampler_params.near_field_max_m,
-                                             blocked_wins_depth_m=self.sampler_params.blocked_wins_depth_m,
-                                             view_obstacle_range_m=self.sampler_params.view_obstacle_range_m)
+                                             blocked_wins_depth_m=self.sampler_params.blocked_wins_depth_m)
         for ground_k, T_world_camera_k in self._views:
             checker.add_view(ground_k, T_g_world @ T_world_camera_k, self.sampler_params.horizon_m,
                              obstacle_depth_m)
@@ -365,13 +357,13 @@ class NavPlanner:
         middle's path (curvature omega(kappa) / speed, omega 0 within crawl_dead_band_per_m). A
         station (beyond the swing guard's front swing_guard_m, whose way the arcs check) may not come
         nearer the map's obstacles than half the body's width + crawl_margin_m, or than it already is
-        when it is nearer. If the current kappa fails, the nearest that passes is forced (the bounds
-        close round it and its passing neighbours); if none passes, None (the replan backs off
-        with sampler.crawl_blocked_backs_off, else the swing guard's bounds stand). With
-        crawl_guard_forces false the current kappa failing is as none passing, except (with
-        sampler.crawl_forces_toward_arc; toward: the chosen arc's feed-forward kappa) when a kappa on
-        `toward`'s side of the current one passes: the nearest of those is forced (the follower bends
-        that way anyway; forcing against the arc can circle the robot off the goal). Without it a
+        when it is nearer. If the current kappa passes, the bounds close round it and its passing
+        neighbours. If it fails, None (the replan backs off with sampler.crawl_blocked_backs_off,
+        else the swing guard's bounds stand), except (sampler.crawl_forces_toward_arc; toward: the
+        chosen arc's feed-forward kappa) when a kappa on `toward`'s side of the current one passes:
+        the nearest of those is forced (the follower bends that way anyway; forcing against the arc
+        can circle the robot off the goal; forcing the nearest passing kappa on either side was
+        measured and dropped). Without it a
         station that misses the clearance by a millimetre at the current kappa, while kappas on the
         arc's side pass, makes the robot back off, and back off again beside the same obstacle, until
         the time limit."""
@@ -406,7 +398,7 @@ class NavPlanner:
         ok = [clear(k) for k in ks]
         now = min(range(len(ks)), key=lambda i: abs(ks[i] - kappa_now))
         passing = [i for i in range(len(ks)) if ok[i]]
-        if not ok[now] and not sp.crawl_guard_forces:
+        if not ok[now]:
             if toward is None or not sp.crawl_forces_toward_arc:
                 return None
             passing = [j for j in passing if (ks[j] - kappa_now) * (toward - kappa_now) > 0]

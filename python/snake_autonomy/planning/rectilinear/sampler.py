@@ -95,9 +95,6 @@ class SamplerParams:
     turn_keeps_side: bool = False         # a turn in place only to the side chosen at the
                                           # stop's first replan (planner._turning); that side not free:
                                           # back off. False: the other side is tried next
-    near_field_max_m: float = math.inf    # caps the near field (collision_check.py: unseen
-                                          # points nearer than it ahead of the camera count as free;
-                                          # for the full 0.5 m footprint that is 0.5 m, sideways too)
     goal_disc: bool = False               # the goal bias aims at the goal's disc (the caller's
                                           # goal_radius_m), not its centre: a free prefix that enters the
                                           # disc reaches the goal (goal_err 0). False: the centre (radius 0)
@@ -124,20 +121,14 @@ class SamplerParams:
     crawl_blocked_backs_off: bool = False  # when no curvature the swing guard allows crawls clear
                                           # (crawl guard on), back off along the track if its tail's track is
                                           # clear; False: follow within the swing guard's bounds
-    crawl_guard_forces: bool = True       # the crawl guard forces the nearest passing kappa when the
-                                          # current one fails; False: the current one failing is as none passing
     swing_guard_body: bool = False        # the swing guard also keeps the stations between its front
                                           # and its tail off the obstacle map: none may come nearer the map's
                                           # obstacles than half the body's width + crawl_margin_m, or than
                                           # it already is when it is nearer (planner._swing_bounds)
-    crawl_forces_toward_arc: bool = False  # with crawl_guard_forces false, the current kappa failing
+    crawl_forces_toward_arc: bool = False  # the current kappa's crawl failing
                                           # forces the nearest passing kappa on the chosen arc's side of it
                                           # (towards its feed-forward kappa) when one passes there; else back off.
                                           # False: back off whenever the current one fails
-    view_obstacle_range_m: float = math.inf  # an earlier view's non-ground further than this from its
-                                          # camera (depth along its axis) is not known to be an obstacle (far
-                                          # off it is mostly a cylinder's upper part hiding the floor behind
-                                          # it; collision_check.py). inf: all of it is
 
     def validate(self) -> List[str]:
         p = []
@@ -148,14 +139,12 @@ class SamplerParams:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
         for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "curvature_step_per_m", "known_free_m",
                     "resume_free_m", "footprint_taper_m", "switch_cost_m", "swing_guard_m", "turn_free_m",
-                    "near_field_max_m", "back_off_check_m", "swing_guard_tail_m",
-                    "blocked_wins_depth_m", "crawl_guard_m", "crawl_dead_band_per_m", "crawl_margin_m",
-                    "view_obstacle_range_m"):
+                    "back_off_check_m", "swing_guard_tail_m",
+                    "blocked_wins_depth_m", "crawl_guard_m", "crawl_dead_band_per_m", "crawl_margin_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
         for key in ("body_model", "blocked_wins", "turn_keeps_side", "goal_disc", "reshape_keeps_centroid",
-                    "swing_guard_body", "crawl_blocked_backs_off", "crawl_guard_forces",
-                    "crawl_forces_toward_arc"):
+                    "swing_guard_body", "crawl_blocked_backs_off", "crawl_forces_toward_arc"):
             if not isinstance(getattr(self, key), bool):
                 p.append(f"{key}: must be true or false, got {getattr(self, key)!r}")
         if not isinstance(self.earlier_views, int) or self.earlier_views < 0:
