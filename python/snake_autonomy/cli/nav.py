@@ -12,12 +12,18 @@
                                                     the closed loop in batch (runs/nav_batch.py):
                                                     DIR/metrics.json, topview.png, frames/
     snake_autonomy nav experiment --worlds N --seeds 0-4 [--perception depth|mono|both|truth]
+                           [--family corridors|barn | --world-files GLOB] [--first-world K]
                            [--robot R] [--time-limit S|auto] [--time-factor F]
                            [--engine dask|threads|serial] [--scheduler ADDR] --out DIR
-                                                    random solvable corridors (runs/nav_experiment.py);
-                                                    auto: 3 x each world's straight-line time
+                                                    generated worlds K..K+N-1 of a family
+                                                    (sim/nav_worlds.py), or the user's own world
+                                                    files; auto: 3 x each world's straight-line time
                                                     on Dask: DIR/runs.csv, summary.json, table.md
+    snake_autonomy nav worlds [--family barn|corridors] [--first-world K] [--worlds N] [--robot R] --out DIR
+                                                    the generated worlds as world files and top
+                                                    views: DIR/NAME.yaml, DIR/NAME.png
 """
+import glob
 import json
 import math
 import sys
@@ -40,6 +46,7 @@ from snake_autonomy.runs.nav_experiment import (TIME_FACTOR, experiment_tasks, m
 from snake_autonomy.runs.render_set import render_scenes
 from snake_autonomy.runs.sweep_runner import open_executor, run_tasks
 from snake_autonomy.sim.config import SimConfig
+from snake_autonomy.sim.nav_worlds import barn_layout
 from snake_autonomy.sim.world_file import WorldError, load_world
 
 
@@ -70,9 +77,17 @@ def add_arguments(parser):
                      help="driver: config/gaits.yaml's rectilinear through the C++ driver (default); "
                           "reference: the Python reference planning/rectilinear/gait.py (backing off: its "
                           "wave reversed)")
-    ex = sub.add_parser("experiment", help="random solvable corridors x seeds: success rate, collisions, time")
-    ex.add_argument("--worlds", type=int, default=20, help="random corridors 0..N-1 (runs/nav_experiment.py)")
-    ex.add_argument("--first-world", type=int, default=0)
+    ex = sub.add_parser("experiment", help="generated (or your own) worlds x seeds: success rate, collisions, time",
+                        description=WORLDS_CONVENTION)
+    ex.add_argument("--worlds", type=int, default=20,
+                    help="generated worlds K..K+N-1 of the family (sim/nav_worlds.py; not with --world-files)")
+    ex.add_argument("--first-world", type=int, default=0, metavar="K",
+                    help="the first generated world: 0-19 tune, 100 up held out (reports)")
+    ex.add_argument("--family", choices=("corridors", "barn"), default=None,
+                    help="generated worlds: corridors (default: 1-3 cylinders, goal 1.4 m ahead) or barn "
+                         "(BARN-like cluttered 5 x 4 m fields, goal >= 3 m away, a path for the robot's footprint)")
+    ex.add_argument("--world-files", metavar="GLOB",
+                    help="your own world files (sorted; quote the glob) instead of a generated family")
     ex.add_argument("--seeds", default="0-4", help="plant seeds: 0-4 or 0,2,3")
     ex.add_argument("--perception", choices=("depth", "mono", "both", "truth"), default="depth",
                     help="both: depth and mono; truth: the segmentation render through the classifier's cells")
@@ -85,7 +100,13 @@ def add_arguments(parser):
     ex.add_argument("--keep-runs", action="store_true", help="each run's figures under DIR/runs/")
     ex.add_argument("--out", required=True, metavar="DIR")
     add_engine_arguments(ex)
-    for p in (tr, ev, run, ex):
+    wd = sub.add_parser("worlds", help="write generated worlds as world files with a top view each",
+                        description=WORLDS_CONVENTION)
+    wd.add_argument("--family", choices=("barn", "corridors"), default="barn")
+    wd.add_argument("--first-world", type=int, default=0, metavar="K", help="0-19 tune, 100 up held out")
+    wd.add_argument("--worlds", type=int, default=5, metavar="N")
+    wd.add_argument("--out", required=True, metavar="DIR", help="DIR/NAME.yaml (sim.launch world:=FILE), DIR/NAME.png")
+    for p in (tr, ev, run, ex, wd):
         p.add_argument("--robot", default="cobra", help="robot name (config/robots/NAME.yaml) or YAML file")
         p.add_argument("--config", default=None,
                        help="nav config (default: config/nav_ROBOT.yaml if it exists, else config/nav.yaml)")
@@ -193,8 +214,10 @@ def main(args) -> int:
         return 0
     if args.nav_command == "experiment":
         return _experiment(args)
+    if args.nav_command == "worlds":
+        return _worlds(args)
     print("usage: snake_autonomy nav {check-world FILE...|train-classifier --out FILE|eval-perception|run|"
-          "experiment}",
+          "experiment|worlds}",
           file=sys.stderr)
     return 2
 
@@ -221,12 +244,21 @@ def _experiment(args) -> int:
         print("nav experiment: perception mono/both needs --classifier FILE (snake_autonomy nav "
               "train-classifier --out FILE)", file=sys.stderr)
         return 1
-    if args.worlds < 1:
-        print(f"nav experiment: --worlds must be >= 1, got {args.worlds}", file=sys.stderr)
-        return 1
-    ry = robot_yaml(args.robot)
-    body = max(head_width_m(ry), 2.0 * _core.RobotModel.from_yaml(str(ry)).link_radius_m)
-    worlds = [random_corridor(k, body_width_m=body) for k in range(args.first_world, args.first_world + args.worlds)]
+    if args.world_files is not None:
+        if args.family is not None:
+            print("nav experiment: --family and --world-files: one or the other", file=sys.stderr)
+            return 2
+        try:
+            worlds = _world_files(args.world_files)
+        except ValueError as e:
+            print(f"nav experiment: --world-files: {e}", file=sys.stderr)
+            return 2
+    else:
+        try:
+            worlds = [w for w, _ in _generated(args, args.family or "corridors")]
+        except ValueError as e:
+            print(f"nav experiment: {e}", file=sys.stderr)
+            return 1
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     _write_worlds(worlds, out / "worlds")
@@ -278,11 +310,109 @@ def _time_limits(args, worlds):
     return [time_limit_s(w, speed, factor) for w in worlds], factor
 
 
-def _write_worlds(worlds, folder: Path) -> None:
+def _write_worlds(worlds, folder: Path, command: str = "nav experiment") -> None:
     """Each generated world as the world file `nav run --world` reads (folder/NAME.yaml): a row of
     runs.csv is reproduced without regenerating it."""
     folder.mkdir(parents=True, exist_ok=True)
     for w in worlds:
         (folder / f"{w.name}.yaml").write_text(
-            f"# {w.source or w.name} (snake_autonomy nav experiment, runs/nav_experiment.py)\n"
+            f"# {w.source or w.name} (snake_autonomy {command}, sim/nav_worlds.py)\n"
             + yaml.safe_dump(w.to_dict(), sort_keys=False))
+
+
+WORLDS_CONVENTION = ("World indices: tune on worlds 0-19 (--first-world 0 --worlds 20); report on held-out "
+                     "worlds from 100 up (--first-world 100), never looked at while tuning.")
+
+
+def _generated(args, family: str):
+    """[(world, BarnLayout or None)] of the family's worlds --first-world .. + --worlds - 1, for the
+    robot: corridors' gaps from its body width, barn's footprint from its nav config's
+    sampler.body_clearance_m and the body's length behind base_link from the robot model."""
+    if args.worlds < 1:
+        raise ValueError(f"--worlds must be >= 1, got {args.worlds}")
+    if args.first_world < 0:
+        raise ValueError(f"--first-world must be >= 0, got {args.first_world}")
+    indices = range(args.first_world, args.first_world + args.worlds)
+    ry = robot_yaml(args.robot)
+    model = _core.RobotModel.from_yaml(str(ry))
+    if family == "corridors":
+        body = max(head_width_m(ry), 2.0 * model.link_radius_m)
+        return [(random_corridor(k, body_width_m=body), None) for k in indices]
+    clearance = NavConfig.from_yaml(args.config or nav_config_path(args.robot)).sampler.body_clearance_m
+    length = model.head_length_m + model.num_joints * model.link_length_m + model.link_radius_m
+    layouts = [barn_layout(k, clearance, body_length_m=length) for k in indices]
+    return [(b.world, b) for b in layouts]
+
+
+def _world_files(pattern: str):
+    """The world files matching the glob, sorted, each named (its name, else its file's stem);
+    ValueError naming the glob or the file."""
+    files = sorted(glob.glob(pattern, recursive=True))
+    if not files:
+        raise ValueError(f"no file matches {pattern!r}")
+    worlds = []
+    for f in files:
+        try:
+            w = load_world(f)
+        except WorldError as e:
+            raise ValueError(str(e)) from None
+        w.name = w.name or Path(f).stem
+        worlds.append(w)
+    names = [w.name for w in worlds]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ValueError(f"world names must differ (runs.csv and DIR/worlds/NAME.yaml use them); more than one "
+                         f"file is named {', '.join(twice)}: {', '.join(w.source for w in worlds if w.name in twice)}")
+    return worlds
+
+
+def _worlds(args) -> int:
+    """nav worlds: the generated worlds as world files, with a top view each."""
+    try:
+        pairs = _generated(args, args.family)
+    except ValueError as e:
+        print(f"nav worlds: {e}", file=sys.stderr)
+        return 1
+    out = Path(args.out)
+    _write_worlds([w for w, _ in pairs], out, "nav worlds")
+    for w, layout in pairs:
+        _top_view(w, layout, out / f"{w.name}.png")
+        figures = "" if layout is None else (f", fill {layout.fill:.3f}, passage {layout.passage_m:.2f} m "
+                                             f"(footprint {2 * layout.robot_clearance_m:.2f} m)")
+        print(f"{out / w.name}.yaml: {len(w.obstacles)} obstacle(s), start {list(w.start)}, goal {list(w.goal)}"
+              + figures)
+    print(f"one through ROS: scripts/with-env roslaunch snake_autonomy sim.launch world:={out.resolve()}/NAME.yaml; "
+          f"batch: snake_autonomy nav run --world {out}/NAME.yaml --out DIR")
+    return 0
+
+
+def _top_view(world, layout, path: Path) -> None:
+    """Obstacles, the start (its heading an arrow, the body lying behind it dashed), the goal's disc."""
+    import matplotlib  # lazy: matplotlib is heavy and only this path needs it
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Circle, Polygon, Rectangle
+    fig, ax = plt.subplots(figsize=(7, 6))
+    if layout is not None:
+        ax.add_patch(Rectangle(layout.origin_m, *layout.size_m, fill=False, ls=":", color="0.5", label="field"))
+    for ob in world.obstacles:
+        ax.add_patch(Circle((ob.x_m, ob.y_m), ob.radius_m, color="0.35") if ob.kind == "cylinder"
+                     else Polygon(ob.corners(), color="0.35"))
+    x, y, heading = world.start_rad
+    if layout is not None:
+        behind = layout.body_length_m
+        ax.plot([x, x - behind * math.cos(heading)], [y, y - behind * math.sin(heading)], "b--", lw=1,
+                label="body (lying straight)")
+    ax.arrow(x, y, 0.4 * math.cos(heading), 0.4 * math.sin(heading), width=0.03, color="b", label="start")
+    ax.add_patch(Circle(world.goal, world.goal_radius_m, color="g", alpha=0.5, label="goal"))
+    title = f"{world.name}: {len(world.obstacles)} obstacles"
+    if layout is not None:
+        title += f", fill {100 * layout.fill:.0f} %, passage {layout.passage_m:.2f} m"
+    ax.set_title(title)
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.legend(loc="upper right", fontsize="small")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    fig.savefig(path, dpi=100, bbox_inches="tight")
+    plt.close(fig)

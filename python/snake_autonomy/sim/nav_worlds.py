@@ -74,6 +74,7 @@ class BarnLayout:
     initial_fill: float           # the random fill before smoothing that gave `fill`
     passage_m: float              # 2 x the clearance of the widest start-goal path (its bottleneck)
     robot_clearance_m: float
+    body_length_m: float
     tries: int                    # rejection-sampling tries it took
 
     @property
@@ -156,7 +157,7 @@ def barn_layout(index: int, robot_clearance_m: float = 0.25, body_length_m: floa
                 "floor_texture": FLOOR_TEXTURES[index % 5],
                 "obstacles": _boxes(occupied, c, origin, height_m)}
         world = World.from_dict(data, f"barn_world({index})")
-        return BarnLayout(world, occupied, c, origin, fill, initial, passage, hw, attempt)
+        return BarnLayout(world, occupied, c, origin, fill, initial, passage, hw, body_length_m, attempt)
     raise ValueError(f"barn_world({index}): no field with a path for a footprint half-width of {hw:g} m in "
                      f"{max_tries} tries ({nx * c:g} x {ny * c:g} m, cells {c:g} m, fill {lo:g}-{hi:g}): "
                      f"a larger field or cells, or a lower fill")
