@@ -1,9 +1,7 @@
 """The body as a curve (body_model.py) and how COBRA's body really moves.
 
 The model: the middle lies half the body back along its curvature; a new curvature swings both ends
-to the inside of the turn, (L^2/8) kappa, about the middle or (keep_centroid) about the centroid; an
-arc whose reshaping would sweep a seen obstacle is refused; curvature candidates stay within a step
-of the current one.
+to the inside of the turn, (L^2/8) kappa, about the middle or (keep_centroid) about the centroid.
 
 The measurement (runs/gait_map.py simulate_point: the C++ driver's rectilinear gait, nav runs' flat
 belly, the centroid of the body's frames over 4 gait cycles, in base_link's frame). The planner's
@@ -17,18 +15,13 @@ omega -0.028 / +0.010 / +0.112 / +0.364 / +0.496 / +1.072 deg/s at kappa 0.25 / 
 1 / 2 (the line: 0.13 / 0.19 / 0.26 / 0.40 / 0.53 / 1.06); the centroid moving -10.3 / -14.9 / -19.7
 / -28.5 / -37.2 / -66.2 deg off the head's heading against the middle's tangent -10.8 / -15.1 /
 -21.6 / -32.4 / -43.3 / -86.5."""
-import dataclasses
 import math
 
 import pytest
 
-from nav_scenes import CFG, COBRA, HALF_LENGTH_M, K, T_GC, drawn_mask
+from nav_scenes import COBRA, HALF_LENGTH_M
 from snake_autonomy.planning.rectilinear import body_model
 from snake_autonomy.planning.rectilinear.body_model import BodyGeometry, body_poses
-from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
-from snake_autonomy.planning.rectilinear.follower import RecedingHorizonFollower
-from snake_autonomy.planning.rectilinear.planner import NavPlanner
-from snake_autonomy.planning.rectilinear.sampler import SamplerParams, TrajectorySampler
 from snake_autonomy.runs.gait_map import gait_map_points, simulate_point
 
 
@@ -39,53 +32,18 @@ def test_the_middle_is_half_the_body_back_along_its_curvature():
     assert x == pytest.approx(-math.sin(0.75)) and y == pytest.approx(1.0 - math.cos(0.75))
 
 
-def test_at_the_current_curvature_the_head_path_starts_at_the_head():
-    for kappa in (0.0, 0.6, -1.0):
-        mid = body_model.middle_pose((0.0, 0.0, 0.0), kappa, COBRA.half_length_m)
-        poses, s = body_model.head_path(mid, kappa, COBRA.half_length_m, 1.0, 0.02)
-        assert s[0] == pytest.approx(0.0, abs=0.02) and s[-1] == pytest.approx(1.0)
-        assert poses[0, :2] == pytest.approx([0.0, 0.0], abs=0.02)
-
-
 def test_a_new_curvature_swings_the_head_by_l2_over_8_per_unit_of_kappa():
     # measured (bench/nav_body_sweep): 0.28 m per 1/m on COBRA (L 1.51 m)
     mid = body_model.middle_pose((0.0, 0.0, 0.0), 0.0, COBRA.half_length_m)
-    poses, _ = body_model.head_path(mid, 1.0, COBRA.half_length_m, 0.5, 0.01)
+    shapes = body_model.body_poses(mid, 0.0, 1.0, COBRA.half_length_m, 0.01)
     L = 2.0 * COBRA.half_length_m
-    assert poses[0, 1] == pytest.approx(L * L / 8.0, rel=0.08)
-    assert poses[0, 2] == pytest.approx(L / 2.0, abs=0.02)     # its heading turns by L/2 kappa
-    shapes = body_model.body_poses(mid, 0.0, 1.0, COBRA.half_length_m, 0.02)
+    head = shapes[-1][-1]
+    assert head[1] == pytest.approx(L * L / 8.0, rel=0.08)
+    assert head[2] == pytest.approx(L / 2.0, abs=0.02)         # its heading turns by L/2 kappa
     assert len(shapes) == len(body_model.RESHAPE_FRACTIONS)
     # tail to head, the last shape the new arc: both ends swung to the inside (+y)
     assert shapes[-1][0, 1] > 0.2 and shapes[-1][-1, 1] > 0.2
     assert shapes[0][-1, 1] < shapes[-1][-1, 1]
-
-
-def test_the_body_model_refuses_an_arc_whose_body_would_sweep_a_seen_obstacle():
-    # a disc seen in an earlier view beside the tail: turning left swings the tail there (both
-    # ends to the inside of the turn); turning right is free
-    sp = dataclasses.replace(CFG.sampler, body_model=True, curvature_step_per_m=0.5, max_curvature_per_m=1.0,
-                             body_clearance_m=0.0, known_free_m=0.35, earlier_views=5)
-    planner = NavPlanner(K, 0.09, sp, RecedingHorizonFollower(CFG.follower), COBRA)
-    disc = (0.95, 0.3, 0.1)                  # in the view from 2.4 m back: at (-1.45, 0.3), the tail's end
-    planner.replan(0.0, drawn_mask(discs=[disc]), T_GC, (-2.4, 0.0, 0.0), None)
-    r = planner.replan(10.0, drawn_mask(), T_GC, (0.0, 0.0, 0.0), None)
-    by_c = {round(a.curvature_per_m, 2): a for a in r.selection.arcs}
-    assert not by_c[0.5].body_free and by_c[0.5].free_m == 0.0
-    assert by_c[-0.5].body_free and by_c[-0.5].free_m > 0.0
-    assert NavPlanner(K, 0.09, sp, RecedingHorizonFollower(CFG.follower), COBRA).footprint_width_m == \
-        pytest.approx(0.09 + 2 * sp.lateral_margin_m)
-    with pytest.raises(ValueError, match="body geometry"):
-        NavPlanner(K, 0.09, sp, RecedingHorizonFollower(CFG.follower))
-
-
-def test_curvature_candidates_stay_within_the_step_and_the_range():
-    sp = SamplerParams(num_arcs=5, max_curvature_per_m=1.0, curvature_step_per_m=0.5)
-    s = TrajectorySampler(PerceptionCollisionChecker(K, T_GC, 0.25), sp)
-    assert list(s.curvatures_around(0.0)) == pytest.approx([-0.5, -0.25, 0.0, 0.25, 0.5])
-    assert list(s.curvatures_around(0.8)) == pytest.approx([0.3, 0.55, 0.8, 1.0])
-    fixed = TrajectorySampler(PerceptionCollisionChecker(K, T_GC, 0.25), SamplerParams(num_arcs=5))
-    assert list(fixed.curvatures_around(0.8)) == pytest.approx([-2.0, -1.0, 0.0, 1.0, 2.0])
 
 
 OMEGA_PER_KAPPA = 0.00923      # config/nav.yaml follower.omega_per_kappa (rad/s per 1/m)

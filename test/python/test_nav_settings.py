@@ -20,13 +20,13 @@ def test_the_planned_arcs_are_ones_the_follower_can_drive(root, name):
 
 def test_boolean_keys_take_true_or_false_only(tmp_path):
     f = tmp_path / "nav.yaml"
-    f.write_text("follower: {back_off: 1}\nsampler: {body_model: yes}\n")
+    f.write_text("follower: {back_off: 1}\nsampler: {goal_disc: yes}\n")
     with pytest.raises(NavConfigError) as e:
         NavConfig.from_yaml(str(f))
     assert "follower.back_off: must be true or false, got 1" in str(e.value)
-    f.write_text("follower: {back_off: true}\nsampler: {body_model: false}\n")
+    f.write_text("follower: {back_off: true}\nsampler: {goal_disc: false}\n")
     cfg = NavConfig.from_yaml(str(f))
-    assert cfg.follower.back_off is True and cfg.sampler.body_model is False
+    assert cfg.follower.back_off is True and cfg.sampler.goal_disc is False
 
 
 def test_nav_config_refuses_a_stride_beyond_the_block(root, nav_config_over):

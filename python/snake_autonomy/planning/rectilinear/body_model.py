@@ -6,19 +6,12 @@ the body follows the same circle, the tail in the head's track. When kappa chang
 reshapes about its middle (measured with bench/nav_body_sweep: the head swings
 (L^2 / 8) dkappa = 0.28 m per 1/m to the inside on COBRA, L 1.51 m, and its heading turns by
 (L / 2) dkappa = 0.75 rad per 1/m at once; that swing is what drove COBRA's head and tail into
-obstacles beside a head-only arc). So the unicycle of Chang et al. is the body's MIDDLE here:
-
-- the middle's pose is base_link's pose carried back half the body along the current curvature;
-- an arc of curvature c is an arc of the middle; after reshaping the body lies on it, the head
-  half a body length ahead of the middle, the tail half a body length behind;
-- its collision check covers the head's path (the part the camera sees, free prefix = how far the
-  robot may go), and the whole body on the new arc and on two intermediate shapes (the sweep of
-  the reshaping), which must all be free;
-- the follower tracks the middle's path: its heading answers kappa only through the turn rate
-  (omega = omega_per_kappa kappa), not through the instant swing of the head.
-
-The paper's robot (12 links, 51 mm head) is short enough for the head-only model; the model here
-reduces to it for a body of length 0 (half_length_m 0).
+obstacles beside a head-only arc). The planner's guards (planner.py: the swing guard, the crawl guard,
+backing off, the turn in place) judge the body's sweep with this model: the middle's pose is
+base_link's pose carried back half the body along the current curvature, and body_poses gives the
+body's shapes from the current kappa to a new one. (Planning arcs of the middle with the whole body
+checked, an option no shipped config set, was removed: the arcs are the head's, with the body's swept
+width.)
 
 Measured with the gait map (test/python/test_nav_body_model.py): on COBRA the first premise does
 not hold at small curvatures. Below about 0.35-0.4 /m the body does not turn at all (omega 0.0002 rad/s at
@@ -57,21 +50,6 @@ def middle_pose(head_pose, kappa_per_m: float, half_length_m: float) -> Tuple[fl
         return tuple(float(v) for v in head_pose)
     p = arc_poses(kappa_per_m, -half_length_m, half_length_m, start=head_pose)[-1]
     return float(p[0]), float(p[1]), float(p[2])
-
-
-def head_path(middle, curvature_per_m: float, half_length_m: float, horizon_m: float,
-              spacing_m: float) -> Tuple[np.ndarray, np.ndarray]:
-    """(poses (N, 3), s (N,)) of the head on the middle's arc: s = the head's travel from where it
-    will be once the body has the new shape (0) to horizon_m."""
-    poses = arc_poses(curvature_per_m, half_length_m + horizon_m, spacing_m, start=middle)
-    s_mid = np.linspace(0.0, half_length_m + horizon_m, len(poses))
-    keep = s_mid >= half_length_m - 1e-9
-    return poses[keep], s_mid[keep] - half_length_m
-
-
-def middle_path(middle, curvature_per_m: float, length_m: float, spacing_m: float) -> np.ndarray:
-    """The middle's own path on the arc (what the follower tracks)."""
-    return arc_poses(curvature_per_m, length_m, spacing_m, start=middle)
 
 
 def body_poses(middle, kappa_now: float, curvature_per_m: float, half_length_m: float,

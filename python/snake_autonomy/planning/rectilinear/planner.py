@@ -42,7 +42,7 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-from .body_model import BodyGeometry, body_poses, middle_path, middle_pose
+from .body_model import BodyGeometry, body_poses, middle_pose
 from .collision_check import PerceptionCollisionChecker
 from .follower import Command, RecedingHorizonFollower
 from .obstacle_map import MapParams, ObstacleMap, view_on_floor
@@ -99,18 +99,15 @@ def _from_head(stations_xy: np.ndarray) -> np.ndarray:
 class NavPlanner:
     def __init__(self, intrinsics, head_width_m: float, sampler_params, follower: RecedingHorizonFollower,
                  body: Optional[BodyGeometry] = None, map_params: Optional[MapParams] = None):
-        """body: the robot's body (BodyGeometry.of_robot), needed by sampler_params.body_model:
-        arcs of the body's middle, the whole body checked, the follower tracking the middle.
+        """body: the robot's body (BodyGeometry.of_robot): the swing, crawl and back-off guards and
+        the turn in place judge its sweep; None: they are off (the turn in place blind).
         map_params: config/nav.yaml map: (obstacle_map.py, route.py); source truth leaves
         obstacle_map for the simulator to set (ObstacleMap.from_world)."""
-        if sampler_params.body_model and body is None:
-            raise ValueError("sampler.body_model: true needs the robot's body geometry (BodyGeometry.of_robot)")
         self.intrinsics = intrinsics
         self.head_width_m = head_width_m
         self.sampler_params = sampler_params
         self.follower = follower
-        self.body = body if sampler_params.body_model else None
-        self.geometry = body               # the body's sweep when turning in place (body_model.py)
+        self.geometry = body               # the body's sweep: guards and turns in place (body_model.py)
         self._turning = None
         self._stops = 0                    # replans in a row without a free arc
         self._views = collections.deque(maxlen=max(1, sampler_params.earlier_views))
@@ -124,23 +121,15 @@ class NavPlanner:
 
     @property
     def footprint_width_m(self) -> float:
-        """The checked footprint: the head's width (body model: the wider of head and body) plus
-        lateral_margin_m a side, at least 2 body_clearance_m (the body's swept width around the
-        head's path: for the head-only model)."""
-        return max(self._width_with_margins(self.body), 2.0 * self.sampler_params.body_clearance_m)
+        """The checked footprint: the head's width plus lateral_margin_m a side, at least 2
+        body_clearance_m (the body's swept width around the head's path)."""
+        return max(self._width_with_margins(None), 2.0 * self.sampler_params.body_clearance_m)
 
     def _width_with_margins(self, body: Optional[BodyGeometry]) -> float:
         """The head's width (with a body: the wider of head and body) plus lateral_margin_m a side:
-        the footprint at an arc's start (taper), of the body model, and of a turn in place."""
+        the footprint at an arc's start (taper, body None) and of the body's sweep."""
         width = self.head_width_m if body is None else max(self.head_width_m, body.width_m)
         return width + 2.0 * self.sampler_params.lateral_margin_m
-
-    def middle(self, pose):
-        """The pose the follower tracks: the body's middle (body model, from base_link's pose and
-        the commanded kappa), else base_link's."""
-        if self.body is None or pose is None:
-            return pose
-        return middle_pose(pose, self.follower.kappa_per_m, self.body.half_length_m)
 
     def replan(self, t_s: float, ground_image: np.ndarray, T_ground_camera: np.ndarray, pose,
                goal_xy=None, goal_radius_m: float = 0.0) -> Replan:
@@ -148,7 +137,7 @@ class NavPlanner:
         T_world_g = T_world_ground(pose)
         T_g_world = np.linalg.inv(T_world_g)
         checker = self._checker(T_ground_camera, T_g_world, sp.obstacle_depth_m)
-        guarded = sp.swing_guard_m > 0 and self.geometry is not None and self.body is None
+        guarded = sp.swing_guard_m > 0 and self.geometry is not None
         swing_checker = self._checker(T_ground_camera, T_g_world, sp.swing_obstacle_depth_m) if guarded else None
         T_world_camera = T_world_g @ np.asarray(T_ground_camera, float)
         if self.sampler_params.earlier_views:
@@ -169,11 +158,7 @@ class NavPlanner:
         if goal_xy is not None:
             g = T_g_world @ np.array([goal_xy[0], goal_xy[1], 0.0, 1.0])
             goal_g = (float(g[0]), float(g[1]))
-        body = None
-        if self.body is not None:
-            kappa = self.follower.kappa_per_m
-            body = (self.body, middle_pose((0.0, 0.0, 0.0), kappa, self.body.half_length_m), kappa)
-        sel = sampler.select(ground_image, goal_g, body, resuming=self._stops > 0, cost_to_go=cost_to_go,
+        sel = sampler.select(ground_image, goal_g, resuming=self._stops > 0, cost_to_go=cost_to_go,
                              goal_radius_m=goal_radius_m)
         if sel.no_free_arc:
             # keep turning the same way as at the previous replan (no dithering); else towards the
@@ -213,28 +198,24 @@ class NavPlanner:
         keep = arc.s_m <= arc.free_m + 1e-9
         path = to_world(arc.poses[keep], pose)
         reason = f"arc c {arc.curvature_per_m:+.2f}/m, free {arc.free_m:.2f} m"
-        if self.body is None:
-            bounds = self._swing_bounds(swing_checker, ground_image, T_world_g) if guarded else None
-            crawl = bounds
-            if bounds is not None and sp.crawl_guard_m > 0:
-                toward = self.follower.params.kappa(self.follower.params.speed_m_s * arc.curvature_per_m)
-                crawl = self._crawl_bounds(bounds, T_world_g, toward)
-                if crawl is None and sp.crawl_blocked_backs_off and self.follower.params.back_off and \
-                        self._back_off_clear(ground_image, swing_checker, T_ground_camera, T_g_world):
-                    # every curvature the swing guard allows crawls the body into the map
-                    self.follower.back_off_now()
-                    return Replan(t_s, tuple(pose), sel, None,
-                                  f"{reason}, kappa {bounds[0]:+.2f}..{bounds[1]:+.2f} /m (swing guard) all crawl "
-                                  "into the map (crawl guard): back off along the track", route_path)
-                crawl = bounds if crawl is None else crawl
-            self.follower.set_path(path, arc.curvature_per_m, crawl)
-            if bounds is not None:
-                reason += f", kappa {bounds[0]:+.2f}..{bounds[1]:+.2f} /m (swing guard)"
-            if crawl != bounds:
-                reason += f", {crawl[0]:+.2f}..{crawl[1]:+.2f} /m (crawl guard)"
-        else:
-            mid = middle_path(arc.middle, arc.curvature_per_m, arc.free_m, self.sampler_params.spacing_m)
-            self.follower.set_path(to_world(mid, pose), arc.curvature_per_m)
+        bounds = self._swing_bounds(swing_checker, ground_image, T_world_g) if guarded else None
+        crawl = bounds
+        if bounds is not None and sp.crawl_guard_m > 0:
+            toward = self.follower.params.kappa(self.follower.params.speed_m_s * arc.curvature_per_m)
+            crawl = self._crawl_bounds(bounds, T_world_g, toward)
+            if crawl is None and sp.crawl_blocked_backs_off and self.follower.params.back_off and \
+                    self._back_off_clear(ground_image, swing_checker, T_ground_camera, T_g_world):
+                # every curvature the swing guard allows crawls the body into the map
+                self.follower.back_off_now()
+                return Replan(t_s, tuple(pose), sel, None,
+                              f"{reason}, kappa {bounds[0]:+.2f}..{bounds[1]:+.2f} /m (swing guard) all crawl "
+                              "into the map (crawl guard): back off along the track", route_path)
+            crawl = bounds if crawl is None else crawl
+        self.follower.set_path(path, arc.curvature_per_m, crawl)
+        if bounds is not None:
+            reason += f", kappa {bounds[0]:+.2f}..{bounds[1]:+.2f} /m (swing guard)"
+        if crawl != bounds:
+            reason += f", {crawl[0]:+.2f}..{crawl[1]:+.2f} /m (crawl guard)"
         return Replan(t_s, tuple(pose), sel, path, reason, route_path)
 
     def _checker(self, T_ground_camera, T_g_world, obstacle_depth_m: float) -> PerceptionCollisionChecker:
@@ -446,4 +427,4 @@ class NavPlanner:
 
     def command(self, t_s: float, pose=None) -> Command:
         """pose: base_link's (x, y, theta) on the floor, or None to predict."""
-        return self.follower.update(t_s, self.middle(pose))
+        return self.follower.update(t_s, pose)

@@ -22,8 +22,8 @@ where COBRA's 0.5 m footprint leaves the 55 deg view, so the straight arc always
 footprint_taper_m: the footprint grows from the head's (start_width_m) to the full width over the
 first metres of an arc (a full-width footprint at the start pose overlapped the obstacle beside the
 body and blocked every arc, those leaving it too). resume_free_m: after a stop, a longer free prefix
-to resume. body_model (off; body_model.py): arcs of the body's middle with the body's sweep
-checked, candidates within curvature_step_per_m of the current curvature, switch_cost_m.
+to resume. The arcs are the head's: arcs of the body's middle with the body's sweep checked (with
+candidates within a step of the current curvature), an option no shipped config set, were removed.
 
 goal_disc: the goal bias aims at the goal's disc, not its centre: a free prefix that
 enters the disc costs 0 (whatever the route says there); among those, the one passing nearest the
@@ -38,7 +38,6 @@ from typing import List, Optional, Tuple
 
 import numpy as np
 
-from .body_model import body_poses, head_path
 from .collision_check import PerceptionCollisionChecker, prefix_length
 from .unicycle import arc_poses
 
@@ -64,10 +63,6 @@ class SamplerParams:
     blocked_wins: bool = False            # a hidden point one earlier view shows as an
                                           # obstacle is blocked, whatever the others show (False:
                                           # ground in any view frees it; collision_check.py)
-    body_model: bool = False              # arcs of the body's middle, the whole body checked
-                                          # (body_model.py); False: arcs of base_link (the paper)
-    curvature_step_per_m: float = 0.0     # > 0: candidates within +- this of the current curvature
-                                          # (clipped to +- max_curvature_per_m); 0: a fixed set
     footprint_taper_m: float = 0.0        # > 0: the footprint grows from the head's (head width +
                                           # lateral margins, at the start) to the full width over
                                           # this much travel: the body's sweep beyond the head's
@@ -77,9 +72,6 @@ class SamplerParams:
                                           # beyond, only a point seen blocked ends its free prefix (a
                                           # point no view shows yet is seen before the robot gets
                                           # there); inf: every point must be seen free (the paper)
-    switch_cost_m: float = 0.0            # body model's goal bias: metres of closest approach a change
-                                          # of 1/m of curvature from the current one costs (keeps the
-                                          # side round an obstacle from one replan to the next)
     swing_guard_m: float = 0.0            # > 0: while following an arc, the body's curvature
                                           # changes only as far as reshaping keeps the body's first
                                           # swing_guard_m (from the head) off obstacles the views
@@ -137,13 +129,13 @@ class SamplerParams:
         for key in ("max_curvature_per_m", "horizon_m", "spacing_m", "swing_obstacle_depth_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
-        for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "curvature_step_per_m", "known_free_m",
-                    "resume_free_m", "footprint_taper_m", "switch_cost_m", "swing_guard_m", "turn_free_m",
+        for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "known_free_m",
+                    "resume_free_m", "footprint_taper_m", "swing_guard_m", "turn_free_m",
                     "back_off_check_m", "swing_guard_tail_m",
                     "blocked_wins_depth_m", "crawl_guard_m", "crawl_dead_band_per_m", "crawl_margin_m"):
             if getattr(self, key) < 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
-        for key in ("body_model", "blocked_wins", "turn_keeps_side", "goal_disc", "reshape_keeps_centroid",
+        for key in ("blocked_wins", "turn_keeps_side", "goal_disc", "reshape_keeps_centroid",
                     "swing_guard_body", "crawl_blocked_backs_off", "crawl_forces_toward_arc"):
             if not isinstance(getattr(self, key), bool):
                 p.append(f"{key}: must be true or false, got {getattr(self, key)!r}")
@@ -161,8 +153,6 @@ class Arc:
     poses: np.ndarray          # (N, 3) the head's path in the ground frame of the planning pose
     s_m: np.ndarray            # (N,) arc length of each pose
     free_m: float = 0.0        # collision-free prefix
-    middle: Optional[tuple] = None   # body model: the middle's pose the arc starts from
-    body_free: bool = True     # body model: the body on the arc and while reshaping to it is free
 
 
 @dataclass
@@ -201,35 +191,17 @@ class TrajectorySampler:
         self._all_s = np.concatenate([a[2] for a in self._arcs])
         self._splits = np.cumsum([len(a[1]) for a in self._arcs])[:-1]
 
-    def curvatures_around(self, kappa_now: float) -> np.ndarray:
-        """The candidates' curvatures: the fixed set, or (curvature_step_per_m > 0) the current
-        curvature +- the step, clipped to the range (duplicates at the range's ends dropped)."""
-        p = self.params
-        if p.curvature_step_per_m <= 0:
-            return self.curvatures
-        c = np.clip(kappa_now + np.linspace(-p.curvature_step_per_m, p.curvature_step_per_m, p.num_arcs),
-                    -p.max_curvature_per_m, p.max_curvature_per_m)
-        return np.array(sorted(set(np.round(c, 9))))
-
     def select(self, ground: np.ndarray, goal_in_ground: Optional[Tuple[float, float]] = None,
-               body: Optional[Tuple] = None, resuming: bool = False, cost_to_go=None,
-               goal_radius_m: float = 0.0) -> Selection:
+               resuming: bool = False, cost_to_go=None, goal_radius_m: float = 0.0) -> Selection:
         """Check every arc against the traversability image `ground` (True = ground) and choose.
-        body: (BodyGeometry, the middle's pose in the ground frame, the current kappa) for the
-        body model (arcs of the middle, the body checked); None: arcs of base_link. resuming: the
-        last replan found no free arc (candidates need resume_free_m). cost_to_go: None, or a
+        resuming: the last replan found no free arc (candidates need resume_free_m). cost_to_go: None, or a
         callable (M, 2) ground-frame points -> (M,) the route's cost to the goal (route.py): the goal
         bias then takes the arc whose free prefix reaches the least cost, not the least distance.
         goal_radius_m: the goal's radius; with params.goal_disc the goal is that disc (points in it
         cost 0), else its centre."""
         p = self.params
         goal_radius_m = goal_radius_m if p.goal_disc else 0.0
-        kappa_now = 0.0
-        if body is None:
-            arcs = self._head_arcs(ground)
-        else:
-            kappa_now = float(body[2])
-            arcs = self._body_arcs(ground, *body)
+        arcs = self._head_arcs(ground)
         need = max(p.min_free_m, p.resume_free_m) if resuming else p.min_free_m
         cands = [i for i, a in enumerate(arcs) if a.free_m >= need and a.free_m > 0]
         if not cands:
@@ -259,8 +231,7 @@ class TrajectorySampler:
                     d = np.where(dist <= goal_radius_m, 0.0, d)
                     depth_err = float(np.min(dist))
                 goal_err, end_err = float(np.min(d)), float(d[-1])
-            switch = p.switch_cost_m * abs(a.curvature_per_m - kappa_now) if body is not None else 0.0
-            return (round(goal_err + switch, 2), round(depth_err, 2), round(end_err, 2), abs(a.curvature_per_m))
+            return (round(goal_err, 2), round(depth_err, 2), round(end_err, 2), abs(a.curvature_per_m))
         return Selection(arcs, min(best, key=key))
 
     def _head_arcs(self, ground) -> List[Arc]:
@@ -277,26 +248,3 @@ class TrajectorySampler:
             scale = start + (1.0 - start) * np.clip(s_m / self.params.footprint_taper_m, 0.0, 1.0)
         blocked, unknown = self.checker.pose_state(poses, ground, scale)
         return ~blocked & ~(unknown & (s_m < self.params.known_free_m))
-
-    def _body_arcs(self, ground, geometry, middle, kappa_now: float) -> List[Arc]:
-        """body_model.py: per curvature the head's path from the middle (free prefix) and the body
-        in the shapes from the current kappa to it (all free, else the arc is not a candidate)."""
-        p = self.params
-        groups, along, meta = [], [], []
-        for c in self.curvatures_around(kappa_now):
-            poses, s = head_path(middle, float(c), geometry.half_length_m, p.horizon_m, p.spacing_m)
-            shapes = body_poses(middle, kappa_now, float(c), geometry.half_length_m, 2.0 * p.spacing_m,
-                                p.reshape_keeps_centroid)
-            groups += [poses] + shapes
-            along += [s] + [np.zeros(len(b)) for b in shapes]     # the body: known free everywhere
-            meta.append((float(c), poses, s, len(shapes)))
-        free_all = np.split(self._free(np.vstack(groups), np.concatenate(along), ground),
-                            np.cumsum([len(g) for g in groups])[:-1])
-        arcs, k = [], 0
-        for c, poses, s, n_shapes in meta:
-            head_free, shapes_free = free_all[k], free_all[k + 1:k + 1 + n_shapes]
-            k += 1 + n_shapes
-            body_free = all(f.all() for f in shapes_free)
-            free = max(0.0, prefix_length(head_free, s) - p.margin_m) if body_free else 0.0
-            arcs.append(Arc(c, poses, s, free, tuple(middle), body_free))
-        return arcs
