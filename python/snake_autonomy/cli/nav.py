@@ -278,7 +278,8 @@ def _experiment(args) -> int:
     table = markdown_table(summary) + "\n\n" + outcome_table(summary)
     write_csv(rows, out / "runs.csv")
     (out / "summary.json").write_text(json.dumps(
-        {"robot": args.robot, "worlds": [w.to_dict() for w in worlds], "seeds": seeds,
+        {"robot": args.robot, "family": None if args.world_files else (args.family or "corridors"),
+         "world_files": args.world_files, "worlds": [w.to_dict() for w in worlds], "seeds": seeds,
          "perceptions": list(perceptions), "time_limit": args.time_limit,
          "time_factor": factor,
          "time_limits_s": {w.name: limit for w, limit in zip(worlds, limits)}, "engine": args.engine,
@@ -316,7 +317,7 @@ def _write_worlds(worlds, folder: Path, command: str = "nav experiment") -> None
     folder.mkdir(parents=True, exist_ok=True)
     for w in worlds:
         (folder / f"{w.name}.yaml").write_text(
-            f"# {w.source or w.name} (snake_autonomy {command}, sim/nav_worlds.py)\n"
+            f"# {w.source or w.name} (snake_autonomy {command})\n"
             + yaml.safe_dump(w.to_dict(), sort_keys=False))
 
 
