@@ -43,3 +43,19 @@ def nav_config_over(tmp_path):
         path.write_text(f"base: {ROOT / 'config' / 'nav.yaml'}\n{overrides}")
         return str(path)
     return write
+
+
+@pytest.fixture
+def paper_sampler_params():
+    """SamplerParams of the paper's planner (Chang et al. III): the longest free arc, every option
+    config/nav.yaml (and so SamplerParams()) turns on off, curvatures within 2 /m. Tests of the
+    sampler's own rules start from it (dataclasses.replace) rather than from nav.yaml's values."""
+    from snake_autonomy.planning.rectilinear.sampler import SamplerParams
+    inf = float("inf")
+    return SamplerParams(max_curvature_per_m=2.0, resume_free_m=0.0, margin_m=0.0, goal_tie_m=0.0,
+                         lateral_margin_m=0.0, body_clearance_m=0.0, earlier_views=0, obstacle_depth_m=inf,
+                         blocked_wins=False, footprint_taper_m=0.0, known_free_m=inf, swing_guard_m=0.0,
+                         swing_guard_tail_m=0.0, turn_free_m=0.0, turn_keeps_side=False, goal_disc=False,
+                         blocked_wins_depth_m=inf, back_off_check_m=0.0, crawl_guard_m=0.0,
+                         crawl_dead_band_per_m=0.0, reshape_keeps_centroid=False, crawl_blocked_backs_off=False,
+                         swing_guard_body=False, crawl_forces_toward_arc=False)

@@ -21,12 +21,16 @@ def planner(**sampler_kw):
     return NavPlanner(K, HEAD_W, sp, RecedingHorizonFollower(CFG.follower))
 
 
-def straight_free(width_m, mask, views=()):
-    checker = PerceptionCollisionChecker(K, T_GC, width_m)
-    for ground, T in views:
-        checker.add_view(ground, T)
-    sel = TrajectorySampler(checker, SamplerParams(num_arcs=1)).select(mask)
-    return sel.arcs[0].free_m
+@pytest.fixture
+def straight_free(paper_sampler_params):
+    """straight_free(width_m, mask, views): the straight arc's free length, the paper's sampler."""
+    def free(width_m, mask, views=()):
+        checker = PerceptionCollisionChecker(K, T_GC, width_m)
+        for ground, T in views:
+            checker.add_view(ground, T)
+        sel = TrajectorySampler(checker, dataclasses.replace(paper_sampler_params, num_arcs=1)).select(mask)
+        return sel.arcs[0].free_m
+    return free
 
 
 def test_footprint_width_is_the_body_clearance_when_wider_than_the_head_and_margins():
@@ -35,7 +39,7 @@ def test_footprint_width_is_the_body_clearance_when_wider_than_the_head_and_marg
     assert NavConfig.from_yaml().sampler.body_clearance_m >= 0.2        # config/nav.yaml
 
 
-def test_an_arc_passing_between_the_head_and_the_body_half_width_is_refused():
+def test_an_arc_passing_between_the_head_and_the_body_half_width_is_refused(straight_free):
     # a disc whose edge is 0.20 m beside the straight arc: outside the head's footprint (0.045 m +
     # 0.08 m margin = 0.125 m a side), inside the body's swept half-width (0.25 m)
     disc = (0.8, 0.30, 0.10)
@@ -48,14 +52,14 @@ def test_an_arc_passing_between_the_head_and_the_body_half_width_is_refused():
     assert blocked > 0.3                                                      # but not at the start
 
 
-def test_the_wide_footprint_on_open_floor_is_free_to_the_horizon():
+def test_the_wide_footprint_on_open_floor_is_free_to_the_horizon(straight_free):
     # the near field (hidden beside the view) grows with the width, to where the view is that wide
     assert straight_free(0.5, drawn_mask()) == pytest.approx(CFG.sampler.horizon_m)
     c = PerceptionCollisionChecker(K, T_GC, 0.5)
     assert 0.45 < c.near_field_m < 0.55
 
 
-def test_an_obstacle_the_image_shows_is_not_free_however_near():
+def test_an_obstacle_the_image_shows_is_not_free_however_near(straight_free):
     # a box straight ahead from 0.15 m: inside the near field of a 0.5 m footprint (0.49 m), shown
     mask = drawn_mask(boxes=[(0.15, 0.5, -0.05, 0.05)])
     c = PerceptionCollisionChecker(K, T_GC, 0.5)
@@ -63,7 +67,7 @@ def test_an_obstacle_the_image_shows_is_not_free_however_near():
     assert straight_free(0.5, mask) < 0.15
 
 
-def test_an_obstacle_beside_the_body_seen_by_an_earlier_view_stays_blocked():
+def test_an_obstacle_beside_the_body_seen_by_an_earlier_view_stays_blocked(straight_free):
     # a disc 0.25 m to the left of the robot now (hidden: beside the view); 0.5 m back, the camera
     # saw it 0.55 m ahead
     disc_now = (0.05, 0.25, 0.08)

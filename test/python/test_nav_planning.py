@@ -1,5 +1,6 @@
 """Perception-space collision checks, arc sampling and the receding-horizon follower, on drawn
 ground masks (planning/rectilinear/)."""
+import dataclasses
 import math
 
 import numpy as np
@@ -10,14 +11,19 @@ from snake_autonomy.perception.ground_region import grow_from_bottom, traversabl
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.follower import (FOLLOW, TURN_IN_PLACE, FollowerParams,
                                                           RecedingHorizonFollower)
-from snake_autonomy.planning.rectilinear.sampler import SamplerParams, TrajectorySampler
+from snake_autonomy.planning.rectilinear.sampler import TrajectorySampler
 from snake_autonomy.planning.rectilinear.unicycle import arc_poses, predict
 
 HEAD_W = 0.051
 
 
-def sampler(head_w=HEAD_W, **kw):
-    return TrajectorySampler(PerceptionCollisionChecker(K, T_GC, head_w), SamplerParams(**kw))
+@pytest.fixture
+def sampler(paper_sampler_params):
+    """sampler(head_w, **keys): the paper's sampler (conftest paper_sampler_params) with keys over it."""
+    def make(head_w=HEAD_W, **kw):
+        return TrajectorySampler(PerceptionCollisionChecker(K, T_GC, head_w),
+                                 dataclasses.replace(paper_sampler_params, **kw))
+    return make
 
 
 def test_grow_from_bottom_stops_at_first_obstacle_per_column():
@@ -32,7 +38,7 @@ def test_grow_from_bottom_stops_at_first_obstacle_per_column():
     assert traversable(mask, 40)[0:40, 0:40].sum() == 0 and traversable(mask, 40)[40:, :].all()
 
 
-def test_open_floor_chooses_the_straight_arc_full_length():
+def test_open_floor_chooses_the_straight_arc_full_length(sampler):
     sel = sampler().select(drawn_mask())
     assert not sel.no_free_arc
     assert sel.arc.curvature_per_m == 0.0
@@ -41,7 +47,7 @@ def test_open_floor_chooses_the_straight_arc_full_length():
     assert max(a.free_m for a in sel.arcs if abs(a.curvature_per_m) == 2.0) < CFG.sampler.horizon_m
 
 
-def test_obstacle_ahead_left_picks_a_right_arc_that_clears_it():
+def test_obstacle_ahead_left_picks_a_right_arc_that_clears_it(sampler):
     disc = (0.5, 0.06, 0.12)
     sel = sampler().select(drawn_mask(discs=[disc]))
     straight = [a for a in sel.arcs if a.curvature_per_m == 0.0][0]
@@ -53,7 +59,7 @@ def test_obstacle_ahead_left_picks_a_right_arc_that_clears_it():
     assert np.hypot(free[:, 0] - disc[0], free[:, 1] - disc[1]).min() > disc[2] + 0.5 * HEAD_W - 0.01
 
 
-def test_gap_narrower_than_the_head_blocks_the_straight_arc():
+def test_gap_narrower_than_the_head_blocks_the_straight_arc(sampler):
     # two boxes from 0.3 m on, 40 mm apart, straight ahead
     mask = drawn_mask(boxes=[(0.3, 2.0, 0.02, 0.5), (0.3, 2.0, -0.5, -0.02)])
     wide = [a for a in sampler(0.051).select(mask).arcs if a.curvature_per_m == 0.0][0]
@@ -62,7 +68,7 @@ def test_gap_narrower_than_the_head_blocks_the_straight_arc():
     assert narrow.free_m == pytest.approx(CFG.sampler.horizon_m)
 
 
-def test_wall_everywhere_means_no_free_arc_and_turn_in_place():
+def test_wall_everywhere_means_no_free_arc_and_turn_in_place(sampler):
     sel = sampler().select(drawn_mask(boxes=[(0.12, 0.5, -3.0, 3.0)]))
     assert sel.no_free_arc and all(a.free_m < 0.15 for a in sel.arcs)
     f = RecedingHorizonFollower(FollowerParams())
@@ -73,7 +79,7 @@ def test_wall_everywhere_means_no_free_arc_and_turn_in_place():
     assert f.pose[2] == pytest.approx(0.0)      # prediction: not moved forward while stopped
 
 
-def test_odd_arc_count_and_symmetric_curvatures():
+def test_odd_arc_count_and_symmetric_curvatures(sampler):
     s = sampler(num_arcs=7, max_curvature_per_m=3.0)
     assert s.curvatures.tolist() == pytest.approx([-3, -2, -1, 0, 1, 2, 3])
     with pytest.raises(ValueError, match="num_arcs: must be odd"):
@@ -110,7 +116,7 @@ def test_follower_feedback_steers_back_to_the_path_and_maps_omega_to_kappa():
     assert f.pose[0] > before[0] + 0.09
 
 
-def test_margin_shortens_every_free_prefix():
+def test_margin_shortens_every_free_prefix(sampler):
     mask = drawn_mask(discs=[(0.5, 0.06, 0.12)])
     plain = sampler().select(mask)
     kept = sampler(margin_m=0.1).select(mask)

@@ -39,7 +39,10 @@ def test_nav_config_refuses_a_stride_beyond_the_block(root, nav_config_over):
 def test_the_ground_margin_key_is_checked_and_zero_in_nav_yaml(nav_config_over):
     assert NavConfig.from_yaml().classifier.ground_margin == 0.0           # the committed: the SVM's class
     f = nav_config_over("nav.yaml", "classifier:\n  ground_margin: .nan\n")
-    with pytest.raises(NavConfigError, match="ground_margin: must be finite, got nan"):
+    with pytest.raises(NavConfigError, match="classifier.ground_margin: must be a number, got nan"):
+        NavConfig.from_yaml(f)
+    f = nav_config_over("nav.yaml", "classifier:\n  ground_margin: .inf\n")
+    with pytest.raises(NavConfigError, match="classifier.ground_margin: must be finite, got inf"):
         NavConfig.from_yaml(f)
     f = nav_config_over("nav.yaml", "classifier:\n  ground_margin: 0.25\n")
     assert NavConfig.from_yaml(f).classifier.ground_margin == 0.25
@@ -96,7 +99,8 @@ def test_the_map_section_is_checked_and_named():
                  "map.edge_px: must be an integer", "map.route: must be true or false, got 1"):
         assert part in text, text
     with pytest.raises(NavConfigError, match="route: true needs a map"):
-        NavConfig.from_dict({"map": {"route": True}})
+        NavConfig.from_dict({"map": {"source": "none"}})              # route's default: nav.yaml's true
+    assert NavConfig.from_dict({"map": {"source": "none", "route": False}}).map.source == "none"
     assert MapParams().validate() == []
 
 
@@ -202,3 +206,13 @@ def test_every_robots_depth_plane_is_refined():
     for robot in ("cobra", "chang_rectilinear"):
         d = NavConfig.from_yaml(nav_config_path(robot)).depth
         assert d.refine_iterations == 3 and d.refine_floor_m == pytest.approx(0.0005), robot
+
+
+def test_the_code_defaults_are_the_shipped_nav_yaml(root):
+    """NavConfig() with no file is config/nav.yaml, and a config that omits a key (or a section)
+    plans as nav.yaml does; the dataclasses of this package's sections default to its values too."""
+    shipped = NavConfig.from_yaml(root / "config" / "nav.yaml")
+    assert NavConfig() == shipped
+    assert NavConfig.from_dict({}) == shipped
+    for section in ("sampler", "map", "classifier", "gait", "plant", "gaits"):
+        assert type(getattr(shipped, section))() == getattr(shipped, section), section

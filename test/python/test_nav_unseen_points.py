@@ -15,19 +15,23 @@ from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollis
 from snake_autonomy.planning.rectilinear.config import CameraMount, NavConfig, NavConfigError, T_ground_camera
 from snake_autonomy.planning.rectilinear.follower import RecedingHorizonFollower
 from snake_autonomy.planning.rectilinear.planner import NavPlanner
-from snake_autonomy.planning.rectilinear.sampler import SamplerParams, TrajectorySampler
+from snake_autonomy.planning.rectilinear.sampler import TrajectorySampler
 
 
-def _curved_free(known_free_m, mask, width=0.25, c=1.0):
-    checker = PerceptionCollisionChecker(K, T_GC, width)
-    sp = SamplerParams(num_arcs=3, max_curvature_per_m=c, known_free_m=known_free_m)
-    return {a.curvature_per_m: a.free_m for a in TrajectorySampler(checker, sp).select(mask).arcs}
+@pytest.fixture
+def curved_free(paper_sampler_params):
+    """curved_free(known_free_m, mask): each arc's free length, the paper's sampler with known_free_m."""
+    def free(known_free_m, mask, width=0.25, c=1.0):
+        checker = PerceptionCollisionChecker(K, T_GC, width)
+        sp = dataclasses.replace(paper_sampler_params, num_arcs=3, max_curvature_per_m=c, known_free_m=known_free_m)
+        return {a.curvature_per_m: a.free_m for a in TrajectorySampler(checker, sp).select(mask).arcs}
+    return free
 
 
-def test_an_arc_leaving_the_view_is_free_beyond_known_free_m_and_cut_without_it():
+def test_an_arc_leaving_the_view_is_free_beyond_known_free_m_and_cut_without_it(curved_free):
     mask = drawn_mask()                                       # open floor
-    strict = _curved_free(math.inf, mask)
-    relaxed = _curved_free(0.3, mask)
+    strict = curved_free(math.inf, mask)
+    relaxed = curved_free(0.3, mask)
     # the paper's rule: the curved arcs' footprint leaves the 55 deg view -> cut there
     assert strict[1.0] < 0.8 and strict[-1.0] < 0.8
     assert strict[0.0] == pytest.approx(CFG.sampler.horizon_m)
@@ -36,9 +40,9 @@ def test_an_arc_leaving_the_view_is_free_beyond_known_free_m_and_cut_without_it(
         assert relaxed[c] == pytest.approx(CFG.sampler.horizon_m)
 
 
-def test_an_obstacle_the_image_shows_still_blocks_beyond_known_free_m():
+def test_an_obstacle_the_image_shows_still_blocks_beyond_known_free_m(curved_free):
     mask = drawn_mask(discs=[(0.7, 0.0, 0.1)])
-    relaxed = _curved_free(0.35, mask)
+    relaxed = curved_free(0.35, mask)
     assert relaxed[0.0] <= 0.7 - 0.1 + 1e-9                   # the straight arc stops at the disc
     assert relaxed[0.0] > 0.35
 

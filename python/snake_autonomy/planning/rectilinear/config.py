@@ -1,10 +1,17 @@
 """config/nav.yaml: camera, traversability, sampler and follower parameters, every problem listed.
 
+NavConfig() is config/nav.yaml's values: a file that omits a key plans as nav.yaml does. One schema,
+checked where a file is loaded (NavConfig.from_dict): unknown sections and keys are refused, each
+key's type is its default's (true/false, a string, an integer, a number; never nan), and each
+section's validate() checks the ranges; every problem is named with its section.key and value, all
+at once.
+
 A robot's own values live in config/nav_<robot>.yaml (e.g. nav_chang_rectilinear.yaml): a file with
 `base: nav.yaml` and only the keys that differ, merged key by key over its base. nav_config_path(robot)
 is the one place that picks the file a robot's runs use when none is named."""
 import math
-from dataclasses import dataclass, fields
+import dataclasses
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any, Dict, List
 
@@ -42,7 +49,7 @@ class ClassifierParams:
 
     def validate(self) -> List[str]:
         p = [f"{key}: must be > 0, got {getattr(self, key)}"
-             for key in ("block_px", "dct_coefficients", "svm_c") if not getattr(self, key) > 0]
+             for key in ("block_px", "dct_coefficients", "svm_c") if not 0 < getattr(self, key) < math.inf]
         if not math.isfinite(self.ground_margin):
             p.append(f"ground_margin: must be finite, got {self.ground_margin}")
         if not 0 < self.ground_fraction <= 1:
@@ -55,7 +62,7 @@ class ClassifierParams:
 @dataclass(frozen=True)
 class PlantOptions:
     """Simulator options of the navigation runs (nav.yaml `plant:`), over config/sim.yaml's."""
-    flat_belly_fraction: float = 0.0   # physics.flat_belly_fraction for nav runs (sim/mjcf.py)
+    flat_belly_fraction: float = 0.8   # physics.flat_belly_fraction for nav runs (sim/mjcf.py)
 
     def validate(self) -> List[str]:
         if not 0.0 <= self.flat_belly_fraction <= 1.0:
@@ -94,14 +101,23 @@ class NavGaits:
         return cls(**kwargs)
 
 
+# config/nav.yaml's follower and depth_traversability values where FollowerParams' and
+# DepthTraversabilityParams' own defaults differ (their modules keep the paper's and the plain fit's)
+NAV_FOLLOWER = dict(speed_m_s=0.006354748980833362, omega_per_kappa=0.00923, kappa_max_per_m=2.0, lookahead_m=0.15,
+                    k_heading=0.016, turn_in_place_rad_s=0.019, kappa_turn_per_m=1.5, kappa_rate_per_m_s=0.1,
+                    back_off=True, back_off_replans=2)
+NAV_DEPTH = dict(refine_iterations=3)
+
+
 @dataclass
 class NavConfig:
-    intrinsics: CameraIntrinsics
-    mount: CameraMount
-    depth: DepthTraversabilityParams
-    sampler: SamplerParams
-    follower: FollowerParams
-    classifier: ClassifierParams
+    """config/nav.yaml; the defaults are its values (COBRA's)."""
+    intrinsics: CameraIntrinsics = field(default_factory=CameraIntrinsics.d435i_like)
+    mount: CameraMount = CameraMount()
+    depth: DepthTraversabilityParams = field(default_factory=lambda: DepthTraversabilityParams(**NAV_DEPTH))
+    sampler: SamplerParams = field(default_factory=SamplerParams)
+    follower: FollowerParams = field(default_factory=lambda: FollowerParams(**NAV_FOLLOWER))
+    classifier: ClassifierParams = field(default_factory=ClassifierParams)
     replan_period_s: float = 10.0
     gait: RectilinearGait = RectilinearGait()
     plant: PlantOptions = PlantOptions()
@@ -121,15 +137,16 @@ class NavConfig:
         for key in data:
             if key not in known:
                 problems.append(f"{key}: unknown section; known: {', '.join(known)}")
+        defaults = cls()
         cam = data.get("camera") or {}
-        intr = CameraIntrinsics.d435i_like()
+        intr = defaults.intrinsics
         try:
             if "intrinsics" in cam:
                 intr = CameraIntrinsics.from_dict(cam["intrinsics"])
         except ValueError as e:
             problems.append(str(e))
         mount_d = cam.get("mount") or {}
-        mount = CameraMount()
+        mount = defaults.mount
         t, rpy = mount_d.get("translation_m", mount.translation_m), mount_d.get("rpy_deg", mount.rpy_deg)
         if not _vec3(t):
             problems.append(f"camera.mount.translation_m: expected 3 numbers, got {t!r}")
@@ -138,20 +155,19 @@ class NavConfig:
         if _vec3(t) and _vec3(rpy):
             mount = CameraMount(tuple(float(x) for x in t), tuple(float(x) for x in rpy))
         follower_d = _with_gait_map(data.get("follower"), source, problems)
-        replan = follower_d.pop("replan_period_s", 10.0)
-        if not isinstance(replan, (int, float)) or replan <= 0:
-            problems.append(f"follower.replan_period_s: must be > 0, got {replan!r}")
-        depth = _section(DepthTraversabilityParams, data.get("depth_traversability"), "depth_traversability",
-                         problems)
-        sampler = _section(SamplerParams, data.get("sampler"), "sampler", problems)
-        follower = _section(FollowerParams, follower_d, "follower", problems)
-        classifier = _section(ClassifierParams, data.get("classifier"), "classifier", problems)
-        gait = _section(RectilinearGait, data.get("gait"), "gait", problems)
-        plant = _section(PlantOptions, data.get("plant"), "plant", problems)
+        replan = follower_d.pop("replan_period_s", defaults.replan_period_s)
+        if not _number(replan) or not 0 < replan < math.inf:
+            problems.append(f"follower.replan_period_s: must be a number > 0, got {replan!r}")
+        depth = _section(defaults.depth, data.get("depth_traversability"), "depth_traversability", problems)
+        sampler = _section(defaults.sampler, data.get("sampler"), "sampler", problems)
+        follower = _section(defaults.follower, follower_d, "follower", problems)
+        classifier = _section(defaults.classifier, data.get("classifier"), "classifier", problems)
+        gait = _section(defaults.gait, data.get("gait"), "gait", problems)
+        plant = _section(defaults.plant, data.get("plant"), "plant", problems)
         gaits = NavGaits.from_dict(data.get("gaits"), problems)
-        omap = _section(MapParams, data.get("map"), "map", problems)
+        omap = _section(defaults.map, data.get("map"), "map", problems)
         for key in ("amplitude_m", "wavelength_m", "frequency_hz"):
-            if not getattr(gait, key) > 0:
+            if not 0 < getattr(gait, key) < math.inf:
                 problems.append(f"gait.{key}: must be > 0, got {getattr(gait, key)}")
         for name, obj in (("depth_traversability", depth), ("sampler", sampler), ("follower", follower),
                           ("plant", plant), ("classifier", classifier), ("map", omap)):
@@ -241,34 +257,38 @@ def _vec3(v) -> bool:
         isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x) for x in v)
 
 
-def _section(cls, d, name: str, problems: List[str]):
+def _number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and not math.isnan(value)
+
+
+def _section(default, d, name: str, problems: List[str]):
+    """A section's mapping over its default dataclass: each key's type is the default's (true or
+    false; a string; an integer; a number, never nan), a key of the wrong type keeps its default
+    (and is named); ranges are the dataclass's validate()."""
     d = d or {}
     if not isinstance(d, dict):
         problems.append(f"{name}: expected a mapping, got {d!r}")
-        return cls()
-    types = {f.name: f.type for f in fields(cls)}
+        return default
+    known = [f.name for f in fields(default)]
     kwargs = {}
     for key, value in d.items():
-        if key not in types:
-            problems.append(f"{name}.{key}: unknown key (value {value!r}); known: {', '.join(types)}")
-        elif isinstance(getattr(cls(), key), bool):
-            if isinstance(value, bool):
-                kwargs[key] = value
-            else:
-                problems.append(f"{name}.{key}: must be true or false, got {value!r}")
-        elif isinstance(getattr(cls(), key), str):
-            if isinstance(value, str):
-                kwargs[key] = value
-            else:
-                problems.append(f"{name}.{key}: must be a string, got {value!r}")
-        elif not isinstance(value, (int, float)) or isinstance(value, bool):
-            problems.append(f"{name}.{key}: must be a number, got {value!r}")
+        if key not in known:
+            problems.append(f"{name}.{key}: unknown key (value {value!r}); known: {', '.join(known)}")
+            continue
+        was = getattr(default, key)
+        if isinstance(was, bool):
+            ok, want = isinstance(value, bool), "true or false"
+        elif isinstance(was, str):
+            ok, want = isinstance(value, str), "a string"
+        elif isinstance(was, int):
+            ok, want = _number(value) and math.isfinite(value) and value == int(value), "an integer"
         else:
-            default = getattr(cls(), key)
-            if isinstance(default, int) and not isinstance(default, bool) and value != int(value):
-                problems.append(f"{name}.{key}: must be an integer, got {value!r}")
-            kwargs[key] = type(default)(value)
-    return cls(**kwargs)
+            ok, want = _number(value), "a number"
+        if ok:
+            kwargs[key] = value if isinstance(was, (bool, str)) else type(was)(value)
+        else:
+            problems.append(f"{name}.{key}: must be {want}, got {value!r}")
+    return dataclasses.replace(default, **kwargs)
 
 
 def head_width_m(robot_yaml) -> float:

@@ -33,8 +33,8 @@ MAP_SOURCES = ("none", "faces", "truth")
 
 @dataclass(frozen=True)
 class MapParams:
-    """config/nav.yaml `map:`."""
-    source: str = "none"          # none | faces (the views' obstacle faces with the prior) | truth (the
+    """config/nav.yaml `map:`; the defaults are its values."""
+    source: str = "faces"         # none | faces (the views' obstacle faces with the prior) | truth (the
                                   # simulated world's obstacles: a diagnostic, simulation only)
     prior_radius_m: float = 0.1   # faces: each face point is the near side of a disc of this radius
     max_range_m: float = 0.8      # faces further from the camera on the floor are not taken: with the
@@ -45,7 +45,7 @@ class MapParams:
                                   # depth's faces lay a median 2-7 cm behind the obstacle's
                                   # surface at 0, 1-3 cm in front at 4-8; mono's 20 px cells alike)
     column_step_px: int = 4       # faces: every 4th image column
-    route: bool = False           # the goal bias steers by the route's cost to go (route.py)
+    route: bool = True            # the goal bias steers by the route's cost to go (route.py)
     cell_m: float = 0.04          # route grid
     inflated_cost: float = 20.0   # route: a metre within half the checked footprint (the arcs' reach,
                                   # sampler.body_clearance_m) of an obstacle costs this many
@@ -53,7 +53,7 @@ class MapParams:
     route_max_cells: int = 1_000_000   # route grid: at most this many cells (about 250 bytes and 0.8 us
                                   # a cell per replan: 1e6 = 40 m x 40 m at 4 cm, 250 MB); a larger
                                   # start-goal box is refused naming its extent (route.grid_shape)
-    priors_off_own_floor: bool = False   # a view's prior discs are not laid on the floor
+    priors_off_own_floor: bool = True    # a view's prior discs are not laid on the floor
                                   # the same view shows (ObstacleMap.add_view)
 
     def validate(self) -> List[str]:

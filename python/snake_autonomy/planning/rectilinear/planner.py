@@ -102,7 +102,7 @@ class NavPlanner:
         """body: the robot's body (BodyGeometry.of_robot): the swing, crawl and back-off guards and
         the turn in place judge its sweep; None: they are off (the turn in place blind).
         map_params: config/nav.yaml map: (obstacle_map.py, route.py); source truth leaves
-        obstacle_map for the simulator to set (ObstacleMap.from_world)."""
+        obstacle_map for the simulator to set (ObstacleMap.from_world); None: no map (source none)."""
         self.intrinsics = intrinsics
         self.head_width_m = head_width_m
         self.sampler_params = sampler_params
@@ -111,7 +111,7 @@ class NavPlanner:
         self._turning = None
         self._stops = 0                    # replans in a row without a free arc
         self._views = collections.deque(maxlen=max(1, sampler_params.earlier_views))
-        self.map_params = map_params or MapParams()
+        self.map_params = map_params if map_params is not None else MapParams(source="none", route=False)
         mp = self.map_params
         # obstacle_map.ObstacleMap: answers for the points no image shows; route.Route: the goal
         # bias steers by its cost to go

@@ -44,83 +44,84 @@ from .unicycle import arc_poses
 
 @dataclass
 class SamplerParams:
+    """config/nav.yaml `sampler:`; the defaults are its values (COBRA's). The paper's planner: the
+    keys marked "off" at 0, false or inf."""
     num_arcs: int = 5
-    max_curvature_per_m: float = 2.0      # path curvature c = omega / v (from the gait map's range)
+    max_curvature_per_m: float = 3.0      # path curvature c = omega / v (from the gait map's range)
     horizon_m: float = 1.2                # length of each candidate arc
     spacing_m: float = 0.02               # poses along an arc
     min_free_m: float = 0.15              # shorter free prefixes: no candidate
-    resume_free_m: float = 0.0            # after a replan with no free arc: candidates need at
+    resume_free_m: float = 0.3            # after a replan with no free arc: candidates need at
                                           # least this (hysteresis: backing off 7 cm and driving
-                                          # back into the same gap is no way round)
-    margin_m: float = 0.0                 # taken off every free prefix
-    goal_tie_m: float = 0.0               # > 0: the goal bias above
-    lateral_margin_m: float = 0.0         # added to each side of the head footprint (planner.py)
-    body_clearance_m: float = 0.0         # > 0: the footprint's half-width is at least this (the
-                                          # body's reach beyond the head's path, planner.py)
-    earlier_views: int = 0                # views of earlier replans kept for hidden points
-    obstacle_depth_m: float = math.inf    # in those: non-ground this far beyond the ground's edge
-                                          # counts as blocked, further is hidden behind it
-    blocked_wins: bool = False            # a hidden point one earlier view shows as an
-                                          # obstacle is blocked, whatever the others show (False:
+                                          # back into the same gap is no way round); off: 0
+    margin_m: float = 0.1                 # taken off every free prefix
+    goal_tie_m: float = 0.3               # > 0: the goal bias above; off: 0
+    lateral_margin_m: float = 0.08        # added to each side of the head footprint (planner.py)
+    body_clearance_m: float = 0.25        # > 0: the footprint's half-width is at least this (the
+                                          # body's reach beyond the head's path, planner.py); off: 0
+    earlier_views: int = 30               # views of earlier replans kept for hidden points; off: 0
+    obstacle_depth_m: float = 0.25        # in those: non-ground this far beyond the ground's edge
+                                          # counts as blocked, further is hidden behind it; off: inf
+    blocked_wins: bool = True             # a hidden point one earlier view shows as an
+                                          # obstacle is blocked, whatever the others show (false:
                                           # ground in any view frees it; collision_check.py)
-    footprint_taper_m: float = 0.0        # > 0: the footprint grows from the head's (head width +
+    footprint_taper_m: float = 0.3        # > 0: the footprint grows from the head's (head width +
                                           # lateral margins, at the start) to the full width over
                                           # this much travel: the body's sweep beyond the head's
                                           # path builds up as it moves; an obstacle beside the body
                                           # now does not block every arc, those leaving it included
-    known_free_m: float = math.inf        # an arc's first known_free_m of travel must be seen free;
+    known_free_m: float = 0.35            # an arc's first known_free_m of travel must be seen free;
                                           # beyond, only a point seen blocked ends its free prefix (a
                                           # point no view shows yet is seen before the robot gets
                                           # there); inf: every point must be seen free (the paper)
-    swing_guard_m: float = 0.0            # > 0: while following an arc, the body's curvature
+    swing_guard_m: float = 0.2            # > 0: while following an arc, the body's curvature
                                           # changes only as far as reshaping keeps the body's first
                                           # swing_guard_m (from the head) off obstacles the views
-                                          # show (planner.py _swing_bounds); 0: off
-    swing_guard_tail_m: float = 0.0       # > 0: the guard also keeps the body's last metres (from
+                                          # show (planner.py _swing_bounds); off: 0
+    swing_guard_tail_m: float = 0.2       # > 0: the guard also keeps the body's last metres (from
                                           # the tail) off what the obstacle map holds (not the views)
     swing_obstacle_depth_m: float = 0.1   # the swing guard's obstacles: non-ground up to this beyond a
                                           # view's ground edge (the obstacle's face), not obstacle_depth_m
-    turn_free_m: float = 0.0              # > 0: a turn in place needs the tightest arc on its
+    turn_free_m: float = 0.05             # > 0: a turn in place needs the tightest arc on its
                                           # side free for this much (after margin_m): the gait crawls on
                                           # while it turns (COBRA at kappa 1.5 /m: 4-5 mm/s, so 4-5 cm a
-                                          # replan); else it backs off. 0: off
-    turn_keeps_side: bool = False         # a turn in place only to the side chosen at the
+                                          # replan); else it backs off. off: 0
+    turn_keeps_side: bool = True          # a turn in place only to the side chosen at the
                                           # stop's first replan (planner._turning); that side not free:
-                                          # back off. False: the other side is tried next
-    goal_disc: bool = False               # the goal bias aims at the goal's disc (the caller's
+                                          # back off. false: the other side is tried next
+    goal_disc: bool = True                # the goal bias aims at the goal's disc (the caller's
                                           # goal_radius_m), not its centre: a free prefix that enters the
-                                          # disc reaches the goal (goal_err 0). False: the centre (radius 0)
-    blocked_wins_depth_m: float = math.inf  # with blocked_wins, only non-ground within this of an
+                                          # disc reaches the goal (goal_err 0). false: the centre (radius 0)
+    blocked_wins_depth_m: float = 0.1     # with blocked_wins, only non-ground within this of an
                                           # earlier view's ground edge (the face) wins over ground another
                                           # view shows; the shadow behind it (to obstacle_depth_m) does not
-    back_off_check_m: float = 0.0         # > 0: backing off needs the tail's track continued this
+    back_off_check_m: float = 0.1         # > 0: backing off needs the tail's track continued this
                                           # far backwards clear of what the views and the obstacle map show
-                                          # (planner._back_off_clear); else a turn in place. 0: unchecked
-    crawl_guard_m: float = 0.0            # > 0: the swing guard also predicts the crawl: the body
+                                          # (planner._back_off_clear); else a turn in place. off: 0
+    crawl_guard_m: float = 0.2            # > 0: the swing guard also predicts the crawl: the body
                                           # in its new shape moves rigidly with its middle, which goes along
                                           # its own tangent this far turning at the measured rate (none
                                           # within crawl_dead_band_per_m); a curvature that crawls the body
-                                          # into what the obstacle map holds is not allowed, and when the
-                                          # current one does, the nearest that does not is forced
-                                          # (planner._crawl_bounds). 0: off
-    crawl_dead_band_per_m: float = 0.0    # the body turns only beyond this curvature (COBRA: not
+                                          # into what the obstacle map holds is not allowed
+                                          # (planner._crawl_bounds). off: 0
+    crawl_dead_band_per_m: float = 0.35   # the body turns only beyond this curvature (COBRA: not
                                           # below about 0.35-0.4 /m, test_nav_body_model.py); beyond it, at
                                           # follower omega_per_kappa per 1/m above it
     crawl_margin_m: float = 0.02          # the crawl guard's clearance beyond half the body's width
-    reshape_keeps_centroid: bool = False  # the body reshapes about its centroid (measured on COBRA),
+    reshape_keeps_centroid: bool = True   # the body reshapes about its centroid (measured on COBRA),
                                           # not its middle (body_model.body_poses): the swing guard, the
-                                          # crawl guard and the turn in place. False: about the middle
-    crawl_blocked_backs_off: bool = False  # when no curvature the swing guard allows crawls clear
+                                          # crawl guard and the turn in place. false: about the middle
+    crawl_blocked_backs_off: bool = True  # when no curvature the swing guard allows crawls clear
                                           # (crawl guard on), back off along the track if its tail's track is
-                                          # clear; False: follow within the swing guard's bounds
-    swing_guard_body: bool = False        # the swing guard also keeps the stations between its front
+                                          # clear; false: follow within the swing guard's bounds
+    swing_guard_body: bool = True         # the swing guard also keeps the stations between its front
                                           # and its tail off the obstacle map: none may come nearer the map's
                                           # obstacles than half the body's width + crawl_margin_m, or than
                                           # it already is when it is nearer (planner._swing_bounds)
-    crawl_forces_toward_arc: bool = False  # the current kappa's crawl failing
-                                          # forces the nearest passing kappa on the chosen arc's side of it
-                                          # (towards its feed-forward kappa) when one passes there; else back off.
-                                          # False: back off whenever the current one fails
+    crawl_forces_toward_arc: bool = True  # the current kappa's crawl failing forces the nearest passing
+                                          # kappa on the chosen arc's side of it (towards its feed-forward
+                                          # kappa) when one passes there; else back off. false: back off
+                                          # whenever the current one fails
 
     def validate(self) -> List[str]:
         p = []
