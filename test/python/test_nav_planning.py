@@ -82,7 +82,7 @@ def test_wall_everywhere_means_no_free_arc_and_turn_in_place(sampler):
 def test_odd_arc_count_and_symmetric_curvatures(sampler):
     s = sampler(num_arcs=7, max_curvature_per_m=3.0)
     assert s.curvatures.tolist() == pytest.approx([-3, -2, -1, 0, 1, 2, 3])
-    with pytest.raises(ValueError, match="num_arcs: must be odd"):
+    with pytest.raises(ValueError, match="num_arcs: must be an odd integer >= 1, got 4"):
         sampler(num_arcs=4)
 
 

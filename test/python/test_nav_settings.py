@@ -39,10 +39,10 @@ def test_nav_config_refuses_a_stride_beyond_the_block(root, nav_config_over):
 def test_the_ground_margin_key_is_checked_and_zero_in_nav_yaml(nav_config_over):
     assert NavConfig.from_yaml().classifier.ground_margin == 0.0           # the committed: the SVM's class
     f = nav_config_over("nav.yaml", "classifier:\n  ground_margin: .nan\n")
-    with pytest.raises(NavConfigError, match="classifier.ground_margin: must be a number, got nan"):
+    with pytest.raises(NavConfigError, match="classifier.ground_margin: must be a finite number, got nan"):
         NavConfig.from_yaml(f)
     f = nav_config_over("nav.yaml", "classifier:\n  ground_margin: .inf\n")
-    with pytest.raises(NavConfigError, match="classifier.ground_margin: must be finite, got inf"):
+    with pytest.raises(NavConfigError, match="classifier.ground_margin: must be a finite number, got inf"):
         NavConfig.from_yaml(f)
     f = nav_config_over("nav.yaml", "classifier:\n  ground_margin: 0.25\n")
     assert NavConfig.from_yaml(f).classifier.ground_margin == 0.25
@@ -216,3 +216,51 @@ def test_the_code_defaults_are_the_shipped_nav_yaml(root):
     assert NavConfig.from_dict({}) == shipped
     for section in ("sampler", "map", "classifier", "gait", "plant", "gaits"):
         assert type(getattr(shipped, section))() == getattr(shipped, section), section
+
+
+def test_one_schema_names_every_bad_key_with_its_value_at_once():
+    """Checked where the file is loaded: each key's type (its default's; numbers finite unless .inf
+    means off) and range, named section.key with the value, every problem in one error."""
+    bad = {
+        "camera": {"lens": "wide", "mount": {"translation_m": [0.05, 0.0]},
+                   "intrinsics": {"width": 640.5, "height": 480, "fx": 615.0, "fy": 615.0, "cx": 320.0, "cy": 240.0}},
+        "depth_traversability": {"stride_px": 2.5, "inlier_m": -1},
+        "sampler": {"num_arcs": 4, "margin_m": -0.1, "horizon_m": float("inf"), "known_free_m": float("inf"),
+                    "goal_disc": "yes"},
+        "follower": {"k_heading": float("nan"), "back_off_replans": -1, "replan_period_s": 0},
+        "classifier": {"stride_px": 60},
+        "plant": {"flat_belly_fraction": 1.5},
+        "map": {"source": "walls", "cell_m": 0, "column_step_px": 0},
+    }
+    expected = [
+        "camera.lens: unknown key (value 'wide'); known: intrinsics, mount",
+        "camera.intrinsics.width: must be an integer, got 640.5",
+        "camera.mount.translation_m: expected 3 numbers, got [0.05, 0.0]",
+        "depth_traversability.stride_px: must be an integer, got 2.5",
+        "depth_traversability.inlier_m: must be > 0, got -1.0",
+        "sampler.num_arcs: must be an odd integer >= 1, got 4",
+        "sampler.margin_m: must be >= 0, got -0.1",
+        "sampler.horizon_m: must be a finite number, got inf",
+        "sampler.goal_disc: must be true or false, got 'yes'",
+        "follower.k_heading: must be a finite number, got nan",
+        "follower.back_off_replans: must be an integer >= 0, got -1",
+        "follower.replan_period_s: must be a number > 0, got 0",
+        "classifier.stride_px: must be in (0, block_px = 40], got 60",
+        "plant.flat_belly_fraction: must be in [0, 1], got 1.5",
+        "map.source: expected one of none, faces, truth, got 'walls'",
+        "map.cell_m: must be > 0, got 0.0",
+        "map.column_step_px: must be an integer >= 1, got 0",
+    ]
+    with pytest.raises(NavConfigError) as e:
+        NavConfig.from_dict(bad, "bad.yaml")
+    assert sorted(e.value.problems) == sorted(expected)
+    assert str(e.value).startswith(f"bad.yaml: {len(expected)} problem(s):")
+
+
+def test_a_config_that_is_no_mapping_is_refused_by_name():
+    with pytest.raises(NavConfigError, match=r"expected a mapping of sections, got \['sampler'\]"):
+        NavConfig.from_dict(["sampler"])
+    with pytest.raises(NavConfigError, match=r"camera.mount: expected a mapping, got 5"):
+        NavConfig.from_dict({"camera": {"mount": 5}})
+    with pytest.raises(NavConfigError, match=r"sampler: expected a mapping, got 'all'"):
+        NavConfig.from_dict({"sampler": "all"})

@@ -27,6 +27,11 @@ from .obstacle_map import MapParams
 from .sampler import SamplerParams
 
 NAV_YAML = config_path("nav.yaml")
+# the keys whose number may be .inf (the option off); every other number must be finite
+MAY_BE_INFINITE = {"sampler": ("obstacle_depth_m", "known_free_m", "blocked_wins_depth_m"),
+                   "depth_traversability": ("max_range_m",)}
+CAMERA_KEYS = {"camera": ("intrinsics", "mount"), "camera.mount": ("translation_m", "rpy_deg"),
+               "camera.intrinsics": ("width", "height", "fx", "fy", "cx", "cy")}
 
 
 class NavConfigError(ValueError):
@@ -132,20 +137,25 @@ class NavConfig:
     @classmethod
     def from_dict(cls, data: Dict[str, Any], source: str = "nav.yaml") -> "NavConfig":
         problems: List[str] = []
+        if not isinstance(data, dict):
+            raise NavConfigError(source, [f"expected a mapping of sections, got {data!r}"])
         known = ("camera", "depth_traversability", "sampler", "follower", "classifier", "gait", "plant", "gaits",
                  "map")
         for key in data:
             if key not in known:
                 problems.append(f"{key}: unknown section; known: {', '.join(known)}")
         defaults = cls()
-        cam = data.get("camera") or {}
+        cam = _mapping(data.get("camera"), "camera", problems)
         intr = defaults.intrinsics
-        try:
-            if "intrinsics" in cam:
-                intr = CameraIntrinsics.from_dict(cam["intrinsics"])
-        except ValueError as e:
-            problems.append(str(e))
-        mount_d = cam.get("mount") or {}
+        intr_d = _mapping(cam.get("intrinsics"), "camera.intrinsics", problems)
+        if intr_d:
+            try:
+                intr = CameraIntrinsics.from_dict(intr_d)
+            except ValueError as e:
+                problems.extend(str(e).split("; "))
+            problems += [f"camera.intrinsics.{k}: must be an integer, got {intr_d[k]!r}" for k in ("width", "height")
+                         if _number(intr_d.get(k)) and math.isfinite(intr_d[k]) and intr_d[k] != int(intr_d[k])]
+        mount_d = _mapping(cam.get("mount"), "camera.mount", problems)
         mount = defaults.mount
         t, rpy = mount_d.get("translation_m", mount.translation_m), mount_d.get("rpy_deg", mount.rpy_deg)
         if not _vec3(t):
@@ -167,12 +177,11 @@ class NavConfig:
         gaits = NavGaits.from_dict(data.get("gaits"), problems)
         omap = _section(defaults.map, data.get("map"), "map", problems)
         for key in ("amplitude_m", "wavelength_m", "frequency_hz"):
-            if not 0 < getattr(gait, key) < math.inf:
+            if not getattr(gait, key) > 0:
                 problems.append(f"gait.{key}: must be > 0, got {getattr(gait, key)}")
         for name, obj in (("depth_traversability", depth), ("sampler", sampler), ("follower", follower),
                           ("plant", plant), ("classifier", classifier), ("map", omap)):
-            if obj is not None:
-                problems += [f"{name}.{p}" for p in obj.validate()]
+            problems += [f"{name}.{p}" for p in obj.validate()]
         if problems:
             raise NavConfigError(source, problems)
         return cls(intr, mount, depth, sampler, follower, classifier, float(replan), gait, plant, gaits, omap)
@@ -257,6 +266,18 @@ def _vec3(v) -> bool:
         isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x) for x in v)
 
 
+def _mapping(d, name: str, problems: List[str]) -> Dict[str, Any]:
+    """A camera (sub)section: a mapping of known keys (CAMERA_KEYS); else named, and {}."""
+    if d is None:
+        return {}
+    if not isinstance(d, dict):
+        problems.append(f"{name}: expected a mapping, got {d!r}")
+        return {}
+    problems += [f"{name}.{k}: unknown key (value {v!r}); known: {', '.join(CAMERA_KEYS[name])}"
+                 for k, v in d.items() if k not in CAMERA_KEYS[name]]
+    return d
+
+
 def _number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and not math.isnan(value)
 
@@ -282,8 +303,10 @@ def _section(default, d, name: str, problems: List[str]):
             ok, want = isinstance(value, str), "a string"
         elif isinstance(was, int):
             ok, want = _number(value) and math.isfinite(value) and value == int(value), "an integer"
+        elif key in MAY_BE_INFINITE.get(name, ()):
+            ok, want = _number(value), "a number (.inf: off)"
         else:
-            ok, want = _number(value), "a number"
+            ok, want = _number(value) and math.isfinite(value), "a finite number"
         if ok:
             kwargs[key] = value if isinstance(was, (bool, str)) else type(was)(value)
         else:

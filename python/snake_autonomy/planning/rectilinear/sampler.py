@@ -124,27 +124,25 @@ class SamplerParams:
                                           # whenever the current one fails
 
     def validate(self) -> List[str]:
+        """Every key's range (config.py checks the types where a file is loaded)."""
         p = []
-        if self.num_arcs < 1 or self.num_arcs % 2 == 0:
-            p.append(f"num_arcs: must be odd and >= 1, got {self.num_arcs}")
+        if not isinstance(self.num_arcs, int) or self.num_arcs < 1 or self.num_arcs % 2 == 0:
+            p.append(f"num_arcs: must be an odd integer >= 1, got {self.num_arcs!r}")
+        if not isinstance(self.earlier_views, int) or self.earlier_views < 0:
+            p.append(f"earlier_views: must be an integer >= 0, got {self.earlier_views!r}")
         for key in ("max_curvature_per_m", "horizon_m", "spacing_m", "swing_obstacle_depth_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
-        for key in ("lateral_margin_m", "body_clearance_m", "obstacle_depth_m", "known_free_m",
-                    "resume_free_m", "footprint_taper_m", "swing_guard_m", "turn_free_m",
-                    "back_off_check_m", "swing_guard_tail_m",
-                    "blocked_wins_depth_m", "crawl_guard_m", "crawl_dead_band_per_m", "crawl_margin_m"):
-            if getattr(self, key) < 0:
+        for key in ("min_free_m", "resume_free_m", "margin_m", "goal_tie_m", "lateral_margin_m", "body_clearance_m",
+                    "obstacle_depth_m", "footprint_taper_m", "known_free_m", "swing_guard_m", "swing_guard_tail_m",
+                    "turn_free_m", "blocked_wins_depth_m", "back_off_check_m", "crawl_guard_m",
+                    "crawl_dead_band_per_m", "crawl_margin_m"):
+            if not getattr(self, key) >= 0:
                 p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
         for key in ("blocked_wins", "turn_keeps_side", "goal_disc", "reshape_keeps_centroid",
                     "swing_guard_body", "crawl_blocked_backs_off", "crawl_forces_toward_arc"):
             if not isinstance(getattr(self, key), bool):
                 p.append(f"{key}: must be true or false, got {getattr(self, key)!r}")
-        if not isinstance(self.earlier_views, int) or self.earlier_views < 0:
-            p.append(f"earlier_views: must be an integer >= 0, got {self.earlier_views!r}")
-        if self.min_free_m < 0 or self.goal_tie_m < 0 or self.margin_m < 0:
-            p.append(f"min_free_m, goal_tie_m, margin_m: must be >= 0, got {self.min_free_m}, "
-                     f"{self.goal_tie_m}, {self.margin_m}")
         return p
 
 
