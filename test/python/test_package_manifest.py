@@ -3,7 +3,9 @@
 The declared dependencies are checked against what the code imports: each third-party module that
 python/, scripts/, test/ or bench/ imports has a rosdep key in package.xml or a pin in
 requirements.txt (PyPI-only), and each pin is imported somewhere (or listed in PLANNED), or is a
-command-line tool a script runs (TOOLS).
+command-line tool a script runs (TOOLS). What python/snake_autonomy imports at run time also has its
+rosdep key among package.xml's exec_depend/depend (a ROS user's `rosdep install`), unless rosdistro has
+no key installing a Debian package for it (NO_ROSDEP, pinned in requirements.txt).
 """
 import ast
 import os
@@ -38,18 +40,33 @@ THIRD_PARTY = {
     "distributed": ("pypi", "distributed"),
     "importlinter": ("pypi", "import-linter"),
 }
+# PyPI-pinned modules the package itself (python/snake_autonomy) imports at run time also need their rosdep key in
+# package.xml, for ROS users who install with rosdep rather than the venv (official keys: rosdistro rosdep/python.yaml).
+ROSDEP_OF_PYPI = {"cv2": "python3-opencv", "sklearn": "python3-sklearn", "joblib": "python3-joblib",
+                  "shapely": "python3-shapely"}
+# ... unless rosdistro has no key for them that installs a Debian package (package.xml says so too).
+NO_ROSDEP = {
+    "mujoco": "only a pip key (python3-mujoco-pip): rosdep would pip-install system-wide, refused on Debian 12",
+    "rosbags": "only a pip key (python3-rosbags-pip), as mujoco",
+    "evo": "no key", "dynamixel_sdk": "no Debian package (a ROS package of ROBOTIS)",
+    "threadpoolctl": "no key (Debian has python3-threadpoolctl, rosdistro no entry)",
+    "distributed": "no key (Debian has python3-distributed, rosdistro no entry)",
+}
 # Pinned before their first import, for work under way (none now: shapely is imported by planning/fbsr).
 PLANNED = set()
 # Pinned command-line tools, run rather than imported: each counts as used when the script named runs it.
 TOOLS = {"ruff": "scripts/check_style", "clang-format": "scripts/check_style"}
 
 
-def _imports():
-    """Top-level modules imported by the package's Python (files without .py in scripts/ and bench/ too)."""
-    files = list((ROOT / "python").rglob("*.py")) + list((ROOT / "test").rglob("*.py"))
-    for folder in ("scripts", "bench"):
-        files += [p for p in (ROOT / folder).iterdir()
-                  if p.is_file() and p.read_bytes()[:40].startswith(b"#!/usr/bin/env python3")]
+def _imports(package_only=False):
+    """Top-level modules imported by the package's Python (files without .py in scripts/ and bench/ too), lazy
+    imports inside functions included; package_only: python/snake_autonomy alone (what runs once installed)."""
+    files = list((ROOT / "python" / "snake_autonomy").rglob("*.py"))
+    if not package_only:
+        files = list((ROOT / "python").rglob("*.py")) + list((ROOT / "test").rglob("*.py"))
+        for folder in ("scripts", "bench"):
+            files += [p for p in (ROOT / folder).iterdir()
+                      if p.is_file() and p.read_bytes()[:40].startswith(b"#!/usr/bin/env python3")]
     local = {p.stem for p in (ROOT / "test").rglob("*.py")} | {"snake_autonomy"}
     found = {}
     for path in files:
@@ -103,6 +120,33 @@ def test_every_imported_module_is_declared():
         if kind == "pypi" and name not in pins:
             problems.append(f"{module} (imported in {where}): {name} missing from requirements.txt")
     assert not problems, "\n".join(problems)
+
+
+def test_every_module_the_package_imports_at_run_time_has_a_rosdep_key():
+    """A ROS user's `rosdep install` must bring what python/snake_autonomy imports (stdlib: sys.stdlib_module_names):
+    its rosdep key is an exec_depend (or depend) of package.xml, or the module is a NO_ROSDEP one, pinned in
+    requirements.txt."""
+    root, _ = _manifest_keys()
+    run_keys = {e.text for e in root if e.tag in ("exec_depend", "depend")}
+    pins = _requirements()
+    problems = []
+    for module, where in sorted(_imports(package_only=True).items()):
+        kind, name = THIRD_PARTY.get(module, (None, None))
+        key = name if kind == "rosdep" else ROSDEP_OF_PYPI.get(module)
+        if key is None and module in NO_ROSDEP:
+            if name not in pins:
+                problems.append(f"{module} (imported in {where}): no rosdep key, and {name} not pinned in "
+                                "requirements.txt")
+        elif key is None:
+            problems.append(f"{module} (imported in {where}): no rosdep key known here: add its key (rosdistro "
+                            "rosdep/python.yaml) to package.xml's exec_depend and to ROSDEP_OF_PYPI or THIRD_PARTY, "
+                            "or to NO_ROSDEP saying why there is none")
+        elif key not in run_keys:
+            problems.append(f"{module} (imported in {where}): rosdep key {key} missing from package.xml's "
+                            "exec_depend/depend")
+    assert not problems, "\n".join(problems)
+    shapely = [e for e in root if e.text == "python3-shapely"]
+    assert [e.get("version_gte", "").split(".")[0] for e in shapely] == ["2"], "the shapely 2 API is used: >= 2.0"
 
 
 def test_every_requirement_is_imported_and_pinned():
