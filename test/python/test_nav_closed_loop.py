@@ -59,18 +59,6 @@ def test_with_tiles_cobra_touches_the_cylinder_at_the_image_edge_and_with_cells_
     assert m["goal_reached"] and m["collisions"] == 0 and m["outcome"] == "success"
 
 
-def test_a_nav_run_with_follow_the_leader_steering(root):
-    """config/nav_follow_the_leader.yaml through a whole run (truth perception, random world 8 seed 0:
-    measured success in 188 s, one stop, backed off, never turned in place; with an obstacle in
-    one earlier view winning: 330 s, 7 stops, within COBRA's experiment limit of 567 s). About 25 s."""
-    result = NavRun(NavRunSpec(random_corridor(8), perception="truth", seed=0, time_limit_s=566.5,
-                               keep_frames=False,
-                               nav_config=str(root / "config" / "nav_follow_the_leader.yaml"))).run()
-    m = result.metrics
-    assert m["steering"] == "follow_the_leader" and m["outcome"] == "success", m
-    assert not any("turn in place" in r.reason for r in result.replans)
-
-
 def test_cobra_passes_the_three_cylinders_of_world_6_without_its_front_links_touching(nav_config_over):
     """Random world 6 seed 4, depth. Without the swing guard the planner reached at 449 s with 21
     contact episodes (the head passed the right cylinder 0.18 m off, the left arc back to the goal

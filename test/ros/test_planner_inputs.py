@@ -25,6 +25,7 @@ from driver_test_helpers import wait_for
 
 GAP_S = 2.0              # the planner commands at 2 Hz: a gap this long means its loop stopped
 FRAME_TIMEOUT_S = 2.0    # as planner_inputs.test gives ~frame_timeout_s
+STOPS = ("hold", "hold_curve")   # the straight hold before camera_info, the stop keeping kappa after
 
 
 def floor_depth(k, T_ground_optical):
@@ -107,12 +108,12 @@ class PlannerInputsTest(unittest.TestCase):
 
     def moving(self, since):
         with self.lock:
-            return any(t >= since and gait != "hold" and curve for t, gait, curve in self.commands)
+            return any(t >= since and gait not in STOPS and curve for t, gait, curve in self.commands)
 
     def holding_since(self, since):
         with self.lock:
             after = [g for t, g, _ in self.commands if t >= since]
-        return len(after) >= 2 and all(g == "hold" for g in after)
+        return len(after) >= 2 and all(g in STOPS for g in after)
 
     def assert_never_silent(self):
         with self.lock:

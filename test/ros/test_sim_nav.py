@@ -7,11 +7,13 @@ rectilinear with curve=true; the robot's base_link (ground truth) gets PROGRESS_
 goal than at the first gait command (or reaches it) within the time limit; sim_node counts contact
 episodes with the obstacle in its diagnostics (obstacle_contacts), none on this way past it.
 """
+import itertools
 import math
 import threading
 import time
 import unittest
 
+import numpy as np
 import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray
@@ -25,6 +27,18 @@ from mission_test_helpers import wait_for
 
 PROGRESS_M = 0.3        # ~45 s of the gait's 7 mm/s (measured: 0.14 m in the first 21 s); ~200 s allowed
 TIMEOUT_S = 200.0
+KAPPA_TOLERANCE = 0.3   # /m: the same replans, the follower's kappa through different latencies and noise
+
+
+def moving_from_first(commands):
+    """(t, gait, kappa) from the first command that moves (not a stop), t from that command."""
+    first = next(i for i, (_, g, _) in enumerate(commands) if g not in ("hold", "hold_curve"))
+    t0 = commands[first][0]
+    return [(t - t0, g, k) for t, g, k in commands[first:]]
+
+
+def collapsed(commands):
+    return [g for g, _ in itertools.groupby(g for _, g, _ in commands)]
 
 
 class SimNavTest(unittest.TestCase):
@@ -118,6 +132,27 @@ class SimNavTest(unittest.TestCase):
                       f"min clearance {values.get('min_clearance_m')} m")
         self.assertEqual(values["obstacle_contacts"], "0")
         self.assertGreater(float(values["min_clearance_m"]), 0.0)
+        self.compare_with_the_batch_run()
+
+    def compare_with_the_batch_run(self):
+        """The batch run (runs/nav_batch.py: the same NavLoop fed as this node is, the driver in lock-step)
+        on the same world and seed sends the same commands: the same gaits in the same order and a kappa
+        within KAPPA_TOLERANCE of this run's at the same time since the first command that moves."""
+        from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+        with self.lock:
+            ros = [(c.header.stamp.to_sec(), c.gait, float(c.kappa)) for c in self.commands]
+        ros = moving_from_first(ros)
+        window = ros[-1][0]
+        batch = NavRun(NavRunSpec(self.world, seed=0, time_limit_s=window + 30.0, keep_frames=False)).run()
+        ours = moving_from_first([(t, g, k) for t, g, k, _ in batch.commands])
+        ours = [c for c in ours if c[0] <= window]
+        rospy.loginfo("sim_nav: ROS commands " + " ".join(f"{t:.1f}:{g}:{k:+.2f}" for t, g, k in ros))
+        rospy.loginfo("sim_nav: batch commands " + " ".join(f"{t:.1f}:{g}:{k:+.2f}" for t, g, k in ours))
+        self.assertEqual(collapsed(ros), collapsed(ours))
+        times = np.array([t for t, _, _ in ours])
+        worst = max(abs(k - ours[int(np.argmin(np.abs(times - t)))][2]) for t, _, k in ros)
+        rospy.loginfo(f"sim_nav: largest kappa difference {worst:.3f} /m over {window:.0f} s")
+        self.assertLessEqual(worst, KAPPA_TOLERANCE)
 
 
 if __name__ == "__main__":

@@ -73,10 +73,9 @@ def add_arguments(parser):
     run.add_argument("--out", required=True, metavar="DIR")
     run.add_argument("--flat-belly", type=float, default=None, metavar="F",
                      help="plant option: flat belly F x the link diameter wide (default nav.yaml plant:)")
-    run.add_argument("--gait-source", choices=("driver", "reference"), default="driver",
-                     help="driver: config/gaits.yaml's rectilinear through the C++ driver (default); "
-                          "reference: the Python reference planning/rectilinear/gait.py (backing off: its "
-                          "wave reversed)")
+    run.add_argument("--pose-source", choices=("mocap", "truth"), default="mocap",
+                     help="the planner's base pose: mocap (motion capture with its noise, as sim.launch; "
+                          "default) or truth (the plant's, a diagnostic)")
     ex = sub.add_parser("experiment", help="generated (or your own) worlds x seeds: success rate, collisions, time",
                         description=WORLDS_CONVENTION)
     ex.add_argument("--worlds", type=int, default=20,
@@ -208,7 +207,7 @@ def main(args) -> int:
         result = NavRun(NavRunSpec(world, robot=args.robot, perception=args.perception, seed=args.seed,
                                    time_limit_s=args.time_limit, classifier=args.classifier,
                                    nav_config=args.config, flat_belly_fraction=args.flat_belly,
-                                   gait_source=args.gait_source)).run()
+                                   pose_source=args.pose_source)).run()
         result.write(args.out)
         print(json.dumps(result.metrics))
         return 0

@@ -9,7 +9,8 @@ Subscribes  base_pose (geometry_msgs/PoseWithCovarianceStamped): base_link's pos
             camera/color/image_raw + camera/color/camera_info (sensor_msgs; the intrinsics come from
             the first camera_info), camera/depth/image_rect_raw (32FC1 m or 16UC1 mm; ~perception depth).
 Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with curve=true and kappa;
-            hold while waiting for a pose and a frame, with no free arc and once the goal is reached),
+            ~stop_gait keeping the last kappa while waiting for an input, with no free arc and once
+            the goal is reached; the straight hold before camera_info arrives),
             nav/path (nav_msgs/Path: the chosen arc's free prefix, latched), nav/route (nav_msgs/Path:
             the route on the obstacle map the goal bias steers by, latched; nav config map.route), nav/arcs
             (visualization_msgs/MarkerArray: every candidate, chosen green, free parts yellow,
@@ -19,7 +20,7 @@ Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with cur
 Params      ~world (a world file: goal and goal radius) or ~goal ("x,y") + ~goal_radius_m; ~nav_config
             (config/nav.yaml), ~robot_config (config/robots/cobra.yaml: head width, link radius),
             ~perception (depth|mono), ~classifier (model file, mono), ~rate_hz (2: the follower's
-            command rate), ~gait, ~reverse_gait (default: ~nav_config's gaits:),
+            command rate), ~gait, ~reverse_gait, ~stop_gait (hold_curve),
             ~on_no_free_arc (hold|turn|back_off; default back_off when the nav config's
             follower.back_off, else hold), ~world_frame (frame of
             the path and markers; default base_pose's frame_id), ~pose_timeout_s (1.0),
@@ -54,7 +55,8 @@ from snake_autonomy.perception.depth_traversability import DepthTraversability
 from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m
-from snake_autonomy.planning.rectilinear.nav_loop import ERROR, GOAL_REACHED, NO_FREE_ARC, STALE, WAITING, NavLoop
+from snake_autonomy.planning.rectilinear.nav_loop import (ERROR, GOAL_REACHED, NO_FREE_ARC, STALE, STOP_GAIT, WAITING,
+                                                           NavLoop)
 from snake_autonomy.planning.rectilinear.overlay import overlay
 from snake_autonomy.planning.rectilinear.planner import to_world
 from snake_autonomy.sim.world_file import load_world
@@ -79,10 +81,11 @@ class PlannerNode:
             raise ValueError("~classifier: perception mono needs a model file (snake_autonomy nav train-classifier)")
         self.goal, self.goal_radius_m = self._goal()
         if self.cfg.gaits.steering != "uniform":
-            raise ValueError(f"~nav_config: gaits.steering {self.cfg.gaits.steering!r} runs in the batch simulator "
-                             "only (nav run / nav experiment); this node commands curve + kappa (uniform)")
+            raise ValueError(f"~nav_config: gaits.steering {self.cfg.gaits.steering!r} is a prototype of "
+                             "bench/nav_follow_the_leader; this node commands curve + kappa (uniform)")
         self.gait = rospy.get_param("~gait", self.cfg.gaits.forward)
         self.reverse_gait = rospy.get_param("~reverse_gait", self.cfg.gaits.reverse)
+        self.stop_gait = rospy.get_param("~stop_gait", STOP_GAIT)
         # the nav config's choice (follower.back_off: back off, else hold) unless the param says
         self.on_no_free_arc = rospy.get_param("~on_no_free_arc", "back_off" if self.cfg.follower.back_off else "hold")
         self.rate_hz = float(rospy.get_param("~rate_hz", 2.0))
@@ -238,7 +241,7 @@ class PlannerNode:
         except Exception as exc:          # noqa: BLE001 - the loop outlives any bug: hold and say why
             self.node_error("tick", exc)
             try:
-                self.publish_command(True, 0.0)
+                self.publish_command(True, self.loop.kappa_per_m if self.loop is not None else 0.0)
             except Exception as exc2:     # noqa: BLE001 - publishing during shutdown
                 self.node_error("hold", exc2)
         try:
@@ -248,7 +251,7 @@ class PlannerNode:
 
     def tick(self):
         if self.loop is None:
-            self.publish_command(True, 0.0)
+            self.publish_command(True, 0.0, straight=True)
             return
         now = rospy.Time.now()
         tick = self.loop.tick(now.to_sec())      # never raises: a failed tick holds (state error)
@@ -269,13 +272,16 @@ class PlannerNode:
         if tick.state == GOAL_REACHED and (previous is None or previous.state != GOAL_REACHED):
             rospy.loginfo(f"planner: {tick.message}")
 
-    def publish_command(self, hold: bool, kappa_per_m: float, backwards: bool = False):
+    def publish_command(self, hold: bool, kappa_per_m: float, backwards: bool = False, straight: bool = False):
+        """hold: the stop gait keeping kappa_per_m (the body as it is); straight: the driver's hold posture
+        (before the loop has started: nothing commanded yet)."""
         c = GaitCommand()
         c.header.stamp = rospy.Time.now()
-        if hold:
+        if straight:
             c.gait = "hold"
         else:
-            c.gait, c.curve, c.kappa = self.reverse_gait if backwards else self.gait, True, float(kappa_per_m)
+            gait = self.stop_gait if hold else self.reverse_gait if backwards else self.gait
+            c.gait, c.curve, c.kappa = gait, True, float(kappa_per_m)
         self.pub_cmd.publish(c)
 
     def publish_replan(self, stamp, tick):

@@ -1,46 +1,41 @@
-"""The navigation experiment in batch, ROS-free: a world file, the plant with its
-obstacles, the head camera, traversability (depth or the monocular classifier), the perception-space
-planner and the receding-horizon follower, closed through the rectilinear gait's Python reference.
+"""The navigation experiment in batch, ROS-free: a world file, the plant with its obstacles, the
+head camera, traversability (depth or the monocular classifier) and the robot's own navigation loop
+(planning/rectilinear/nav_loop.NavLoop, the one planner_node runs), closed through the C++ driver.
 
     run = NavRun(NavRunSpec(world=load_world(FILE), robot="cobra", perception="depth", seed=0))
     result = run.run()
-    result.write(out_dir)      # metrics.json (the issue's contract), topview.png, frames/*.png,
-                               # contacts.csv (each contact episode: when, which link, where, and
-                               # what the follower was doing), replans.csv (each replan: the pose,
-                               # every candidate arc's free length, the choice or the stop and why)
+    result.write(out_dir)      # metrics.json, topview.png, frames/*.png, commands.csv (every gait
+                               # command the loop sent), contacts.csv (each contact episode: when,
+                               # which link, where, what the follower was doing), replans.csv (each
+                               # replan: the pose, every candidate arc's free length, the choice or why none)
 
-metrics.json adds to the contract: `closest_to_goal_m` (how near base_link came to the goal's disc),
-`outcome` (success, reached_with_contact, rolled_over,
-circling_goal, stopped, time_limit: NavRun._outcome) and contacts_follow / _turn_in_place / _back_off /
-_idle (the contact episodes by the follower's mode when they began).
+This file has no navigation logic: it feeds NavLoop what planner_node gets, and sends what it
+returns to the driver as driver_node would get it.
+- Poses: the run's pose source at its rate, stamped when sampled and delivered pose_latency_s later:
+  `mocap` (default, as sim.launch feedback:=mocap: base_link at 100 Hz with config/sim.yaml's
+  mocap noise) or `truth` (the plant's base_link, no noise: a diagnostic, named in metrics.json).
+- Camera frames at camera_rate_hz (sim.launch's 0.5 Hz), stamped at capture and delivered
+  frame_latency_s later (sim_node renders in a child process: 0.07-0.17 s). A frame is rendered
+  when the loop first reads it, from a copy of the plant's state at its stamp: the same image as a
+  render at the stamp, and a frame the loop drops unread costs nothing.
+- Commands: NavLoop.tick every command_period_s (planner_node's ~rate_hz 2) -> hold, or the nav
+  config's forward / reverse gait with curve + kappa, through the driver (runs/gait_driver.py: the
+  DriverController driver_node runs, whose CPG ramps the wave in from the hold posture).
+- The end: "reached" means the robot comes to rest with base_link inside the goal's disc by
+  ground truth: when the loop says the goal is reached it holds, the run goes on settle_s more
+  and base_link's final position decides. Otherwise the run ends at time_limit_s or on roll-over.
 
-Pose source: the plant's ground truth of base_link (the head's front, where the camera looks and
-the arcs start; the simulated VIO's place, not wired here yet). The head's yaw answers a change of
-kappa at once (the lateral joints bend the body behind it: about L/2 = 0.75 rad per 1/m on COBRA),
-so the heading feedback gain must stay well below 1 / (L/2) in kappa per rad: with the paper-like
-0.5 1/s (38 /m per rad) the follower oscillated bang-bang and rolled COBRA over within 3 s
-(config/nav.yaml k_heading). The body's average axis (chord) is no better a heading for planning:
-at kappa 1/m it points up to 43 deg away from the camera's 27.5 deg half field of view.
-The camera's pose in the planning frame is the true one at the frame (the head bobs with the gait).
-kappa is updated every command_period_s and slewed at kappa_slew_per_m_s (the body reshapes over a
-gait cycle; an instant 0.5 rad jump of every lateral joint whips the body).
-Joint targets (NavRunSpec.gait_source): "driver" (default) commands config/gaits.yaml's rectilinear
-gait with curve + kappa through the C++ driver on the plant (runs/gait_driver.py: LockStepDriver, the
-DriverController driver_node runs; its CPG ramps the wave in from the hold posture); "reference"
-writes the Python reference's gait.joint_angles(t, kappa) (config/nav.yaml gait:) straight to the
-plant every control period, ramped in over ramp_s. The driver's gaits are the nav config's `gaits:`
-(forward, reverse); without a nav config named, the robot's own (config.nav_config_path: config/
-nav_chang_rectilinear.yaml names rectilinear_chang, derived for its 0.07 m links) or nav.yaml's.
-With the nav config's gaits.steering follow_the_leader kappa is laid along the head's path as
-it crawls (planning/rectilinear/follow_the_leader.py, the crawl measured on base_link's ground truth)
-and each yaw joint gets its own curvature: through the driver as explicit per-joint biases of the gait
-command (GaitCommand bias, every command_period_s), with the reference as its yaw angles.
+metrics.json: goal_reached (by that rule), loop_reached (the loop said so), final_distance_m
+(base_link to the goal's centre at the end), closest_to_goal_m (how near base_link came to the
+goal's disc), outcome (NavRun._outcome), contacts_follow / _turn_in_place / _back_off / _idle (the
+contact episodes by the follower's mode when they began), the loop's refusals and errors.
 """
 import collections
+import copy
 import csv
-import dataclasses
 import json
 import math
+from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, List, Optional
@@ -54,20 +49,25 @@ from snake_autonomy.perception.depth_traversability import DepthTraversability
 from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m, nav_config_path
-from snake_autonomy.planning.rectilinear.follow_the_leader import FollowTheLeader
-from snake_autonomy.planning.rectilinear.follower import BACK_OFF, MODES, RecedingHorizonFollower
+from snake_autonomy.planning.rectilinear.follower import MODES
+from snake_autonomy.planning.rectilinear.nav_loop import GOAL_REACHED, STOP_GAIT, NavLoop
 from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
 from snake_autonomy.planning.rectilinear.overlay import overlay
-from snake_autonomy.planning.rectilinear.planner import NavPlanner, T_world_ground, ground_frame
+from snake_autonomy.planning.rectilinear.planner import ground_frame
 from snake_autonomy.planning.rectilinear.route import grid_shape
 from snake_autonomy.runs.gait_driver import PlantGaitDriver
 from snake_autonomy.runs.results import PathLength
 from snake_autonomy.sim.camera import HeadCamera
 from snake_autonomy.sim.collisions import CollisionMonitor
 from snake_autonomy.sim.config import SimConfig
+from snake_autonomy.sim.mocap import MocapSensor
 from snake_autonomy.sim.scales import ScaledPlant
 from snake_autonomy.sim.scene import build_scene
+from snake_autonomy.sim.sensor_clock import SensorClock
 from snake_autonomy.sim.world_file import World
+from snake_autonomy.transforms import pose_to_matrix
+
+POSE_SOURCES = ("mocap", "truth")
 
 
 @dataclass
@@ -80,15 +80,55 @@ class NavRunSpec:
     classifier: Optional[str] = None      # model file (mono)
     nav_config: Optional[str] = None      # None: config/nav_<robot>.yaml if it exists, else nav.yaml
     sim_config: Optional[str] = None      # default config/sim.yaml
-    control_period_s: float = 0.01
-    ramp_s: float = 2.0
-    command_period_s: float = 0.5
-    kappa_slew_per_m_s: float = 1.0
+    control_period_s: float = 0.01        # the driver's 100 Hz
+    command_period_s: float = 0.5         # planner_node's ~rate_hz 2
+    camera_rate_hz: float = 0.5           # sim.launch camera_rate_hz
+    frame_latency_s: float = 0.2          # capture to the planner: sim_node's render (0.07-0.17 s) + transport
+    pose_source: str = "mocap"            # mocap | truth (a diagnostic: no noise)
+    pose_latency_s: float = 0.01          # sample to the planner
+    pose_timeout_s: float = 1.0           # planner_node's ~pose_timeout_s
+    frame_timeout_s: Optional[float] = None   # None: sim.launch's max(5, 3 camera periods)
+    settle_s: float = 10.0                # after the loop's goal-reached hold: the robot comes to rest
     keep_frames: bool = True
     flat_belly_fraction: Optional[float] = None   # None: nav.yaml plant.flat_belly_fraction
-    gait_source: str = "driver"           # driver (C++ gait, config/gaits.yaml) | reference (gait.py)
     gait_name: Optional[str] = None       # the driver's gait (steering: curvature); None: nav config gaits.forward
-    reverse_gait_name: Optional[str] = None   # backing off (follower back_off); None: gaits.reverse
+    reverse_gait_name: Optional[str] = None   # backing off; None: gaits.reverse
+    on_no_free_arc: Optional[str] = None  # hold | turn | back_off; None: planner_node's default (follower.back_off)
+
+    def check(self) -> None:
+        """ValueError naming the field and value of anything a run cannot use."""
+        for key in ("time_limit_s", "control_period_s", "command_period_s", "camera_rate_hz", "pose_timeout_s"):
+            v = getattr(self, key)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+                raise ValueError(f"{key}: must be a finite number > 0, got {v!r}")
+        for key in ("frame_latency_s", "pose_latency_s", "settle_s"):
+            v = getattr(self, key)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                raise ValueError(f"{key}: must be a finite number >= 0, got {v!r}")
+        if self.pose_source not in POSE_SOURCES:
+            raise ValueError(f"pose_source: expected one of {', '.join(POSE_SOURCES)}, got {self.pose_source!r}")
+        if self.perception not in ("depth", "mono", "truth"):
+            raise ValueError(f"perception: expected depth, mono or truth, got {self.perception!r}")
+        if self.perception == "mono" and not self.classifier:
+            raise ValueError("perception mono needs a classifier model (snake_autonomy nav "
+                             "train-classifier --out FILE; then --classifier FILE)")
+
+
+class DeferredFrame:
+    """A camera frame rendered when first read. The plant's state at the stamp is copied (MjData),
+    so the image is the one a render at the stamp gives, and a frame the loop replaces before it
+    replans costs no render (frames come every 2 s, replans every 10 s)."""
+
+    def __init__(self, camera, data, T_world_base: np.ndarray, t_s: float, kinds: dict):
+        self._camera, self._data, self._T, self.t_s, self._kinds = camera, copy.copy(data), T_world_base, t_s, kinds
+        self.shape = (camera.intrinsics.height, camera.intrinsics.width)
+        self._frame = None
+
+    def render(self):
+        if self._frame is None:
+            self._frame = self._camera.render(self._data, self._T, self.t_s, **self._kinds)
+            self._data = None
+        return self._frame
 
 
 @dataclass
@@ -100,6 +140,7 @@ class NavResult:
     world: Optional[World] = None
     contacts: list = field(default_factory=list)     # (collisions.ContactEpisode, the follower's mode)
     obstacle_map: Any = None                          # the planner's map at the end (shapely; map.source)
+    commands: list = field(default_factory=list)      # (t_s, gait, kappa_per_m, loop state) each command sent
 
     def write(self, out_dir) -> None:
         out = Path(out_dir)
@@ -111,6 +152,10 @@ class NavResult:
             for e, mode in self.contacts:
                 f.write(f"{e.t_s:.2f},{e.obstacle},{e.link},{e.x_m:.4f},{e.y_m:.4f},{mode}\n")
         self._write_replans(out / "replans.csv")
+        with open(out / "commands.csv", "w") as f:
+            f.write("t_s,gait,kappa_per_m,state\n")
+            for t, gait, kappa, state in self.commands:
+                f.write(f"{t:.2f},{gait},{kappa:.4f},{state}\n")
         if self.frames:
             import cv2  # lazy: OpenCV is heavy and only this path needs it
             (out / "frames").mkdir(exist_ok=True)
@@ -179,21 +224,24 @@ class NavResult:
 
 class NavRun:
     def __init__(self, spec: NavRunSpec):
+        spec.check()
         self.spec = spec
-        if not (isinstance(spec.time_limit_s, (int, float)) and math.isfinite(spec.time_limit_s)
-                and spec.time_limit_s > 0):
-            raise ValueError(f"time_limit_s: must be a finite number of seconds > 0, got {spec.time_limit_s!r}")
         self.nav_config = spec.nav_config or str(nav_config_path(spec.robot))
         self.cfg = NavConfig.from_yaml(self.nav_config)
+        if self.cfg.gaits.steering != "uniform":
+            raise ValueError(f"gaits.steering: {self.cfg.gaits.steering!r} is a prototype of "
+                             "bench/nav_follow_the_leader; the navigation loop commands curve + kappa (uniform)")
         mp = self.cfg.map
         if mp.route:   # the route's grid over the start-goal box is bounded: refused before the plant is built
             grid_shape(spec.world.start[:2], spec.world.goal, mp.cell_m, mp.pad_m, mp.route_max_cells)
         self.gait_name = spec.gait_name or self.cfg.gaits.forward
         self.reverse_gait_name = spec.reverse_gait_name or self.cfg.gaits.reverse
+        self.stop_gait_name = STOP_GAIT
         ry = robot_yaml(spec.robot)
         self.robot = _core.RobotModel.from_yaml(str(ry))
         sim_cfg = SimConfig.from_yaml(spec.sim_config or str(config_path("sim.yaml")))
         belly = self.cfg.plant.flat_belly_fraction if spec.flat_belly_fraction is None else spec.flat_belly_fraction
+        self.flat_belly_fraction = belly
         self.params = sim_cfg.with_flat_belly(belly).draw(seed=spec.seed, num_joints=self.robot.num_joints)
         scene = build_scene(spec.world)
         self.plant = ScaledPlant(self.robot, self.params, spec.world.start_rad,
@@ -201,135 +249,147 @@ class NavRun:
         self.camera = HeadCamera(self.plant.model, self.cfg.intrinsics, self.cfg.mount)
         self.collisions = CollisionMonitor(self.plant.model)
         self._contact_modes: List[str] = []
-        self.planner = NavPlanner(self.cfg.intrinsics, head_width_m(ry), self.cfg.sampler,
-                                  RecedingHorizonFollower(self.cfg.follower), BodyGeometry.of_robot(self.robot),
-                                  self.cfg.map)
         self.rollover_deg = sim_cfg.monitor.rollover_tilt_deg
+        self.mocap = MocapSensor(self.params) if spec.pose_source == "mocap" else None
+        self.drive = PlantGaitDriver(self.robot, self.plant)
+        self.render_kinds = {"colour": spec.perception == "mono" or spec.keep_frames,
+                             "depth": spec.perception == "depth", "labels": spec.perception == "truth"}
+        perceive = self._perception()
+        cfg, truth_map = self.cfg, None
         if self.cfg.map.source == "truth":          # the diagnostic: the planner knows every obstacle
-            self.planner.obstacle_map = ObstacleMap.from_world(spec.world.obstacles)
-        if spec.gait_source not in ("driver", "reference"):
-            raise ValueError(f"gait_source: expected driver or reference, got {spec.gait_source!r}")
-        self.drive = None
-        if spec.gait_source == "driver":
-            self.drive = PlantGaitDriver(self.robot, self.plant)
-        self.flat_belly_fraction = belly
+            truth_map = ObstacleMap.from_world(spec.world.obstacles)
+        on_no_free_arc = spec.on_no_free_arc or ("back_off" if cfg.follower.back_off else "hold")
+        frame_timeout = spec.frame_timeout_s or max(5.0, 3.0 / spec.camera_rate_hz)
+        self.loop = NavLoop(cfg, head_width_m(ry), lambda f: perceive(f.render()), spec.world.goal,
+                            spec.world.goal_radius_m, on_no_free_arc, spec.pose_timeout_s,
+                            BodyGeometry.of_robot(self.robot), frame_timeout_s=frame_timeout,
+                            obstacle_map=truth_map)
+
+    def _perception(self):
+        """CameraFrame -> traversability image, by spec.perception."""
+        spec = self.spec
         if spec.perception == "depth":
-            self._depth = DepthTraversability(self.cfg.intrinsics,
-                                              T_ground_camera(self.cfg.mount, self.robot.link_radius_m),
-                                              self.cfg.depth, seed=spec.seed)
-            self.perceive = lambda f: self._depth(f.depth_m)
-        elif spec.perception == "mono":
-            if not spec.classifier:
-                raise ValueError("perception mono needs a classifier model (snake_autonomy nav "
-                                 "train-classifier --out FILE; then --classifier FILE)")
-            clf = BlockClassifier.load(spec.classifier)
-            margin = self.cfg.classifier.ground_margin
-            self.perceive = lambda f: clf.traversable(f.rgb, margin)
-        elif spec.perception == "truth":
-            # a perfect classifier: the segmentation render through the classifier's
-            # blocks and cells (nav.yaml classifier: block_px, stride_px): what mono could reach
-            c = self.cfg.classifier
-            self.perceive = lambda f: truth_traversable(f.ground_truth_ground(), c.block_px, c.stride_px,
-                                                        c.ground_fraction)
-        else:
-            raise ValueError(f"perception: expected depth, mono or truth, got {spec.perception!r}")
+            depth = DepthTraversability(self.cfg.intrinsics, T_ground_camera(self.cfg.mount, self.robot.link_radius_m),
+                                        self.cfg.depth, seed=spec.seed)
+            return lambda f: depth(f.depth_m)
+        if spec.perception == "mono":
+            clf, margin = BlockClassifier.load(spec.classifier), self.cfg.classifier.ground_margin
+            return lambda f: clf.traversable(f.rgb, margin)
+        # a perfect classifier: the segmentation render through the classifier's blocks and cells
+        # (nav.yaml classifier: block_px, stride_px): what mono could reach
+        c = self.cfg.classifier
+        return lambda f: truth_traversable(f.ground_truth_ground(), c.block_px, c.stride_px, c.ground_fraction)
+
+    def _pose_sample(self, t: float, T_wb: np.ndarray):
+        """(stamp, 4x4) of the pose source's sample due at t, else None."""
+        if self.mocap is None:
+            return t, T_wb
+        s = self.mocap.poll(self.plant)
+        return None if s is None else (s.t_s, pose_to_matrix(s.position_m, s.quat_xyzw))
 
     def run(self) -> NavResult:
-        spec, plant, gait, world = self.spec, self.plant, self.cfg.gait, self.spec.world
+        spec, plant, loop = self.spec, self.plant, self.loop
         dt = spec.control_period_s
-        t, kappa = 0.0, 0.0
-        traj, replans, frames = [], [], []
-        next_replan, next_sample = spec.ramp_s, 0.0
-        path, reached, rolled = PathLength(min_step_m=0.0), False, False   # ground truth at 10 Hz: every step
-        kappa_goal, next_command, backwards = 0.0, spec.ramp_s, False
-        # backing off (follower BACK_OFF) with the reference: the same wave travelling to the head
-        # (direction negated, as gaits.yaml's reverse gaits negate the lag)
-        reverse = dataclasses.replace(gait, direction=-gait.direction)
-        ftl, next_bias = None, 0.0
-        if self.cfg.gaits.steering == "follow_the_leader":
-            ftl = FollowTheLeader.of_robot(self.robot)
-        while t < spec.time_limit_s:
+        t, step = 0.0, 0             # t = step x dt: no rounding drift against the tick and sample grids
+        traj, replans, frames, commands = [], [], [], []
+        poses, camera_frames = deque(), deque()          # (delivery time, stamp, pose or frame)
+        camera_clock = SensorClock(spec.camera_rate_hz)
+        next_tick, next_sample, end_t = spec.command_period_s, 0.0, spec.time_limit_s
+        path, rolled, loop_reached_t = PathLength(min_step_m=0.0), False, None   # truth at 10 Hz
+        sent = None
+        while t < end_t:
             T_wb = plant.frame_transform("base_link")
-            pose = ground_frame(T_wb)
-            if t >= next_sample:
+            sample = self._pose_sample(t, T_wb)
+            if sample is not None:
+                poses.append((t + spec.pose_latency_s, *sample))
+            if camera_clock.due(t):
+                camera_clock.tick(t)
+                camera_frames.append((t + spec.frame_latency_s, t,
+                                      DeferredFrame(self.camera, plant.data, T_wb, t, self.render_kinds)))
+            while poses and poses[0][0] <= t + 1e-9:
+                _, stamp, T = poses.popleft()
+                loop.on_pose(stamp, T)
+            while camera_frames and camera_frames[0][0] <= t + 1e-9:
+                _, stamp, f = camera_frames.popleft()
+                loop.on_frame(stamp, f)
+            if t >= next_sample - 1e-9:
                 next_sample += 0.1
-                traj.append((t, pose[0], pose[1]))
-                path.add(pose[0], pose[1])
+                x, y, _ = ground_frame(T_wb)
+                traj.append((t, x, y))
+                path.add(x, y)
                 self._count_contacts(clearance=True)
-                if world.goal_reached(pose[0], pose[1]):
-                    reached = True
-                    break
                 if plant.base_tilt_deg() > self.rollover_deg:
                     rolled = True
                     break
             else:
                 self._count_contacts(clearance=False)
-            if t >= next_replan:
-                next_replan += self.cfg.replan_period_s
-                frame = self.camera.render(plant.data, T_wb, t, colour=spec.perception == "mono" or spec.keep_frames,
-                                           depth=spec.perception == "depth", labels=spec.perception == "truth")
-                ground = self.perceive(frame)
-                T_gc = np.linalg.inv(T_world_ground(pose)) @ frame.T_world_camera
-                r = self.planner.replan(t, ground, T_gc, pose, world.goal, world.goal_radius_m)
-                replans.append(r)
-                if spec.keep_frames:
-                    frames.append(overlay(frame.rgb, ground, r.selection,
-                                          PerceptionCollisionChecker(self.cfg.intrinsics, T_gc,
-                                                                     self.planner.footprint_width_m)))
-            if t >= spec.ramp_s:
-                if t >= next_command:
-                    next_command += spec.command_period_s
-                    cmd = self.planner.command(t, pose)
-                    kappa_goal, backwards = cmd.kappa_per_m, cmd.mode == BACK_OFF
-                step = spec.kappa_slew_per_m_s * dt
-                kappa += max(-step, min(step, kappa_goal - kappa))
-            if ftl is not None and t >= spec.ramp_s:
-                ftl.crawl(pose, kappa)
-            if self.drive is not None:
-                name = self.reverse_gait_name if backwards else self.gait_name
-                if ftl is not None:
-                    if t >= next_bias or self.drive.gait != name:
-                        next_bias = t + spec.command_period_s
-                        self.drive.command(name, bias_rad=ftl.biases())
-                elif self.drive.kappa_per_m != kappa or self.drive.gait != name:
-                    self.drive.command(name, kappa_per_m=kappa)
-                self.drive.step(t, dt)
-            elif t >= spec.ramp_s:
-                g = reverse if backwards else gait
-                yaw_kappas = None if ftl is None else ftl.joint_kappas()
-                plant.set_joint_targets(g.joint_angles(self.robot, t - spec.ramp_s, kappa, yaw_kappas))
-            else:
-                plant.set_joint_targets(gait.joint_angles(self.robot, 0.0, 0.0) * (t / spec.ramp_s))
-            t += dt
+            if t >= next_tick - 1e-9:
+                next_tick += spec.command_period_s
+                tick = loop.tick(t)
+                if tick.replan is not None:
+                    replans.append(tick.replan)
+                    if spec.keep_frames:
+                        frames.append(self._overlay(tick))
+                gait = (self.stop_gait_name if tick.hold else self.reverse_gait_name if tick.backwards
+                        else self.gait_name)
+                kappa = float(tick.kappa_per_m)
+                commands.append((t, gait, kappa, tick.state))
+                if (gait, kappa) != sent:
+                    self.drive.command(gait, kappa_per_m=kappa)
+                    sent = (gait, kappa)
+                if tick.state == GOAL_REACHED and loop_reached_t is None:
+                    loop_reached_t, self._stop_xy = t, ground_frame(T_wb)[:2]
+                    end_t = min(end_t, t + spec.settle_s)
+            self.drive.step(t, dt)
+            step += 1
+            t = step * dt
             plant.step_to(t)
         self.camera.close()
+        return self._result(t, traj, replans, frames, commands, path, rolled, loop_reached_t)
+
+    def _overlay(self, tick) -> np.ndarray:
+        checker = PerceptionCollisionChecker(self.cfg.intrinsics, tick.T_ground_camera,
+                                             self.loop.planner.footprint_width_m)
+        return overlay(tick.frame.render().rgb, tick.ground, tick.replan.selection, checker)
+
+    def _result(self, t, traj, replans, frames, commands, path, rolled, loop_reached_t) -> NavResult:
+        spec, world, loop = self.spec, self.spec.world, self.loop
+        x, y, _ = ground_frame(self.plant.frame_transform("base_link"))
+        final_m = math.hypot(x - world.goal[0], y - world.goal[1])
+        reached = loop_reached_t is not None and final_m <= world.goal_radius_m
         clearance = self.collisions.min_clearance_m
         by_mode = collections.Counter(self._contact_modes)
         traj = np.array(traj)
-        metrics = {"goal_reached": bool(reached), "time_s": round(float(t), 3),
+        metrics = {"goal_reached": bool(reached), "loop_reached": loop_reached_t is not None,
+                   "time_s": round(float(t if loop_reached_t is None else loop_reached_t), 3),
+                   "final_distance_m": round(final_m, 4),
+                   "stop_shift_m": (round(math.hypot(x - self._stop_xy[0], y - self._stop_xy[1]), 4)
+                                    if loop_reached_t is not None else None),
                    "collisions": int(self.collisions.collisions),
                    "min_clearance_m": float(clearance) if math.isfinite(clearance) else None,
                    "path_length_m": round(path.length_m, 4), "replans": len(replans),
-                   "stops_no_free_arc": sum(1 for r in replans if r.path_world is None),
+                   "stops_no_free_arc": loop.stops_no_free_arc,
                    "rolled_over": rolled, "robot": self.robot.name, "perception": spec.perception,
                    "seed": spec.seed, "world": world.source or world.name,
-                   "flat_belly_fraction": self.flat_belly_fraction, "gait_source": spec.gait_source,
-                   "gait": self.gait_name if self.drive is not None else "reference",
-                   "steering": self.cfg.gaits.steering,
-                   "nav_config": Path(self.nav_config).name,
+                   "flat_belly_fraction": self.flat_belly_fraction, "gait": self.gait_name,
+                   "pose_source": spec.pose_source, "nav_config": Path(self.nav_config).name,
+                   "on_no_free_arc": loop.on_no_free_arc,
                    "closest_to_goal_m": round(self._closest_to_goal(traj), 4),
-                   "outcome": self._outcome(reached, rolled, replans, pose),
+                   "outcome": self._outcome(reached, loop_reached_t is not None, rolled, replans,
+                                            ground_frame(self.plant.frame_transform("base_link"))),
+                   "loop_refused": dict(loop.refused), "loop_errors": loop.errors,
+                   "loop_last_error": loop.last_error,
                    **{f"contacts_{m}": by_mode.get(m, 0) for m in MODES}}
         contacts = [(e, m) for e, m in zip(self.collisions.episodes, self._contact_modes)]
-        omap = self.planner.obstacle_map
+        omap = loop.planner.obstacle_map
         return NavResult(metrics, traj, replans, frames, world, contacts,
-                         None if omap is None else omap.geometry())
+                         None if omap is None else omap.geometry(), commands)
 
     def _count_contacts(self, clearance: bool) -> None:
         """New contact episodes, each tagged with what the follower was doing (FOLLOW,
         TURN_IN_PLACE, BACK_OFF, IDLE)."""
         new = self.collisions.update(self.plant.data, clearance=clearance)
-        self._contact_modes += [self.planner.follower.mode] * new
+        self._contact_modes += [self.loop.planner.follower.mode] * new
 
     def _closest_to_goal(self, traj: np.ndarray) -> float:
         """How near base_link came to the goal's disc (0: reached), over the 10 Hz samples (t, x, y)."""
@@ -340,14 +400,17 @@ class NavRun:
         d = np.hypot(xy[:, 0] - w.goal[0], xy[:, 1] - w.goal[1]).min() - w.goal_radius_m
         return float(max(0.0, d))
 
-    def _outcome(self, reached: bool, rolled: bool, replans, pose) -> str:
-        """success | reached_with_contact | rolled_over | circling_goal (at the time limit the goal lies
-        inside the tightest circle the follower drives, within its radius: the arcs circle it) |
-        stopped (3 of the last 5 replans found no free arc) | time_limit."""
+    def _outcome(self, reached: bool, loop_reached: bool, rolled: bool, replans, pose) -> str:
+        """success | reached_with_contact | rolled_over | left_goal (the loop said reached, its hold
+        left base_link outside the disc) | circling_goal (at the time limit the goal lies inside the
+        tightest circle the follower drives, within its radius: the arcs circle it) | stopped (3 of
+        the last 5 replans found no free arc) | time_limit."""
         if reached:
             return "success" if self.collisions.collisions == 0 else "reached_with_contact"
         if rolled:
             return "rolled_over"
+        if loop_reached:
+            return "left_goal"
         goal = self.spec.world.goal
         r = self.cfg.follower.min_radius_m
         x, y, th = pose

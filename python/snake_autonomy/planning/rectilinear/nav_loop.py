@@ -26,6 +26,8 @@ No free arc: `on_no_free_arc` "hold" (default) stops (gait hold) until a replan 
 "turn" turns in place with the follower's kappa_turn_per_m; "back_off" backs off tail first along the
 track (the reverse gait, NavTick.backwards; what the batch run does with follower.back_off).
 Goal reached (base_link within the goal radius): hold for good.
+Every hold keeps the body's curvature (NavTick.kappa_per_m is the last kappa commanded, for
+STOP_GAIT): straightening a bent body swings its head sideways.
 """
 import bisect
 import dataclasses
@@ -42,9 +44,13 @@ from .planner import NavPlanner, Replan, T_world_ground, ground_frame
 FOLLOWING, WAITING, NO_FREE_ARC, GOAL_REACHED = "following", "waiting", "no_free_arc", "goal_reached"
 STALE, ERROR = "stale", "error"    # holding: an input too old / an exception inside the tick
 NO_FREE_ARC_ACTIONS = ("hold", "turn", "back_off")
+STOP_GAIT = "hold_curve"           # config/gaits.yaml: the wave decays, the yaw joints keep kappa (curve + kappa);
+                                   # the straight `hold` swings a body bent to kappa about its middle, moving
+                                   # the head (L^2/8) kappa sideways: 0.28 m per 1/m on COBRA
 POSE_HISTORY = 500                 # base poses kept to match a frame's stamp (5 s of 100 Hz)
 POSE_WORKSPACE_M = 1000.0          # |x|, |y|, |z| of a pose beyond this is an estimator's blunder
 ROTATION_TOLERANCE = 1e-3          # max |R^T R - I| of a pose's rotation
+CLOCK_TOLERANCE_S = 1e-6          # a replan due at t is due at a tick stamped a rounding error before t
 FUTURE_TOLERANCE_S = 0.5           # a stamp this far ahead of the loop's clock is a clock error, not latency
 
 
@@ -52,8 +58,8 @@ FUTURE_TOLERANCE_S = 0.5           # a stamp this far ahead of the loop's clock 
 class NavTick:
     state: str                         # FOLLOWING | WAITING (no frame or pose yet) | NO_FREE_ARC | GOAL_REACHED
                                        # | STALE (an input too old: holding) | ERROR (the tick failed: holding)
-    hold: bool                         # command the hold gait (else rectilinear with kappa_per_m)
-    kappa_per_m: float = 0.0
+    hold: bool                         # stop: STOP_GAIT keeping kappa_per_m (else move)
+    kappa_per_m: float = 0.0           # body curvature; while holding, the last one commanded
     backwards: bool = False            # run the gait backwards (backing off with no free arc)
     replan: Optional[Replan] = None    # a replan happened in this tick
     ground: Optional[np.ndarray] = None   # its traversability image
@@ -66,9 +72,11 @@ class NavLoop:
     def __init__(self, cfg, head_width_m: float, perception: Callable[[np.ndarray], np.ndarray],
                  goal_xy: Optional[Tuple[float, float]] = None, goal_radius_m: float = 0.1,
                  on_no_free_arc: str = "hold", pose_timeout_s: float = 1.0, body=None,
-                 frame_timeout_s: float = 5.0):
+                 frame_timeout_s: float = 5.0, obstacle_map=None):
         """body: the robot's BodyGeometry (body_model.py), needed when cfg.sampler.body_model.
-        pose_timeout_s, frame_timeout_s: the oldest pose / camera frame the loop still moves on."""
+        pose_timeout_s, frame_timeout_s: the oldest pose / camera frame the loop still moves on.
+        obstacle_map: with map.source truth only, the map given in advance (the simulator's
+        diagnostic: ObstacleMap.from_world of the world's obstacles)."""
         if on_no_free_arc not in NO_FREE_ARC_ACTIONS:
             raise ValueError(f"on_no_free_arc: expected hold, turn or back_off, got {on_no_free_arc!r}")
         for key, v in (("goal_radius_m", goal_radius_m), ("pose_timeout_s", pose_timeout_s),
@@ -86,11 +94,14 @@ class NavLoop:
         self.frame_timeout_s = float(frame_timeout_s)
         self.T_base_optical = cfg.mount.T_base_optical()
         follower = dataclasses.replace(cfg.follower, back_off=on_no_free_arc == "back_off")
-        if cfg.map.source == "truth":
-            raise ValueError("map.source: truth is the simulator's diagnostic (the world's obstacles); "
-                             "a robot's planner maps the faces it sees: use faces or none")
+        if (cfg.map.source == "truth") != (obstacle_map is not None):
+            raise ValueError("map.source: truth is the simulator's diagnostic (the world's obstacles, given as "
+                             "obstacle_map); a robot's planner maps the faces it sees: use faces or none"
+                             if obstacle_map is None else "obstacle_map: given only with map.source truth")
         self.planner = NavPlanner(cfg.intrinsics, head_width_m, cfg.sampler, RecedingHorizonFollower(follower),
                                   body, cfg.map)
+        if obstacle_map is not None:
+            self.planner.obstacle_map = obstacle_map
         self.replan_period_s = float(cfg.replan_period_s)
         self._T_wb = None
         self._pose_t = None
@@ -105,6 +116,7 @@ class NavLoop:
         self.errors = 0                    # ticks that raised (and held)
         self.last_error = ""
         self._was_stale = False
+        self.kappa_per_m = 0.0             # the last kappa commanded while moving (kept by every hold)
 
     # ---- inputs ------------------------------------------------------------------------------------
     def refuse(self, kind: str, reason: str) -> str:
@@ -170,12 +182,17 @@ class NavLoop:
     def tick(self, t_s: float) -> NavTick:
         """The command for t_s; never raises (an exception holds: state ERROR, counted in errors)."""
         try:
-            return self._tick(t_s)
+            out = self._tick(t_s)
         except Exception as exc:      # noqa: BLE001 - the loop must outlive any bug or bad frame
             self.errors += 1
             self.last_error = f"{type(exc).__name__}: {exc}"[:300]
             self._next_replan = None          # replan on the next tick that works
-            return NavTick(ERROR, True, message=f"tick failed ({self.last_error}): holding")
+            out = NavTick(ERROR, True, message=f"tick failed ({self.last_error}): holding")
+        if out.hold:
+            out.kappa_per_m, out.backwards = self.kappa_per_m, False
+        else:
+            self.kappa_per_m = out.kappa_per_m
+        return out
 
     def stale(self, t_s: float) -> Optional[str]:
         """Why the pose or the frame is too old (or ahead of the clock) to move on, else None."""
@@ -206,12 +223,12 @@ class NavLoop:
             self._was_stale, self._next_replan = False, None
         pose = self.pose
         out = NavTick(self.state, False)
-        if self._next_replan is None or t_s >= self._next_replan:
+        if self._next_replan is None or t_s >= self._next_replan - CLOCK_TOLERANCE_S:
             self._next_replan = t_s + self.replan_period_s
             out = self._replan(t_s, pose)
         cmd = self.planner.command(t_s, pose)
         if self.state == NO_FREE_ARC and self.on_no_free_arc == "hold":
-            out.hold, out.kappa_per_m = True, 0.0
+            out.hold = True
         else:
             out.hold, out.kappa_per_m = False, float(cmd.kappa_per_m)
             out.backwards = cmd.mode == BACK_OFF
