@@ -57,16 +57,18 @@ def test_the_ground_fraction_key_is_checked_and_half_in_nav_yaml(nav_config_over
     assert NavConfig.from_yaml().classifier.ground_fraction == 0.5        # committed: half the block
 
 
-def test_the_steering_law_is_a_nav_config_key(root):
+def test_the_gaits_and_the_steering_law_are_nav_config_keys():
     base = NavConfig.from_yaml()
-    ftl = NavConfig.from_yaml(root / "config" / "nav_follow_the_leader.yaml")
-    assert base.gaits.steering == "uniform" and ftl.gaits.steering == "follow_the_leader"
-    assert ftl.gaits.forward == base.gaits.forward                   # merged key by key over nav.yaml
-    assert ftl.sampler.body_clearance_m < base.sampler.body_clearance_m
-    assert ftl.follower.kappa_max_per_m == ftl.sampler.max_curvature_per_m
+    assert (base.gaits.forward, base.gaits.reverse, base.gaits.stop) == ("rectilinear", "rectilinear_reverse",
+                                                                         "hold_curve")
+    assert base.gaits.steering == "uniform"
+    ftl = NavConfig.from_dict({"gaits": {"steering": "follow_the_leader"}})
+    assert ftl.gaits.steering == "follow_the_leader" and ftl.gaits.forward == base.gaits.forward
     with pytest.raises(NavConfigError,
                        match=r"gaits.steering: expected one of uniform, follow_the_leader, got 'snake'"):
         NavConfig.from_dict({"gaits": {"steering": "snake"}})
+    with pytest.raises(NavConfigError, match=r"gaits.stop: expected a gait name of config/gaits.yaml, got 3"):
+        NavConfig.from_dict({"gaits": {"stop": 3}})
 
 
 def test_blocked_wins_is_a_boolean_nav_config_key_on_in_nav_yaml():
@@ -150,18 +152,15 @@ def test_reshape_keeps_centroid_is_validated():
 def test_cobras_nav_config_turns_on_the_tail_body_and_crawl_guards():
     """nav.yaml (COBRA): the tail guard on (the 12-link robot's setting), reshaping about the
     centroid with the body guard, the crawl guard and backing off a blocked crawl, measured at 20
-    worlds x 5 seeds. The 12-link robot and follow-the-leader keep the guards off (not measured with
-    them)."""
+    worlds x 5 seeds. The 12-link robot keeps the guards off (not measured with them)."""
     cobra, chang = NavConfig.from_yaml(), NavConfig.from_yaml(nav_config_path("chang_rectilinear"))
-    ftl = NavConfig.from_yaml(nav_config_path("follow_the_leader"))
     assert cobra.sampler.swing_guard_tail_m == chang.sampler.swing_guard_tail_m == pytest.approx(0.2)
     assert cobra.sampler.reshape_keeps_centroid and cobra.sampler.swing_guard_body
     assert cobra.sampler.crawl_guard_m == pytest.approx(0.2) and cobra.sampler.crawl_blocked_backs_off
     assert cobra.sampler.crawl_dead_band_per_m == pytest.approx(0.35)
-    for other in (chang, ftl):
-        s = other.sampler
-        assert not (s.reshape_keeps_centroid or s.swing_guard_body or s.crawl_blocked_backs_off)
-        assert s.crawl_guard_m == 0.0
+    s = chang.sampler
+    assert not (s.reshape_keeps_centroid or s.swing_guard_body or s.crawl_blocked_backs_off)
+    assert s.crawl_guard_m == 0.0
 
 
 def test_the_crawl_toward_arc_key_is_validated():

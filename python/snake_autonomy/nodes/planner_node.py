@@ -20,7 +20,7 @@ Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with cur
 Params      ~world (a world file: goal and goal radius) or ~goal ("x,y") + ~goal_radius_m; ~nav_config
             (config/nav.yaml), ~robot_config (config/robots/cobra.yaml: head width, link radius),
             ~perception (depth|mono), ~classifier (model file, mono), ~rate_hz (2: the follower's
-            command rate), ~gait, ~reverse_gait, ~stop_gait (hold_curve),
+            command rate), ~gait, ~reverse_gait, ~stop_gait (default: ~nav_config's gaits:),
             ~on_no_free_arc (hold|turn|back_off; default back_off when the nav config's
             follower.back_off, else hold), ~world_frame (frame of
             the path and markers; default base_pose's frame_id), ~pose_timeout_s (1.0),
@@ -55,8 +55,7 @@ from snake_autonomy.perception.depth_traversability import DepthTraversability
 from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m
-from snake_autonomy.planning.rectilinear.nav_loop import (ERROR, GOAL_REACHED, NO_FREE_ARC, STALE, STOP_GAIT, WAITING,
-                                                           NavLoop)
+from snake_autonomy.planning.rectilinear.nav_loop import ERROR, GOAL_REACHED, NO_FREE_ARC, STALE, WAITING, NavLoop
 from snake_autonomy.planning.rectilinear.overlay import overlay
 from snake_autonomy.planning.rectilinear.planner import to_world
 from snake_autonomy.sim.world_file import load_world
@@ -85,7 +84,7 @@ class PlannerNode:
                              "bench/nav_follow_the_leader; this node commands curve + kappa (uniform)")
         self.gait = rospy.get_param("~gait", self.cfg.gaits.forward)
         self.reverse_gait = rospy.get_param("~reverse_gait", self.cfg.gaits.reverse)
-        self.stop_gait = rospy.get_param("~stop_gait", STOP_GAIT)
+        self.stop_gait = rospy.get_param("~stop_gait", self.cfg.gaits.stop)
         # the nav config's choice (follower.back_off: back off, else hold) unless the param says
         self.on_no_free_arc = rospy.get_param("~on_no_free_arc", "back_off" if self.cfg.follower.back_off else "hold")
         self.rate_hz = float(rospy.get_param("~rate_hz", 2.0))

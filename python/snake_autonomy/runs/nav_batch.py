@@ -50,7 +50,7 @@ from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m, nav_config_path
 from snake_autonomy.planning.rectilinear.follower import MODES
-from snake_autonomy.planning.rectilinear.nav_loop import GOAL_REACHED, STOP_GAIT, NavLoop
+from snake_autonomy.planning.rectilinear.nav_loop import GOAL_REACHED, NavLoop
 from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
 from snake_autonomy.planning.rectilinear.overlay import overlay
 from snake_autonomy.planning.rectilinear.planner import ground_frame
@@ -236,7 +236,7 @@ class NavRun:
             grid_shape(spec.world.start[:2], spec.world.goal, mp.cell_m, mp.pad_m, mp.route_max_cells)
         self.gait_name = spec.gait_name or self.cfg.gaits.forward
         self.reverse_gait_name = spec.reverse_gait_name or self.cfg.gaits.reverse
-        self.stop_gait_name = STOP_GAIT
+        self.stop_gait_name = self.cfg.gaits.stop
         ry = robot_yaml(spec.robot)
         self.robot = _core.RobotModel.from_yaml(str(ry))
         sim_cfg = SimConfig.from_yaml(spec.sim_config or str(config_path("sim.yaml")))

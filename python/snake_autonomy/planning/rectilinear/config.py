@@ -80,12 +80,17 @@ STEERING_LAWS = ("uniform", "follow_the_leader")
 
 @dataclass(frozen=True)
 class NavGaits:
-    """config/gaits.yaml entries a navigation run drives through the driver (nav.yaml `gaits:`)."""
-    forward: str = "rectilinear"             # head first, steering: curvature
-    reverse: str = "rectilinear_reverse"     # tail first (follower back_off)
+    """config/gaits.yaml entries a navigation run drives through the driver (nav.yaml `gaits:`), each
+    with steering: curvature (curve + kappa)."""
+    forward: str = "rectilinear"             # head first
+    reverse: str = "rectilinear_reverse"     # tail first (backing off)
+    stop: str = "hold_curve"                 # the wave decays, the yaw joints keep kappa: the body stays
+                                             # as it is (the straight `hold` swings the head (L^2/8) kappa
+                                             # sideways: 0.28 m per 1/m on COBRA, out of a goal's disc)
     steering: str = "uniform"                # uniform: every yaw joint at kappa (the driver's curvature
-                                             # law); follow_the_leader: kappa laid along the head's path
-                                             # (follow_the_leader.py; the batch simulator only)
+                                             # law, what the navigation loop commands); follow_the_leader:
+                                             # kappa laid along the head's path (follow_the_leader.py, a
+                                             # prototype measured by bench/nav_follow_the_leader only)
 
     @classmethod
     def from_dict(cls, d, problems: List[str]) -> "NavGaits":
@@ -95,8 +100,9 @@ class NavGaits:
             return cls()
         kwargs = {}
         for key, value in d.items():
-            if key not in ("forward", "reverse", "steering"):
-                problems.append(f"gaits.{key}: unknown key (value {value!r}); known: forward, reverse, steering")
+            if key not in ("forward", "reverse", "stop", "steering"):
+                problems.append(f"gaits.{key}: unknown key (value {value!r}); known: forward, reverse, stop, "
+                                "steering")
             elif key == "steering" and value not in STEERING_LAWS:
                 problems.append(f"gaits.steering: expected one of {', '.join(STEERING_LAWS)}, got {value!r}")
             elif not isinstance(value, str) or not value:

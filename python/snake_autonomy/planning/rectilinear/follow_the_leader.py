@@ -14,10 +14,11 @@ the track in a 1.5 /m turn, 0.11 m against 0.37 m with uniform curvature; at 2.5
 Backing off (the head's arc position decreasing) lays nothing down: the joints take the curvature of
 the path behind them again, so the body retraces its track exactly.
 
-Used by nav runs when the nav config says `gaits.steering: follow_the_leader`
-(config/nav_follow_the_leader.yaml; through the driver as per-joint gait-command biases). Not the
-default: COBRA mono 20 x 5 with it, 65 % (9 runs touching, 24 time limits) against 75 % uniform (16
-touching, 4 time limits).
+Measured in the navigation experiment (COBRA mono 20 x 5, the former batch loop): 65 % (9 runs
+touching, 24 time limits) against 75 % with uniform curvature (16 touching, 4 time limits), so not
+the default. The navigation loop (nav_loop.py, planner_node and nav runs) commands uniform
+curvature only (`gaits.steering: follow_the_leader` is refused there); a navigation loop with it
+would send these per-joint biases in the gait command.
 
 Arc positions: s_head is the head's distance crawled along its path (from the start, forward
 positive); the body behind the start lies straight (curvature 0).

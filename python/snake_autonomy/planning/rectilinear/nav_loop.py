@@ -26,8 +26,8 @@ No free arc: `on_no_free_arc` "hold" (default) stops (gait hold) until a replan 
 "turn" turns in place with the follower's kappa_turn_per_m; "back_off" backs off tail first along the
 track (the reverse gait, NavTick.backwards; what the batch run does with follower.back_off).
 Goal reached (base_link within the goal radius): hold for good.
-Every hold keeps the body's curvature (NavTick.kappa_per_m is the last kappa commanded, for
-STOP_GAIT): straightening a bent body swings its head sideways.
+Every hold keeps the body's curvature (NavTick.kappa_per_m is the last kappa commanded, for the nav
+config's gaits.stop, hold_curve): straightening a bent body swings its head sideways.
 """
 import bisect
 import dataclasses
@@ -44,9 +44,6 @@ from .planner import NavPlanner, Replan, T_world_ground, ground_frame
 FOLLOWING, WAITING, NO_FREE_ARC, GOAL_REACHED = "following", "waiting", "no_free_arc", "goal_reached"
 STALE, ERROR = "stale", "error"    # holding: an input too old / an exception inside the tick
 NO_FREE_ARC_ACTIONS = ("hold", "turn", "back_off")
-STOP_GAIT = "hold_curve"           # config/gaits.yaml: the wave decays, the yaw joints keep kappa (curve + kappa);
-                                   # the straight `hold` swings a body bent to kappa about its middle, moving
-                                   # the head (L^2/8) kappa sideways: 0.28 m per 1/m on COBRA
 POSE_HISTORY = 500                 # base poses kept to match a frame's stamp (5 s of 100 Hz)
 POSE_WORKSPACE_M = 1000.0          # |x|, |y|, |z| of a pose beyond this is an estimator's blunder
 ROTATION_TOLERANCE = 1e-3          # max |R^T R - I| of a pose's rotation
@@ -58,7 +55,7 @@ FUTURE_TOLERANCE_S = 0.5           # a stamp this far ahead of the loop's clock 
 class NavTick:
     state: str                         # FOLLOWING | WAITING (no frame or pose yet) | NO_FREE_ARC | GOAL_REACHED
                                        # | STALE (an input too old: holding) | ERROR (the tick failed: holding)
-    hold: bool                         # stop: STOP_GAIT keeping kappa_per_m (else move)
+    hold: bool                         # stop: the nav config's gaits.stop keeping kappa_per_m (else move)
     kappa_per_m: float = 0.0           # body curvature; while holding, the last one commanded
     backwards: bool = False            # run the gait backwards (backing off with no free arc)
     replan: Optional[Replan] = None    # a replan happened in this tick
@@ -73,7 +70,7 @@ class NavLoop:
                  goal_xy: Optional[Tuple[float, float]] = None, goal_radius_m: float = 0.1,
                  on_no_free_arc: str = "hold", pose_timeout_s: float = 1.0, body=None,
                  frame_timeout_s: float = 5.0, obstacle_map=None):
-        """body: the robot's BodyGeometry (body_model.py), needed when cfg.sampler.body_model.
+        """body: the robot's BodyGeometry (body_model.py: the guards' body stations).
         pose_timeout_s, frame_timeout_s: the oldest pose / camera frame the loop still moves on.
         obstacle_map: with map.source truth only, the map given in advance (the simulator's
         diagnostic: ObstacleMap.from_world of the world's obstacles)."""
