@@ -76,3 +76,25 @@ def named_yaml(folder: str, name_or_path: str) -> Path:
 def robot_yaml(name_or_path: str) -> Path:
     """A robot description: a path ending in .yaml/.yml, or a name under config/robots/ ('cobra')."""
     return named_yaml("robots", name_or_path)
+
+
+def resolve_world_path(path) -> Path:
+    """A nav world file as an absolute path that exists: `~` expanded, a relative path taken against the
+    process's working directory (the user's shell for a command or `rosrun`; ROS_HOME, ~/.ros, for a node
+    roslaunch starts, which is why launch/sim.launch hands its nodes world:= made absolute against the shell's
+    directory). FileNotFoundError names the path tried (and the working directory for a relative one);
+    ValueError for an empty path (no world)."""
+    text = str(path).strip()
+    if not text:
+        raise ValueError("world: empty path (no world file given)")
+    given = Path(os.path.expanduser(text))
+    resolved = given if given.is_absolute() else Path.cwd() / given
+    if resolved.is_file():
+        return resolved
+    why = "is not a file" if resolved.exists() else "does not exist"
+    if given.is_absolute():
+        raise FileNotFoundError(f"world file {resolved} {why}")
+    raise FileNotFoundError(f"world file {resolved} {why} (the relative path {text!r} taken against the working "
+                            f"directory {Path.cwd()}; a node roslaunch starts runs in ROS_HOME, not in your shell's "
+                            f"directory: give an absolute path, $(find snake_autonomy)/config/worlds/NAME.yaml, or "
+                            f"launch through sim.launch, which makes world:= absolute)")

@@ -24,7 +24,8 @@ Subscribes  sim/disturbance (geometry_msgs/WrenchStamped: header.frame_id = the 
 Params      ~feedback (mocap|vio), ~seed, ~start ("x,y,heading_deg" of the centre of mass), ~port,
             ~sim_config, ~robot_config, ~tracker_config, ~mission (for its disturbances), ~world_frame
             (odom), ~camera_frame (camera), ~rate_hz (physics and sensor poll, 200), ~disturbance_duration_s.
-With a world (~world, a nav world file; empty: none, everything above unchanged): the
+With a world (~world, a nav world file, a relative path taken against the node's working directory,
+paths.resolve_world_path; empty: none, everything above unchanged): the
 world's obstacles and floor in the plant, base_link at its start (~start ignored), the plant option
 of ~nav_config (config/nav.yaml plant:), and the head camera (nav.yaml camera: intrinsics and
 mount) rendered in a child process (sim.camera_process) at ~camera_rate_hz (0.5: a colour + depth
@@ -50,7 +51,7 @@ from sensor_msgs.msg import CameraInfo, Image
 
 from snake_autonomy.msg import GaitCommand, TrackingStatus, TrajectoryStatus
 from snake_autonomy.nodes.image_msgs import to_camera_info, to_image
-from snake_autonomy.paths import config_path
+from snake_autonomy.paths import config_path, resolve_world_path
 from snake_autonomy.planning.rectilinear.config import NavConfig
 from snake_autonomy.sim.camera_process import CameraProcess
 from snake_autonomy.sim.collisions import CollisionMonitor
@@ -75,6 +76,8 @@ class SimNode:
             raise ValueError(f"~start: expected x,y,heading_deg, got {start!r}") from None
         config = config_path()
         self.world_file = rospy.get_param("~world", "")
+        if self.world_file:          # absolute, checked: FileNotFoundError names the path tried
+            self.world_file = str(resolve_world_path(self.world_file))
         self.nav_cfg, self.camera = None, None
         extra = {}
         if self.world_file:
