@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from snake_autonomy.planning.rectilinear.config import NavConfig
-from snake_autonomy.planning.rectilinear.nav_loop import (ERROR, FOLLOWING, GOAL_REACHED, NO_FREE_ARC, STALE,
-                                                          WAITING, NavLoop)
+from snake_autonomy.planning.rectilinear.nav_loop import (ERROR, FOLLOWING, GOAL_REACHED, NO_FREE_ARC, NO_GOAL,
+                                                          STALE, WAITING, NavLoop)
 
 
 def _pose(x, y, th, z=0.045):
@@ -79,6 +79,56 @@ def test_goal_reached_holds_for_good():
     assert out.state == GOAL_REACHED and out.hold
     loop.on_pose(2.0, _pose(0.0, 0.0, 0.0))
     assert loop.tick(2.0).state == GOAL_REACHED
+
+
+def test_without_a_goal_the_loop_holds_until_one_is_set():
+    loop, cfg = _loop(True)
+    _feed(loop, cfg, 0.0, _pose(0.0, 0.0, 0.0))
+    out = loop.tick(0.5)
+    assert out.state == NO_GOAL and out.hold and out.message == "no goal: holding"
+    assert loop.replans == 0 and loop.distance_to_goal_m() is None
+    loop.set_goal((2.0, 0.0), 0.2)
+    out = loop.tick(0.6)
+    assert out.state == FOLLOWING and not out.hold and out.replan is not None and loop.replans == 1
+
+
+def test_a_new_goal_ends_goal_reached_and_replans_at_the_next_tick():
+    loop, cfg = _loop(True, goal_xy=(1.0, 0.0), goal_radius_m=0.2)
+    _feed(loop, cfg, 0.0, _pose(0.95, 0.0, 0.0))
+    assert loop.tick(0.5).state == GOAL_REACHED
+    loop.set_goal((3.0, 0.0), 0.3)
+    assert (loop.goal_xy, loop.goal_radius_m) == ((3.0, 0.0), 0.3)
+    out = loop.tick(0.6)                                    # long before replan_period_s: at once
+    assert out.state == FOLLOWING and not out.hold and out.replan is not None
+    assert loop.distance_to_goal_m() == pytest.approx(2.05)
+    loop.set_goal((1.0, 0.1), 0.2)                          # where the robot is: reached at the next tick
+    assert loop.tick(0.7).state == GOAL_REACHED
+
+
+def test_clear_goal_holds_keeping_the_curvature():
+    loop, cfg = _loop(True, goal_xy=(1.0, 1.0), goal_radius_m=0.1)
+    for t in (0.0, 0.5, 1.0, 1.5):                           # kappa is rate-limited: a few ticks to bend
+        _feed(loop, cfg, t, _pose(0.0, 0.0, 0.0))
+        moving = loop.tick(t)
+    assert not moving.hold and moving.kappa_per_m > 0.0     # turning towards the goal on the left
+    loop.clear_goal()
+    replans = loop.replans
+    for t in (1.6, 5.0):
+        out = loop.tick(t)
+        assert out.state == NO_GOAL and out.hold and out.kappa_per_m == moving.kappa_per_m
+    assert loop.replans == replans
+
+
+def test_a_bad_goal_is_refused_and_changes_nothing():
+    loop, _ = _loop(True, goal_xy=(1.0, 0.0), goal_radius_m=0.2)
+    for goal, radius, match in (((float("nan"), 0.0), 0.2, "goal_xy: must be finite"),
+                                (("a", 0.0), 0.2, "goal_xy: expected two numbers"),
+                                ((1.0, 2.0, 3.0), 0.2, "goal_xy: expected two numbers"),
+                                ((2.0, 0.0), 0.0, "goal_radius_m: must be a finite number > 0, got 0.0"),
+                                ((2.0, 0.0), float("inf"), "goal_radius_m: .* got inf")):
+        with pytest.raises(ValueError, match=match):
+            loop.set_goal(goal, radius)
+    assert (loop.goal_xy, loop.goal_radius_m) == ((1.0, 0.0), 0.2)
 
 
 def test_bad_settings_are_refused():

@@ -25,7 +25,8 @@ first fresh frame after that is replanned at once. tick() never raises: an excep
 No free arc: `on_no_free_arc` "hold" (default) stops (gait hold) until a replan finds a free arc;
 "turn" turns in place with the follower's kappa_turn_per_m; "back_off" backs off tail first along the
 track (the reverse gait, NavTick.backwards; what the batch run does with follower.back_off).
-Goal reached (base_link within the goal radius): hold for good.
+Goal reached (base_link within the goal radius): hold for good, until set_goal gives a new goal.
+No goal (goal_xy None at construction, or clear_goal()): hold (state NO_GOAL) until set_goal.
 Every hold keeps the body's curvature (NavTick.kappa_per_m is the last kappa commanded, for the nav
 config's gaits.stop, hold_curve): straightening a bent body swings its head sideways.
 """
@@ -43,6 +44,7 @@ from .planner import NavPlanner, Replan, T_world_ground, ground_frame
 
 FOLLOWING, WAITING, NO_FREE_ARC, GOAL_REACHED = "following", "waiting", "no_free_arc", "goal_reached"
 STALE, ERROR = "stale", "error"    # holding: an input too old / an exception inside the tick
+NO_GOAL = "no_goal"                # holding: no goal given (or it was cleared)
 NO_FREE_ARC_ACTIONS = ("hold", "turn", "back_off")
 POSE_HISTORY = 500                 # base poses kept to match a frame's stamp (5 s of 100 Hz)
 POSE_WORKSPACE_M = 1000.0          # |x|, |y|, |z| of a pose beyond this is an estimator's blunder
@@ -51,9 +53,28 @@ CLOCK_TOLERANCE_S = 1e-6          # a replan due at t is due at a tick stamped a
 FUTURE_TOLERANCE_S = 0.5           # a stamp this far ahead of the loop's clock is a clock error, not latency
 
 
+def _checked_positive(key: str, v) -> float:
+    """v as a float when it is a finite number > 0, else ValueError naming key and v."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+        raise ValueError(f"{key}: must be a finite number > 0, got {v!r}")
+    return float(v)
+
+
+def _checked_goal(goal_xy) -> Tuple[float, float]:
+    """(x, y) as floats when both are finite, else ValueError naming the value."""
+    try:
+        x, y = (float(v) for v in goal_xy)
+    except (TypeError, ValueError):
+        raise ValueError(f"goal_xy: expected two numbers (x, y), got {goal_xy!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise ValueError(f"goal_xy: must be finite, got {tuple(goal_xy)!r}")
+    return x, y
+
+
 @dataclass
 class NavTick:
     state: str                         # FOLLOWING | WAITING (no frame or pose yet) | NO_FREE_ARC | GOAL_REACHED
+                                       # | NO_GOAL (none given or cleared: holding)
                                        # | STALE (an input too old: holding) | ERROR (the tick failed: holding)
     hold: bool                         # stop: the nav config's gaits.stop keeping kappa_per_m (else move)
     kappa_per_m: float = 0.0           # body curvature; while holding, the last one commanded
@@ -78,14 +99,11 @@ class NavLoop:
             raise ValueError(f"on_no_free_arc: expected hold, turn or back_off, got {on_no_free_arc!r}")
         for key, v in (("goal_radius_m", goal_radius_m), ("pose_timeout_s", pose_timeout_s),
                        ("frame_timeout_s", frame_timeout_s)):
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise ValueError(f"{key}: must be a finite number > 0, got {v!r}")
-        if goal_xy is not None and not all(math.isfinite(float(v)) for v in goal_xy):
-            raise ValueError(f"goal_xy: must be finite, got {tuple(goal_xy)!r}")
+            _checked_positive(key, v)
+        self.goal_xy = None if goal_xy is None else _checked_goal(goal_xy)
+        self.goal_radius_m = float(goal_radius_m)
         self.cfg = cfg
         self.perception = perception
-        self.goal_xy = None if goal_xy is None else (float(goal_xy[0]), float(goal_xy[1]))
-        self.goal_radius_m = float(goal_radius_m)
         self.on_no_free_arc = on_no_free_arc
         self.pose_timeout_s = float(pose_timeout_s)
         self.frame_timeout_s = float(frame_timeout_s)
@@ -105,7 +123,7 @@ class NavLoop:
         self._history = deque(maxlen=POSE_HISTORY)     # (t_s, T_world_base), in arrival order
         self._frame = None
         self._next_replan = None
-        self.state = WAITING
+        self.state = WAITING if self.goal_xy is not None else NO_GOAL
         self.replans = 0
         self.stops_no_free_arc = 0
         self.refused = Counter()           # input kind ("pose", "frame") -> refusals
@@ -114,6 +132,21 @@ class NavLoop:
         self.last_error = ""
         self._was_stale = False
         self.kappa_per_m = 0.0             # the last kappa commanded while moving (kept by every hold)
+
+    # ---- the goal ----------------------------------------------------------------------------------
+    def set_goal(self, goal_xy: Tuple[float, float], goal_radius_m: float) -> None:
+        """A new goal (world frame), checked as the constructor's (ValueError naming the value; nothing
+        changes then). Ends GOAL_REACHED and NO_GOAL: the loop moves again, replanning at the next tick."""
+        xy, radius = _checked_goal(goal_xy), _checked_positive("goal_radius_m", goal_radius_m)
+        self.goal_xy, self.goal_radius_m = xy, radius
+        self.state = WAITING
+        self._next_replan = None
+
+    def clear_goal(self) -> None:
+        """No goal: every tick holds (state NO_GOAL, the body's curvature kept) until set_goal."""
+        self.goal_xy = None
+        self.state = NO_GOAL
+        self._next_replan = None
 
     # ---- inputs ------------------------------------------------------------------------------------
     def refuse(self, kind: str, reason: str) -> str:
@@ -205,6 +238,9 @@ class NavLoop:
     def _tick(self, t_s: float) -> NavTick:
         if self.state == GOAL_REACHED:
             return NavTick(GOAL_REACHED, True, message="goal reached: holding")
+        if self.goal_xy is None:
+            self.state = NO_GOAL
+            return NavTick(NO_GOAL, True, message="no goal: holding")
         d = self.distance_to_goal_m()
         if d is not None and d <= self.goal_radius_m:
             self.state = GOAL_REACHED
