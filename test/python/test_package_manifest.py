@@ -32,6 +32,7 @@ THIRD_PARTY = {
     "rosgraph_msgs": ("rosdep", "rosgraph_msgs"), "catkin_pkg": ("rosdep", "catkin"),
     "diagnostic_updater": ("rosdep", "diagnostic_updater"), "trajectory_msgs": ("rosdep", "trajectory_msgs"),
     "actionlib": ("rosdep", "actionlib"), "actionlib_msgs": ("rosdep", "actionlib_msgs"),
+    "move_base_msgs": ("rosdep", "move_base_msgs"),
     "mujoco": ("pypi", "mujoco"), "evo": ("pypi", "evo"), "rosbags": ("pypi", "rosbags"),
     "dynamixel_sdk": ("pypi", "dynamixel-sdk"), "shapely": ("pypi", "shapely"),
     "cv2": ("pypi", "opencv-python-headless"), "sklearn": ("pypi", "scikit-learn"), "joblib": ("pypi", "joblib"),

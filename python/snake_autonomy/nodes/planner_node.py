@@ -10,14 +10,24 @@ Subscribes  base_pose (geometry_msgs/PoseWithCovarianceStamped): base_link's pos
             the first camera_info), camera/depth/image_rect_raw (32FC1 m or 16UC1 mm; ~perception depth).
 Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with curve=true and kappa;
             ~stop_gait keeping the last kappa while waiting for an input, with no free arc and once
-            the goal is reached; the straight hold before camera_info arrives),
+            the goal is reached or while there is none; the straight hold before camera_info arrives),
             nav/path (nav_msgs/Path: the chosen arc's free prefix, latched), nav/route (nav_msgs/Path:
             the route on the obstacle map the goal bias steers by, latched; nav config map.route), nav/arcs
             (visualization_msgs/MarkerArray: every candidate, chosen green, free parts yellow,
             blocked red), nav/traversability (sensor_msgs/Image rgb8: the frame with non-ground tinted
             red and the arcs drawn), /diagnostics ("planner: navigation": WARN with no free arc,
-            OK otherwise; replans, stops, distance to the goal).
-Params      ~world (a world file: goal and goal radius) or ~goal ("x,y") + ~goal_radius_m; ~nav_config
+            OK otherwise; replans, stops, distance to the goal, the goal and its source, goals refused),
+            nav/goal (visualization_msgs/Marker, latched: the goal's disc; planner_goals.py).
+Goals       optional at start: ~world (a world file: its goal and goal radius) or ~goal ("x,y", the world
+            frame) + ~goal_radius_m; without either the robot holds (state no_goal) until a goal comes:
+            move_base_simple/goal (geometry_msgs/PoseStamped: rviz's "2D Nav Goal") or the action below,
+            in any frame tf2 can transform into the world frame. A new goal replaces the current one
+            (also one reached); the reached goal holds the robot as before.
+Actions     move_base (move_base_msgs/MoveBaseAction, move_base's conventions): feedback every tick
+            (base_position), succeeded inside the goal's disc, aborted with the reason (the goal unusable,
+            or not following for ~abort_after_s), preempted by a new goal or a cancel (the robot holds).
+Params      ~world or ~goal (above), ~goal_radius_m (0.2: ~goal's and every goal that arrives), ~abort_after_s
+            (60: an action goal's loop not following this long aborts it); ~nav_config
             (config/nav.yaml), ~robot_config (config/robots/cobra.yaml: head width, link radius),
             ~perception (depth|mono), ~classifier (model file, mono), ~rate_hz (2: the follower's
             command rate), ~gait, ~reverse_gait, ~stop_gait (default: ~nav_config's gaits:),
@@ -49,13 +59,15 @@ from visualization_msgs.msg import Marker, MarkerArray
 from snake_autonomy import _core
 from snake_autonomy.msg import GaitCommand
 from snake_autonomy.nodes.image_msgs import from_camera_info, from_image, to_image
+from snake_autonomy.nodes.planner_goals import PARAMETER, Goal, GoalServer
 from snake_autonomy.paths import config_path
 from snake_autonomy.perception.block_classifier import BlockClassifier
 from snake_autonomy.perception.depth_traversability import DepthTraversability
 from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m
-from snake_autonomy.planning.rectilinear.nav_loop import ERROR, GOAL_REACHED, NO_FREE_ARC, STALE, WAITING, NavLoop
+from snake_autonomy.planning.rectilinear.nav_loop import (ERROR, FOLLOWING, GOAL_REACHED, NO_FREE_ARC, NO_GOAL, STALE,
+                                                          WAITING, NavLoop)
 from snake_autonomy.planning.rectilinear.overlay import overlay
 from snake_autonomy.planning.rectilinear.planner import to_world
 from snake_autonomy.sim.world_file import load_world
@@ -78,7 +90,8 @@ class PlannerNode:
         self.classifier = rospy.get_param("~classifier", "")
         if self.perception == "mono" and not self.classifier:
             raise ValueError("~classifier: perception mono needs a model file (snake_autonomy nav train-classifier)")
-        self.goal, self.goal_radius_m = self._goal()
+        self.goal_radius_m = float(rospy.get_param("~goal_radius_m", 0.2))
+        self.abort_after_s = float(rospy.get_param("~abort_after_s", 60.0))
         if self.cfg.gaits.steering != "uniform":
             raise ValueError(f"~nav_config: gaits.steering {self.cfg.gaits.steering!r} is a prototype of "
                              "bench/nav_follow_the_leader; this node commands curve + kappa (uniform)")
@@ -91,11 +104,14 @@ class PlannerNode:
         self.pose_timeout_s = float(rospy.get_param("~pose_timeout_s", 1.0))
         self.frame_timeout_s = float(rospy.get_param("~frame_timeout_s", 5.0))
         for key, v in (("~rate_hz", self.rate_hz), ("~pose_timeout_s", self.pose_timeout_s),
-                       ("~frame_timeout_s", self.frame_timeout_s)):
+                       ("~frame_timeout_s", self.frame_timeout_s), ("~goal_radius_m", self.goal_radius_m),
+                       ("~abort_after_s", self.abort_after_s)):
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{key}: must be a finite number > 0, got {v!r}")
         self.world_frame = rospy.get_param("~world_frame", "")
         self.loop = None
+        self.applied = None               # (loop, goal seq) the loop's goal was last set for
+        self.base_pose = None             # the latest base pose taken (PoseStamped: the action's feedback)
         self.rgb = None
         self.last_tick = None
         self.intrinsics = None            # of the camera_info the loop was built with
@@ -112,6 +128,7 @@ class PlannerNode:
         self.updater = diagnostic_updater.Updater()
         self.updater.setHardwareID("rectilinear_planner")
         self.updater.add("navigation", self.diagnose)
+        self.goals = GoalServer(self._goal(), self.goal_radius_m, self.abort_after_s, lambda: self.world_frame)
         g = self.guarded
         rospy.Subscriber("camera/color/camera_info", CameraInfo, g(self.on_info, "camera_info"), queue_size=1)
         rospy.Subscriber("base_pose", PoseWithCovarianceStamped, g(self.on_pose, "base_pose"), queue_size=5)
@@ -121,22 +138,27 @@ class PlannerNode:
             rospy.Subscriber("camera/depth/image_rect_raw", Image, g(self.on_depth, "depth image"), queue_size=1,
                              buff_size=2 ** 24)
         self.timer = rospy.Timer(rospy.Duration(1.0 / self.rate_hz), self.on_timer)
-        rospy.loginfo(f"planner: {self.perception} perception, goal {self.goal} (radius {self.goal_radius_m} m), "
-                      f"gait {self.gait}, replan every {self.cfg.replan_period_s:g} s, commands at {self.rate_hz:g} Hz")
+        goal = self.goals.goal
+        goal_text = "none (waiting for one)" if goal is None else f"{goal.xy} (radius {goal.radius_m:g} m)"
+        rospy.loginfo(f"planner: {self.perception} perception, goal {goal_text}, gait {self.gait}, "
+                      f"replan every {self.cfg.replan_period_s:g} s, commands at {self.rate_hz:g} Hz")
 
     def _goal(self):
+        """The goal at start: ~world's, ~goal's, or None (the robot holds until one arrives)."""
         world = rospy.get_param("~world", "")
         if world:
             w = load_world(world)
-            return tuple(w.goal), float(w.goal_radius_m)
+            return Goal((float(w.goal[0]), float(w.goal[1])), float(w.goal_radius_m), PARAMETER)
         goal = str(rospy.get_param("~goal", ""))
         if not goal:
-            raise ValueError("~world or ~goal: the planner needs a goal (a world file or \"x,y\")")
+            return None
         try:
             x, y = (float(v) for v in goal.split(","))
         except ValueError:
             raise ValueError(f"~goal: expected x,y, got {goal!r}") from None
-        return (x, y), float(rospy.get_param("~goal_radius_m", 0.1))
+        if not (math.isfinite(x) and math.isfinite(y)):
+            raise ValueError(f"~goal: must be finite, got {goal!r}")
+        return Goal((x, y), self.goal_radius_m, PARAMETER)
 
     # -- inputs ---------------------------------------------------------------------------------------
     def refuse(self, kind: str, reason: str) -> None:
@@ -189,7 +211,7 @@ class PlannerNode:
         else:
             clf, margin = BlockClassifier.load(self.classifier), cfg.classifier.ground_margin
             perceive = lambda rgb: clf.traversable(rgb, margin)
-        loop = NavLoop(cfg, self.head_width_m, perceive, self.goal, self.goal_radius_m,
+        loop = NavLoop(cfg, self.head_width_m, perceive, None, self.goal_radius_m,   # the tick sets the goal
                        self.on_no_free_arc, self.pose_timeout_s,
                        BodyGeometry.of_robot(robot), frame_timeout_s=self.frame_timeout_s)
         self.intrinsics, self.loop = intr, loop
@@ -211,6 +233,8 @@ class PlannerNode:
             why = self.loop.on_pose(msg.header.stamp.to_sec(), pose_to_matrix(xyz, [v / norm for v in xyzw]))
             if why is not None:
                 self.report_refusal("pose", why)
+                return
+        self.base_pose = PoseStamped(header=msg.header, pose=msg.pose.pose)
 
     def on_image(self, msg, kind: str):
         try:
@@ -249,11 +273,20 @@ class PlannerNode:
             self.node_error("diagnostics", exc)
 
     def tick(self):
-        if self.loop is None:
-            self.publish_command(True, 0.0, straight=True)
-            return
         now = rospy.Time.now()
-        tick = self.loop.tick(now.to_sec())      # never raises: a failed tick holds (state error)
+        goal, seq = self.goals.poll()            # what arrived since the last tick: the goal now
+        loop = self.loop
+        if loop is None:
+            self.publish_command(True, 0.0, straight=True)
+            self.goals.report(now.to_sec(), WAITING, "waiting for camera_info", self.base_pose)
+            return
+        if self.applied != (loop, seq):
+            if goal is None:
+                loop.clear_goal()
+            else:
+                loop.set_goal(goal.xy, goal.radius_m)
+            self.applied = (loop, seq)
+        tick = loop.tick(now.to_sec())           # never raises: a failed tick holds (state error)
         previous, self.last_tick = self.last_tick, tick
         if tick.state != (previous.state if previous else None) and tick.state in (STALE, ERROR):
             rospy.logwarn(f"planner: {tick.message}")
@@ -270,6 +303,7 @@ class PlannerNode:
                 rospy.loginfo(f"planner: replan {self.loop.replans}: {tick.message}; goal {d:.2f} m away")
         if tick.state == GOAL_REACHED and (previous is None or previous.state != GOAL_REACHED):
             rospy.loginfo(f"planner: {tick.message}")
+        self.goals.report(now.to_sec(), tick.state, tick.message, self.base_pose)
 
     def publish_command(self, hold: bool, kappa_per_m: float, backwards: bool = False, straight: bool = False):
         """hold: the stop gait keeping kappa_per_m (the body as it is); straight: the driver's hold posture
@@ -343,11 +377,13 @@ class PlannerNode:
         stat.add("node_errors", str(self.node_errors))
         stat.add("last_error", (loop.last_error if loop is not None and loop.last_error else "")
                  or self.last_node_error or "none")
+        self.goals.diagnose(stat)
         if t is None or loop is None:
             stat.summary(DiagnosticStatus.WARN, "waiting for camera_info" if loop is None else "starting")
             return stat
         level = {ERROR: DiagnosticStatus.ERROR, STALE: DiagnosticStatus.WARN, NO_FREE_ARC: DiagnosticStatus.WARN,
-                 WAITING: DiagnosticStatus.WARN}.get(t.state, DiagnosticStatus.OK)
+                 WAITING: DiagnosticStatus.WARN, NO_GOAL: DiagnosticStatus.OK, FOLLOWING: DiagnosticStatus.OK,
+                 GOAL_REACHED: DiagnosticStatus.OK}.get(t.state, DiagnosticStatus.WARN)
         stat.summary(level, f"{t.state}: {t.message}")
         d = loop.distance_to_goal_m()
         stat.add("state", t.state)
