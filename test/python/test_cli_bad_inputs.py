@@ -165,6 +165,16 @@ def test_nav_run_refuses_a_world_wider_than_the_route_grid(tmp_path):
     assert_refused(proc, "route grid", "182.0 m x 182.0 m", "map.route_max_cells")
 
 
+def test_nav_run_refuses_a_steering_law_the_loop_does_not_command(tmp_path):
+    """follow_the_leader is a prototype of bench/nav_follow_the_leader: the navigation loop commands
+    uniform curvature only, and says so before the simulator starts."""
+    cfg = write(tmp_path, "ftl.yaml", b"base: " + str(ROOT / "config" / "nav.yaml").encode()
+                + b"\ngaits: {steering: follow_the_leader}\n")
+    proc = run_cli("nav", "run", "--world", ROOT / "config" / "worlds" / "corridor.yaml", "--config", cfg,
+                   "--time-limit", "5", "--out", tmp_path / "out")
+    assert_refused(proc, "gaits.steering: 'follow_the_leader'", "uniform")
+
+
 @pytest.mark.parametrize("command", [("urdf",), ("gait", "--duration", "0.1", "--robot")])
 def test_a_robot_name_resolves_only_inside_config_robots(tmp_path, command):
     """A name is config/robots/NAME.yaml and nothing else: ../../../../etc/passwd is not read."""

@@ -204,10 +204,17 @@ def main(args) -> int:
         except WorldError as e:
             print(str(e), file=sys.stderr)
             return 1
-        result = NavRun(NavRunSpec(world, robot=args.robot, perception=args.perception, seed=args.seed,
-                                   time_limit_s=args.time_limit, classifier=args.classifier,
-                                   nav_config=args.config, flat_belly_fraction=args.flat_belly,
-                                   pose_source=args.pose_source)).run()
+        try:
+            run = NavRun(NavRunSpec(world, robot=args.robot, perception=args.perception, seed=args.seed,
+                                    time_limit_s=args.time_limit, classifier=args.classifier,
+                                    nav_config=args.config, flat_belly_fraction=args.flat_belly,
+                                    pose_source=args.pose_source))
+        except (ValueError, OSError) as e:      # a nav config, robot or classifier that cannot be used
+            print(f"nav run: {e}", file=sys.stderr)
+            return 1
+        print(f"nav run: {world.name}, {args.robot}, {args.perception}, seed {args.seed}, up to "
+              f"{args.time_limit:g} simulated s ...", file=sys.stderr, flush=True)
+        result = run.run()
         result.write(args.out)
         print(json.dumps(result.metrics))
         return 0
