@@ -94,7 +94,8 @@ def test_unicycle_arc_and_prediction_agree():
 
 
 def test_follower_feedback_steers_back_to_the_path_and_maps_omega_to_kappa():
-    p = FollowerParams(speed_m_s=0.02, omega_per_kappa=0.05, omega_offset_rad_s=0.01, kappa_max_per_m=4.0)
+    p = FollowerParams(speed_m_s=0.02, omega_per_kappa=0.05, omega_offset_rad_s=0.01, kappa_max_per_m=4.0,
+                       lookahead_m=0.06, k_heading=0.5, kappa_rate_per_m_s=0.0)     # the paper's follower
     f = RecedingHorizonFollower(p)
     path = arc_poses(0.0, 1.0, 0.01)                       # straight along +x
     f.set_path(path, 0.0)

@@ -33,7 +33,7 @@ class DepthTraversabilityParams:
     min_fraction: float = 0.5
     max_plane_tilt_deg: float = 20.0   # fitted normal vs the mount's expected normal
     max_height_error_m: float = 0.05   # fitted camera height vs the mount's
-    refine_iterations: int = 0         # > 0: refit the plane this many times to the points within
+    refine_iterations: int = 3         # > 0: refit the plane this many times to the points within
                                        # a band of 3 robust sigmas of its residuals (at least refine_floor_m,
                                        # at most inlier_m); 0: one least-squares fit to RANSAC's inliers
     refine_floor_m: float = 0.0005     # the narrowest band (below it: the sensor's noise, not the plane)

@@ -112,12 +112,6 @@ class NavGaits:
         return cls(**kwargs)
 
 
-# config/nav.yaml's follower and depth_traversability values where FollowerParams' and
-# DepthTraversabilityParams' own defaults differ (their modules keep the paper's and the plain fit's)
-NAV_FOLLOWER = dict(speed_m_s=0.006354748980833362, omega_per_kappa=0.00923, kappa_max_per_m=2.0, lookahead_m=0.15,
-                    k_heading=0.016, turn_in_place_rad_s=0.019, kappa_turn_per_m=1.5, kappa_rate_per_m_s=0.1,
-                    back_off=True, back_off_replans=2)
-NAV_DEPTH = dict(refine_iterations=3)
 
 
 @dataclass
@@ -125,9 +119,9 @@ class NavConfig:
     """config/nav.yaml; the defaults are its values (COBRA's)."""
     intrinsics: CameraIntrinsics = field(default_factory=CameraIntrinsics.d435i_like)
     mount: CameraMount = CameraMount()
-    depth: DepthTraversabilityParams = field(default_factory=lambda: DepthTraversabilityParams(**NAV_DEPTH))
+    depth: DepthTraversabilityParams = field(default_factory=DepthTraversabilityParams)
     sampler: SamplerParams = field(default_factory=SamplerParams)
-    follower: FollowerParams = field(default_factory=lambda: FollowerParams(**NAV_FOLLOWER))
+    follower: FollowerParams = field(default_factory=FollowerParams)
     classifier: ClassifierParams = field(default_factory=ClassifierParams)
     replan_period_s: float = 10.0
     gait: RectilinearGait = RectilinearGait()

@@ -36,20 +36,21 @@ MODES = (FOLLOW, TURN_IN_PLACE, BACK_OFF, IDLE)
 
 @dataclass
 class FollowerParams:
-    speed_m_s: float = 0.02               # the gait's forward speed (gait map)
-    omega_per_kappa: float = 0.05         # d omega / d kappa (rad/s per 1/m), gait map fit
+    """Defaults: COBRA's (config/nav.yaml follower:, from the gait map of its rectilinear gait)."""
+    speed_m_s: float = 0.006354748980833362   # the gait's forward speed (gait map)
+    omega_per_kappa: float = 0.00923      # d omega / d kappa (rad/s per 1/m), gait map fit
     omega_offset_rad_s: float = 0.0       # omega at kappa = 0 (drift), gait map fit
-    kappa_max_per_m: float = 4.0          # body curvature range of the gait
-    lookahead_m: float = 0.06             # delta of the paper
-    k_heading: float = 0.5                # omega_fb per rad of heading error to the target (1/s)
-    turn_in_place_rad_s: float = 0.2      # turn rate the unicycle prediction assumes when turning
-    kappa_turn_per_m: float = 3.0         # curvature commanded to turn in place (the gait's forward
+    kappa_max_per_m: float = 2.0          # body curvature range of the gait
+    lookahead_m: float = 0.15             # the paper's delta is 60 mm; the head sways ~2 cm a gait cycle
+    k_heading: float = 0.016              # omega_fb per rad of heading error to the target (1/s)
+    turn_in_place_rad_s: float = 0.019    # turn rate the unicycle prediction assumes when turning
+    kappa_turn_per_m: float = 1.5         # curvature commanded to turn in place (the gait's forward
                                           # speed is near zero there: bench/nav_gait)
-    kappa_rate_per_m_s: float = 0.0       # > 0: the commanded kappa changes at most this fast
+    kappa_rate_per_m_s: float = 0.1       # > 0: the commanded kappa changes at most this fast
                                           # (1/m per s; slow body reshaping keeps the robot upright:
                                           # bench/nav_roll); 0: no limit
-    back_off: bool = False                # no free arc: back off along the track (else turn in place)
-    back_off_replans: int = 0             # > 0: back off for this many replans in a row, then turn
+    back_off: bool = True                 # no free arc: back off along the track (else turn in place)
+    back_off_replans: int = 2             # > 0: back off for this many replans in a row, then turn
                                           # in place with the room gained; 0: back off while no arc is free
 
     def validate(self) -> List[str]:
