@@ -43,6 +43,7 @@ from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camer
 from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
 from snake_autonomy.runs.nav_experiment import (TIME_FACTOR, experiment_tasks, markdown_table, outcome_table,
                                                 random_corridor, run_nav_task, summarise, time_limit_s)
+from snake_autonomy.runs.nav_ros_experiment import check_robot, comparison_table, run_experiment
 from snake_autonomy.runs.render_set import render_scenes
 from snake_autonomy.runs.sweep_runner import open_executor, run_tasks
 from snake_autonomy.sim.config import SimConfig
@@ -105,7 +106,21 @@ def add_arguments(parser):
     wd.add_argument("--first-world", type=int, default=0, metavar="K", help="0-19 tune, 100 up held out")
     wd.add_argument("--worlds", type=int, default=5, metavar="N")
     wd.add_argument("--out", required=True, metavar="DIR", help="DIR/NAME.yaml (sim.launch world:=FILE), DIR/NAME.png")
-    for p in (tr, ev, run, ex, wd):
+    rx = sub.add_parser("ros-experiment", help="worlds x seeds through ROS (sim.launch) in real time, each "
+                        "beside its batch run: one table", description=WORLDS_CONVENTION)
+    rx.add_argument("--world-files", metavar="GLOB", help="world files (sorted; quote the glob)")
+    rx.add_argument("--family", choices=("corridors", "barn"), default=None,
+                    help="generated worlds instead (default corridors), written to DIR/worlds/")
+    rx.add_argument("--first-world", type=int, default=0, metavar="K", help="0-19 tune, 100 up held out")
+    rx.add_argument("--worlds", type=int, default=3, metavar="N", help="generated worlds K..K+N-1")
+    rx.add_argument("--seeds", default="0", help="plant seeds: 0-4 or 0,2,3")
+    rx.add_argument("--perception", choices=("depth", "mono"), default="depth")
+    rx.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono)")
+    rx.add_argument("--time-limit", default="auto", metavar="S|auto",
+                    help="seconds after the first command that moves, or auto (as nav experiment)")
+    rx.add_argument("--time-factor", type=float, default=None, metavar="F", help="with --time-limit auto")
+    rx.add_argument("--out", required=True, metavar="DIR")
+    for p in (tr, ev, run, ex, wd, rx):
         p.add_argument("--robot", default="cobra", help="robot name (config/robots/NAME.yaml) or YAML file")
         p.add_argument("--config", default=None,
                        help="nav config (default: config/nav_ROBOT.yaml if it exists, else config/nav.yaml)")
@@ -222,6 +237,8 @@ def main(args) -> int:
         return _experiment(args)
     if args.nav_command == "worlds":
         return _worlds(args)
+    if args.nav_command == "ros-experiment":
+        return _ros_experiment(args)
     print("usage: snake_autonomy nav {check-world FILE...|train-classifier --out FILE|eval-perception|run|"
           "experiment|worlds}",
           file=sys.stderr)
@@ -423,3 +440,32 @@ def _top_view(world, layout, path: Path) -> None:
     ax.set_ylabel("y (m)")
     fig.savefig(path, dpi=100, bbox_inches="tight")
     plt.close(fig)
+
+
+def _ros_experiment(args) -> int:
+    """nav ros-experiment: the worlds (files or a generated family, as nav experiment) through
+    sim.launch and in batch (runs/nav_ros_experiment.py)."""
+    try:
+        check_robot(args.robot)
+        seeds = parse_seeds(args.seeds)
+        if args.perception == "mono" and not args.classifier:
+            raise ValueError("--perception mono needs --classifier FILE")
+        if args.world_files is not None and args.family is not None:
+            raise ValueError("--family and --world-files: one or the other")
+        worlds = (_world_files(args.world_files) if args.world_files is not None
+                  else [w for w, _ in _generated(args, args.family or "corridors")])
+        limits, _ = _time_limits(args, worlds)
+    except ValueError as e:
+        print(f"nav ros-experiment: {e}", file=sys.stderr)
+        return 2
+    out = Path(args.out)
+    _write_worlds(worlds, out / "worlds", "nav ros-experiment")
+    files = [str((Path(w.source) if args.world_files is not None else out / "worlds" / f"{w.name}.yaml").resolve())
+             for w in worlds]
+    t0 = time.perf_counter()
+    rows = run_experiment(list(zip(worlds, files)), seeds, out, limits, robot=args.robot,
+                          perception=args.perception, classifier=args.classifier, nav_config=args.config)
+    print(comparison_table(rows))
+    print(f"\n{len(rows)} runs in {time.perf_counter() - t0:.0f} s: {out / 'table.md'}, {out / 'summary.json'}, "
+          f"{out / 'runs'}/WORLD_sSEED/ (metrics.json, batch.json, roslaunch.log, log/)")
+    return 0
