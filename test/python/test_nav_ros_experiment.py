@@ -3,13 +3,16 @@ watcher's end rules, the batch run's time counted as the ROS run counts it, the 
 (a process group of its own, nothing left behind) and the command's refusals (exit 2, nothing run).
 The ROS path itself (sim.launch per world) is run by hand: docs/navigation.md."""
 import subprocess
+import sys
 import time
+from pathlib import Path
 
 import pytest
 
 from snake_autonomy.cli import main as cli_main
-from snake_autonomy.runs.nav_ros_experiment import (_group_alive, check_robot, comparison_row, comparison_table,
-                                                    moving_time_s, same_outcome, shut_down)
+from snake_autonomy.runs.nav_ros_experiment import (_alive, _group_alive, check_robot, comparison_row,
+                                                    comparison_table, descendants, moving_time_s, same_outcome,
+                                                    shut_down)
 from snake_autonomy.runs.nav_ros_watch import Watch
 
 OK = {"goal_reached": True, "collisions": 0, "time_s": 130.0, "end": "goal_reached"}
@@ -76,13 +79,23 @@ def test_the_watch_ends_at_the_time_limit_without_a_start_or_when_a_node_dies():
     assert w.step(3.0, dead="/planner") == "node_died: /planner"
 
 
-def test_shutdown_leaves_no_process_of_the_launchs_group():
-    proc = subprocess.Popen(["sh", "-c", "trap '' INT; sleep 60 & sleep 60 & wait"], start_new_session=True)
-    time.sleep(0.3)
+def test_shutdown_leaves_no_process_of_the_launch_not_even_in_a_session_of_its_own():
+    # as roslaunch: ignores SIGINT here, a child in its group, a child in a session of its own (a node)
+    proc = subprocess.Popen([sys.executable, "-c", "import signal, subprocess, time\n"
+                             "signal.signal(signal.SIGINT, signal.SIG_IGN)\n"
+                             "subprocess.Popen(['sleep', '60'])\n"
+                             "subprocess.Popen(['sleep', '60'], start_new_session=True)\n"
+                             "time.sleep(60)"], start_new_session=True)
+    deadline = time.monotonic() + 10.0
+    while len(descendants(proc.pid)) < 2 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    below = descendants(proc.pid)
+    assert len(below) == 2
     t0 = time.monotonic()
-    ended = shut_down(proc, timeout_s=1.0)        # SIGINT ignored: SIGKILL to the group
-    assert ended["survivors"] is False and not _group_alive(proc.pid)
-    assert "sigkill" in ended["shutdown"] and time.monotonic() - t0 < 10.0
+    ended = shut_down(proc, timeout_s=1.0)        # SIGINT ignored: SIGKILL to the group and each pid
+    assert ended["survivors"] == [] and not _group_alive(proc.pid)
+    assert not any(Path(f"/proc/{p}").exists() and _alive(p, s) for p, s in below.items())
+    assert ended["shutdown"] == "sigint+sigkill" and time.monotonic() - t0 < 10.0
 
 
 def test_only_the_simulated_robot_is_accepted():

@@ -463,8 +463,12 @@ def _ros_experiment(args) -> int:
     files = [str((Path(w.source) if args.world_files is not None else out / "worlds" / f"{w.name}.yaml").resolve())
              for w in worlds]
     t0 = time.perf_counter()
-    rows = run_experiment(list(zip(worlds, files)), seeds, out, limits, robot=args.robot,
-                          perception=args.perception, classifier=args.classifier, nav_config=args.config)
+    try:
+        rows = run_experiment(list(zip(worlds, files)), seeds, out, limits, robot=args.robot,
+                              perception=args.perception, classifier=args.classifier, nav_config=args.config)
+    except RuntimeError as e:
+        print(f"nav ros-experiment: {e}", file=sys.stderr)
+        return 1
     print(comparison_table(rows))
     print(f"\n{len(rows)} runs in {time.perf_counter() - t0:.0f} s: {out / 'table.md'}, {out / 'summary.json'}, "
           f"{out / 'runs'}/WORLD_sSEED/ (metrics.json, batch.json, roslaunch.log, log/)")

@@ -9,7 +9,8 @@ time limit; then the batch run (runs/nav_batch.py, the same NavLoop) of the same
 
 Each ROS run has a master of its own (roslaunch -p PORT on a free port, ROS_MASTER_URI to match), a
 servo bus pty of its own and a process group of its own: SIGINT to the group at the end (Ctrl+C),
-SIGKILL after SHUTDOWN_S, and the next run starts only when no process of the group is left. The
+SIGKILL after SHUTDOWN_S to the group and to every process below roslaunch by its pid (roslaunch
+starts each node in a session of its own), and the next run starts only when none of them is left. The
 watcher (runs/nav_ros_watch.py) is a child process: rospy initialises once per process.
 
 OUT/runs/WORLD_sSEED/: metrics.json (the ROS run: world, seed, goal_reached, loop_reached, time_s,
@@ -117,6 +118,41 @@ def launch_command(world_file: str, seed: int, port: int, bus: str, perception: 
     return cmd
 
 
+def _proc_stat(pid: int) -> Optional[Tuple[int, str, int]]:
+    """(parent pid, state, start time in clock ticks) of a process from /proc, None when it is gone."""
+    try:
+        text = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    fields = text[text.rindex(")") + 2:].split()     # after "pid (comm) "
+    return int(fields[1]), fields[0], int(fields[19])
+
+
+def descendants(pid: int) -> Dict[int, int]:
+    """Every process below pid (children, theirs...), pid -> start time: roslaunch starts each node
+    in a session of its own (os.setsid), out of reach of a signal to roslaunch's group."""
+    stats = {}
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            st = _proc_stat(int(d.name))
+            if st is not None:
+                stats[int(d.name)] = st
+    found, todo = {}, [pid]
+    while todo:
+        parent = todo.pop()
+        for child, (ppid, _, started) in stats.items():
+            if ppid == parent and child not in found:
+                found[child] = started
+                todo.append(child)
+    return found
+
+
+def _alive(pid: int, started: int) -> bool:
+    """The same process (its start time: a pid may be reused), not yet a zombie."""
+    st = _proc_stat(pid)
+    return st is not None and st[2] == started and st[1] != "Z"
+
+
 def _group_alive(pgid: int) -> bool:
     try:
         os.killpg(pgid, 0)
@@ -128,30 +164,37 @@ def _group_alive(pgid: int) -> bool:
 
 
 def shut_down(proc: subprocess.Popen, timeout_s: float = SHUTDOWN_S) -> Dict:
-    """Ends the launch as Ctrl+C does (SIGINT to its process group), SIGKILL to the group after
-    timeout_s, and waits until no process of the group is left. What it took, for metrics.json."""
+    """Ends the launch as Ctrl+C does (SIGINT to its process group: roslaunch passes it on to its nodes),
+    then SIGKILL after timeout_s to the group and to every process that was below roslaunch (the
+    nodes, the master, their children), each by its pid; waits until none of them is left. What it
+    took, for metrics.json (survivors: pids still there 10 s after SIGKILL)."""
     pgid, t0, how = proc.pid, time.monotonic(), "sigint"
+    below = descendants(proc.pid)
     if proc.poll() is None:
         os.killpg(pgid, signal.SIGINT)
-        try:
-            proc.wait(timeout_s)
-        except subprocess.TimeoutExpired:
-            how = "sigkill"
     else:
         how = "exited"
+
+    def left():
+        # poll: roslaunch reaped (a zombie still counts in its group)
+        return ([pgid] if proc.poll() is None or _group_alive(pgid) else []) + [
+            p for p, started in below.items() if _alive(p, started)]
+
     deadline, killed = time.monotonic() + timeout_s, False
-    # poll: roslaunch reaped (a zombie still counts in its group); a zombie whose parent is gone is
-    # pid 1's to reap: 10 s after SIGKILL the group is given up (metrics.json: survivors)
-    while proc.poll() is None or _group_alive(pgid):
+    while left():
         if time.monotonic() >= deadline:
             if killed:
                 break
-            how, killed = how + ("" if how == "sigkill" else "+sigkill"), True
-            os.killpg(pgid, signal.SIGKILL)
+            how, killed = how + "+sigkill", True
+            for p, started in below.items():
+                if _alive(p, started):
+                    os.kill(p, signal.SIGKILL)
+            if _group_alive(pgid):
+                os.killpg(pgid, signal.SIGKILL)
             deadline = time.monotonic() + 10.0
         time.sleep(0.1)
-    return {"shutdown": how, "shutdown_s": round(time.monotonic() - t0, 1), "survivors": _group_alive(pgid),
-            "launch_exit_code": proc.returncode}
+    return {"shutdown": how, "shutdown_s": round(time.monotonic() - t0, 1), "processes": len(below) + 1,
+            "survivors": left(), "launch_exit_code": proc.returncode}
 
 
 def run_ros(world: World, world_file: str, seed: int, time_limit_s: float, run_dir: Path, robot: str = "cobra",
@@ -229,7 +272,7 @@ def run_experiment(worlds: Sequence[Tuple[World, str]], seeds: Sequence[int], ou
                    robot: str = "cobra", perception: str = "depth", classifier: Optional[str] = None,
                    nav_config: Optional[str] = None) -> List[Dict]:
     """Every (world, its absolute file) x seed: the ROS run, then the batch run; OUT/table.md and
-    OUT/summary.json; the rows (comparison_row)."""
+    OUT/summary.json; the rows (comparison_row). RuntimeError when a launch's process survives."""
     check_robot(robot)
     out = Path(out)
     rows, runs, t0 = [], [], time.monotonic()
@@ -241,6 +284,9 @@ def run_experiment(worlds: Sequence[Tuple[World, str]], seeds: Sequence[int], ou
             print(f"[ros] {world.name} seed {seed}: {ros['end']}, reached {ros['goal_reached']}, contacts "
                   f"{ros['collisions']}, time {ros['time_s']} s, wall {ros['wall_s']} s, shutdown "
                   f"{ros['shutdown']} ({ros['shutdown_s']} s)", flush=True)
+            if ros["survivors"]:
+                raise RuntimeError(f"processes {ros['survivors']} of the launch outlived SIGKILL (see "
+                                   f"{run_dir / 'metrics.json'}): the next run would not start clean; stopped")
             print(f"[batch] {world.name} seed {seed}", flush=True)
             batch = run_batch(world, seed, limit, run_dir, robot, perception, classifier, nav_config)
             print(f"[batch] {world.name} seed {seed}: {batch['outcome']}, time {batch['time_from_move_s']} s, "
