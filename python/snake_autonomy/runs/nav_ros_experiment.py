@@ -213,7 +213,7 @@ def run_ros(world: World, world_file: str, seed: int, time_limit_s: float, run_d
         launch = subprocess.Popen(launch_command(world_file, seed, port, bus, perception, classifier, nav_config),
                                   env=env, stdout=log_file, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                   start_new_session=True)
-    watcher = None
+    watcher, launch_ended = None, None
     try:
         watcher = subprocess.Popen(
             [sys.executable, "-m", "snake_autonomy.runs.nav_ros_watch", "--world", world_file, "--seed", str(seed),
@@ -221,7 +221,6 @@ def run_ros(world: World, world_file: str, seed: int, time_limit_s: float, run_d
              "--startup", str(startup_s), "--out", str(watch_json)]
             + (["--nav-config", str(nav_config)] if nav_config else []), env=env, stdin=subprocess.DEVNULL)
         deadline = t0 + startup_s + time_limit_s + SETTLE_S + MARGIN_S
-        launch_ended = None
         while watcher.poll() is None:
             if launch_ended is None and launch.poll() is not None:
                 launch_ended = time.monotonic()
@@ -243,7 +242,7 @@ def run_ros(world: World, world_file: str, seed: int, time_limit_s: float, run_d
         watched = {"goal_reached": False, "loop_reached": False, "time_s": None, "final_distance_m": None,
                    "collisions": None, "end": "watcher_failed"}
     if watched.get("end") == "running":
-        watched["end"] = "launch_ended" if launch.returncode is not None else "watcher_stopped"
+        watched["end"] = "launch_ended" if launch_ended is not None else "watcher_stopped"
     metrics = {"world": world.name, "seed": int(seed), **watched, "time_limit_s": time_limit_s,
                "wall_s": round(time.monotonic() - t0, 1), "roslaunch_log": str(log),
                "ros_log_dir": str(run_dir / "log"), **ended}
