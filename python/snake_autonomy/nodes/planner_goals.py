@@ -13,9 +13,14 @@ Actions     move_base (move_base_msgs/MoveBaseAction): goal -> the planner's goa
 Publishes   nav/goal (visualization_msgs/Marker, latched): the goal's disc in the world frame, deleted
             when there is none.
 Frames      a goal's position (its orientation is not used: the planner drives into a disc) is transformed
-            into the planner's world frame with tf2 (the latest transform). No frame_id, no transform, or
-            a position not finite: refused with a warning naming the frames. A refused topic goal changes
-            nothing; a refused action goal is aborted, and the goal it preempted is over: the robot holds.
+            into the planner's world frame with tf2 (the latest transform); the robot holds while it is
+            looked up (TF_WAIT_S at most). The tf2 listener is made at the first goal in another frame,
+            not at start: a Python listener decodes every /tf message (the driver's and the robot
+            state publisher's, 100 Hz) in the planner's process, CPU a goal in the world frame never needs.
+Refusals    every new goal takes over at once (the goal it replaces ends: an action goal PREEMPTED). One
+            it cannot use (no frame_id, no transform, a position not finite) is refused with a warning
+            naming the frames, an action goal ABORTED with that text, and the robot holds (as move_base
+            stops on a goal it cannot transform).
 
 The action server is polled from the planner's tick (no callbacks): the goal changes in one thread only,
 and an action goal is SUCCEEDED or ABORTED for the loop state it produced.
@@ -37,6 +42,7 @@ from snake_autonomy.planning.rectilinear.nav_loop import FOLLOWING, GOAL_REACHED
 from snake_autonomy.transforms import quat_to_matrix
 
 PARAMETER, TOPIC, ACTION = "parameter", "move_base_simple/goal", "move_base action"
+TF_WAIT_S = 1.0          # a goal's transform not known this long after the goal came: refused
 GOAL_COLOUR = ColorRGBA(0.2, 0.6, 1.0, 0.5)
 
 
@@ -61,8 +67,8 @@ class GoalServer:
         self._shown = None                 # the seq nav/goal shows
         self._stopped = False
         self.lock = threading.Lock()       # before the action server's locks, never after
-        self.tf = tf2_ros.Buffer()
-        self.tf_listener = tf2_ros.TransformListener(self.tf)
+        self._unresolved = None            # (PoseStamped, source, deadline_s): the new goal, its transform awaited
+        self.tf = self.tf_listener = None  # made at the first goal in another frame than the world's
         self.pub_goal = rospy.Publisher("nav/goal", Marker, queue_size=1, latch=True)
         rospy.Subscriber("move_base_simple/goal", PoseStamped, self.on_simple_goal, queue_size=1)
         self.action = actionlib.SimpleActionServer("move_base", MoveBaseAction, auto_start=False)
@@ -80,14 +86,21 @@ class GoalServer:
         with self.lock:
             if self._stopped:
                 return self.goal, self.seq
-            if self.action.is_new_goal_available():
-                self.take_action_goal(self.action.accept_new_goal())
+            now_s = rospy.get_time()
+            if self.action.is_new_goal_available():          # the active one (if any) ends PREEMPTED
+                self._unresolved = (self.action.accept_new_goal().target_pose, ACTION, now_s + TF_WAIT_S)
             elif self.action.is_active() and self.action.is_preempt_requested():
                 self.action.set_preempted(text="canceled: holding")
+                self._unresolved = None
                 self.set_goal(None, "action goal canceled: holding")
             simple, self._simple = self._simple, None
             if simple is not None:
-                self.take_simple_goal(simple)
+                if self.action.is_active():
+                    self.last_outcome = f"preempted by a goal on {TOPIC}"
+                    self.action.set_preempted(text=self.last_outcome)
+                self._unresolved = (simple, TOPIC, now_s + TF_WAIT_S)
+            if self._unresolved is not None:
+                self.resolve(now_s)
             self.show()
             return self.goal, self.seq
 
@@ -114,26 +127,25 @@ class GoalServer:
                 self.set_goal(None, f"action goal aborted: {why}")
 
     # -- goals -------------------------------------------------------------------------------------
-    def take_action_goal(self, goal) -> None:
-        xy, why = self.to_world(goal.target_pose)
-        if why is not None:
+    def resolve(self, now_s: float) -> None:
+        """The new goal in the world frame: taken; its transform not there yet: hold and try again at the
+        next tick until TF_WAIT_S after it came; else refused (an action goal ABORTED) and hold."""
+        msg, source, deadline_s = self._unresolved
+        xy, why, retry = self.to_world(msg)
+        if xy is not None:
+            self._unresolved = None
+            self.set_goal(Goal(xy, self.radius_m, source), f"goal from {source}")
+        elif retry and now_s < deadline_s:
+            if self.goal is not None:
+                self.set_goal(None, f"goal from {source}: holding while looking up its transform ({why})")
+        else:
+            self._unresolved = None
             self.refuse(why)
-            self.last_outcome = f"aborted: {why}"
-            self.action.set_aborted(text=why)
-            if self.goal is not None and self.goal.source == ACTION:
-                self.set_goal(None, "the action goal preempted by a refused one is over: holding")
-            return
-        self.set_goal(Goal(xy, self.radius_m, ACTION), "action goal")
-
-    def take_simple_goal(self, msg) -> None:
-        xy, why = self.to_world(msg)
-        if why is not None:
-            self.refuse(why)
-            return
-        if self.action.is_active():
-            self.last_outcome = f"preempted by a goal on {TOPIC}"
-            self.action.set_preempted(text=self.last_outcome)
-        self.set_goal(Goal(xy, self.radius_m, TOPIC), f"goal on {TOPIC}")
+            if source == ACTION and self.action.is_active():
+                self.last_outcome = f"aborted: {why}"
+                self.action.set_aborted(text=why)
+            if self.goal is not None:
+                self.set_goal(None, "the goal refused replaced the current one: holding")
 
     def set_goal(self, goal: Optional[Goal], what: str) -> None:
         self.goal, self.seq, self._trouble = goal, self.seq + 1, None
@@ -148,25 +160,30 @@ class GoalServer:
         self.last_refusal = why
         rospy.logwarn(f"planner: goal refused: {why}")
 
-    def to_world(self, msg) -> Tuple[Optional[Tuple[float, float]], Optional[str]]:
-        """(x, y) of a PoseStamped's position in the world frame, or (None, why not)."""
+    def to_world(self, msg) -> Tuple[Optional[Tuple[float, float]], Optional[str], bool]:
+        """(x, y) of a PoseStamped's position in the world frame, or (None, why not, whether a later
+        try may succeed: the transform is not known yet)."""
         frame, world = msg.header.frame_id, self.world_frame()
         p = msg.pose.position
         xyz = np.array([p.x, p.y, p.z], float)
         if not np.all(np.isfinite(xyz)):
-            return None, f"position {tuple(xyz)} not finite"
+            return None, f"position {tuple(xyz)} not finite", False
         if not world:
-            return None, "the planner's world frame is not known yet (no base_pose so far; ~world_frame sets it)"
+            return None, "the planner's world frame is not known yet (no base_pose so far; ~world_frame sets it)", False
         if not frame:
-            return None, f"no frame_id: give header.frame_id (the planner's world frame is {world!r})"
+            return None, f"no frame_id: give header.frame_id (the planner's world frame is {world!r})", False
         if frame != world:
+            if self.tf is None:                # the first goal in another frame: listen from now on
+                self.tf = tf2_ros.Buffer()
+                self.tf_listener = tf2_ros.TransformListener(self.tf)
             try:
                 t = self.tf.lookup_transform(world, frame, rospy.Time(0)).transform
             except tf2_ros.TransformException as exc:
-                return None, f"goal frame {frame!r} has no transform to the planner's world frame {world!r} ({exc})"
+                return None, (f"goal frame {frame!r} has no transform to the planner's world frame {world!r} "
+                              f"({str(exc).strip()})"), True
             r, v = t.rotation, t.translation
             xyz = quat_to_matrix(r.x, r.y, r.z, r.w) @ xyz + (v.x, v.y, v.z)
-        return (float(xyz[0]), float(xyz[1])), None
+        return (float(xyz[0]), float(xyz[1])), None, False
 
     def show(self) -> None:
         """nav/goal: the goal's disc (latched), once per change, when the world frame is known."""
