@@ -27,7 +27,12 @@ from mission_test_helpers import wait_for
 
 PROGRESS_M = 0.3        # ~45 s of the gait's 7 mm/s (measured: 0.14 m in the first 21 s); ~200 s allowed
 TIMEOUT_S = 200.0
-KAPPA_TOLERANCE = 0.3   # /m: the same replans, the follower's kappa through different latencies and noise
+# The same replans, the follower's kappa through other latencies, noise and a loaded machine's timing:
+# its +-0.1 /m head-sway ripple out of phase. Measured over 42-44 s on a loaded machine (7 runs): mean
+# |difference| 0.05-0.12 /m, largest 0.17-0.44 /m. A different decision (the other side, a stop, a
+# turn at 1.5 /m) exceeds both.
+MEAN_KAPPA_TOLERANCE = 0.2
+MAX_KAPPA_TOLERANCE = 0.6
 
 
 def moving_from_first(commands):
@@ -137,7 +142,8 @@ class SimNavTest(unittest.TestCase):
     def compare_with_the_batch_run(self):
         """The batch run (runs/nav_batch.py: the same NavLoop fed as this node is, the driver in lock-step)
         on the same world and seed sends the same commands: the same gaits in the same order and a kappa
-        within KAPPA_TOLERANCE of this run's at the same time since the first command that moves."""
+        near this run's at the same time since the first command that moves (mean and largest
+        difference within MEAN_KAPPA_TOLERANCE, MAX_KAPPA_TOLERANCE)."""
         from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
         with self.lock:
             ros = [(c.header.stamp.to_sec(), c.gait, float(c.kappa)) for c in self.commands]
@@ -150,9 +156,11 @@ class SimNavTest(unittest.TestCase):
         rospy.loginfo("sim_nav: batch commands " + " ".join(f"{t:.1f}:{g}:{k:+.2f}" for t, g, k in ours))
         self.assertEqual(collapsed(ros), collapsed(ours))
         times = np.array([t for t, _, _ in ours])
-        worst = max(abs(k - ours[int(np.argmin(np.abs(times - t)))][2]) for t, _, k in ros)
-        rospy.loginfo(f"sim_nav: largest kappa difference {worst:.3f} /m over {window:.0f} s")
-        self.assertLessEqual(worst, KAPPA_TOLERANCE)
+        diff = np.array([abs(k - ours[int(np.argmin(np.abs(times - t)))][2]) for t, _, k in ros])
+        rospy.loginfo(f"sim_nav: kappa difference mean {diff.mean():.3f}, largest {diff.max():.3f} /m "
+                      f"over {window:.0f} s")
+        self.assertLessEqual(diff.mean(), MEAN_KAPPA_TOLERANCE)
+        self.assertLessEqual(diff.max(), MAX_KAPPA_TOLERANCE)
 
 
 if __name__ == "__main__":
