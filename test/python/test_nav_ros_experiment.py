@@ -117,3 +117,15 @@ def test_bad_arguments_exit_2_before_anything_runs(tmp_path, root, capsys, extra
     assert cli_main(["nav", "ros-experiment", *args, "--out", str(out)]) == 2
     assert message in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_the_watch_writes_commands_and_track_from_the_first_move(tmp_path):
+    w = Watch((1.0, 0.0), 0.15, time_limit_s=100.0, t0=0.0)
+    w.on_command(4.0, "hold_curve", 0.0)
+    w.on_command(5.0, "rectilinear", -1.5)
+    w.on_truth(0.1, 0.0)
+    w.step(6.0)
+    w.write_csv(tmp_path)
+    assert (tmp_path / "commands.csv").read_text().splitlines() == [
+        "t_s,gait,kappa_per_m", "-1.00,hold_curve,0.0000", "0.00,rectilinear,-1.5000"]
+    assert (tmp_path / "trajectory.csv").read_text().splitlines() == ["t_s,x_m,y_m", "1.00,0.1000,0.0000"]

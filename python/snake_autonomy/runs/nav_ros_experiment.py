@@ -14,8 +14,9 @@ starts each node in a session of its own), and the next run starts only when non
 watcher (runs/nav_ros_watch.py) is a child process: rospy initialises once per process.
 
 OUT/runs/WORLD_sSEED/: metrics.json (the ROS run: world, seed, goal_reached, loop_reached, time_s,
-final_distance_m, collisions, wall_s, end, the log paths), roslaunch.log (the launch's output),
-log/ (ROS_LOG_DIR: every node's log), batch.json (the batch run's metrics). OUT/table.md and
+final_distance_m, collisions, wall_s, end, the log paths), commands.csv and trajectory.csv (the ROS
+run's gait commands and base_link), roslaunch.log (the launch's output), log/ (ROS_LOG_DIR: every
+node's log), batch.json (the batch run's metrics), batch/ (its files: nav_batch.NavResult.write). OUT/table.md and
 OUT/summary.json: one row per world and seed (comparison_table).
 """
 import json
@@ -254,7 +255,8 @@ def run_ros(world: World, world_file: str, seed: int, time_limit_s: float, run_d
 def run_batch(world: World, seed: int, time_limit_s: float, run_dir: Path, robot: str = "cobra",
               perception: str = "depth", classifier: Optional[str] = None, nav_config: Optional[str] = None) -> Dict:
     """The batch run of the same world and seed (runs/nav_batch.py); its metrics with time_from_move_s
-    (as the ROS run counts time), also run_dir/batch.json."""
+    (as the ROS run counts time), also run_dir/batch.json; its files (commands, replans, contacts,
+    trajectory, top view) in run_dir/batch/."""
     t0 = time.monotonic()
     result = NavRun(NavRunSpec(world, robot=robot, perception=perception, seed=seed, time_limit_s=time_limit_s,
                                classifier=classifier, nav_config=nav_config, keep_frames=False)).run()
@@ -263,6 +265,7 @@ def run_batch(world: World, seed: int, time_limit_s: float, run_dir: Path, robot
     end_t = result.commands[-1][0] if result.commands else 0.0
     metrics = {**result.metrics, "time_from_move_s": moving_time_s(result.commands, reached_t, end_t, ("hold", stop)),
                "wall_s": round(time.monotonic() - t0, 1)}
+    result.write(run_dir / "batch")
     write_json_atomic(run_dir / "batch.json", metrics)
     return metrics
 

@@ -16,7 +16,7 @@ Ends        when the planner's state has been goal_reached for settle_s (the rob
 Times       wall clock (the launch runs on it: use_sim_time false); time_s from the first command
             that moves to the first goal_reached status (diagnostics every 1 s: +-1 s).
 Writes      the JSON (Watch.result) every second while it runs and once at the end: a killed
-            watcher leaves its latest state.
+            watcher leaves its latest state; at the end, beside it, commands.csv and trajectory.csv.
 """
 import argparse
 import math
@@ -24,7 +24,8 @@ import os
 import sys
 import threading
 import time
-from typing import Dict, Optional
+from pathlib import Path
+from typing import Dict, List, Optional, Tuple
 from xmlrpc.client import ServerProxy
 
 from snake_autonomy.planning.rectilinear.config import NavConfig, nav_config_path
@@ -57,14 +58,17 @@ class Watch:
         self.sim: Dict[str, str] = {}
         self.end: Optional[str] = None
         self.t_end: Optional[float] = None
+        self.commands: List[Tuple[float, str, float]] = []   # (t, gait, kappa) of every gait_command
+        self.track: List[Tuple[float, float, float]] = []    # (t, x, y) of base_link, each step()
 
     # -- inputs ---------------------------------------------------------------------------------------
     def on_truth(self, x: float, y: float) -> None:
         with self.lock:
             self.xy = (float(x), float(y))
 
-    def on_command(self, now: float, gait: str) -> None:
+    def on_command(self, now: float, gait: str, kappa_per_m: float = 0.0) -> None:
         with self.lock:
+            self.commands.append((now, gait, float(kappa_per_m)))
             if self.t_move is None and gait not in self.stop_gaits:
                 self.t_move = now
 
@@ -87,6 +91,8 @@ class Watch:
     def step(self, now: float, dead: Optional[str] = None) -> Optional[str]:
         """The reason the run ends now (and remembers it), else None. dead: a node that died."""
         with self.lock:
+            if self.xy is not None:
+                self.track.append((now, *self.xy))
             if self.end is None:
                 self.end = self._why(now, dead)
                 if self.end is not None:
@@ -103,6 +109,18 @@ class Watch:
         if now - self.t_move >= self.time_limit_s:
             return "time_limit"
         return None
+
+    def write_csv(self, folder: Path) -> None:
+        """folder/commands.csv (every gait command) and trajectory.csv (base_link by ground truth at
+        each step), t_s from the first command that moves, as the batch run's files (t_s from its start)."""
+        with self.lock:
+            t0 = self.t_move if self.t_move is not None else self.t0
+            with open(folder / "commands.csv", "w") as f:
+                f.write("t_s,gait,kappa_per_m\n")
+                f.writelines(f"{t - t0:.2f},{g},{k:.4f}\n" for t, g, k in self.commands)
+            with open(folder / "trajectory.csv", "w") as f:
+                f.write("t_s,x_m,y_m\n")
+                f.writelines(f"{t - t0:.2f},{x:.4f},{y:.4f}\n" for t, x, y in self.track)
 
     def distance_m(self) -> Optional[float]:
         if self.xy is None:
@@ -185,7 +203,8 @@ def watch(args) -> int:
     rospy.init_node("nav_ros_watch", disable_signals=True)
     rospy.Subscriber("ground_truth/base_pose", PoseStamped,
                      lambda m: w.on_truth(m.pose.position.x, m.pose.position.y), queue_size=5)
-    rospy.Subscriber("gait_command", GaitCommand, lambda m: w.on_command(time.monotonic(), m.gait), queue_size=20)
+    rospy.Subscriber("gait_command", GaitCommand, lambda m: w.on_command(time.monotonic(), m.gait, m.kappa),
+                     queue_size=20)
 
     def on_diagnostics(msg):
         for st in msg.status:
@@ -223,6 +242,7 @@ def watch(args) -> int:
         if end:
             break
         time.sleep(0.5)
+    w.write_csv(Path(args.out).parent)
     rospy.signal_shutdown("run over")
     return 0
 
