@@ -60,7 +60,7 @@ from snake_autonomy import _core
 from snake_autonomy.msg import GaitCommand
 from snake_autonomy.nodes.image_msgs import from_camera_info, from_image, to_image
 from snake_autonomy.nodes.planner_goals import PARAMETER, Goal, GoalServer
-from snake_autonomy.paths import config_path
+from snake_autonomy.paths import config_path, resolve_world_path
 from snake_autonomy.perception.block_classifier import BlockClassifier
 from snake_autonomy.perception.depth_traversability import DepthTraversability
 from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
@@ -147,7 +147,7 @@ class PlannerNode:
         """The goal at start: ~world's, ~goal's, or None (the robot holds until one arrives)."""
         world = rospy.get_param("~world", "")
         if world:
-            w = load_world(world)
+            w = load_world(resolve_world_path(world))
             return Goal((float(w.goal[0]), float(w.goal[1])), float(w.goal_radius_m), PARAMETER)
         goal = str(rospy.get_param("~goal", ""))
         if not goal:
