@@ -51,6 +51,7 @@ class Watch:
         self.t0 = t0
         self.lock = threading.Lock()
         self.xy: Optional[tuple] = None
+        self.lag_s, self.max_lag_s = math.nan, 0.0
         self.t_move: Optional[float] = None        # the first command that moves
         self.t_reached: Optional[float] = None     # the first goal_reached status
         self.t_reached_now: Optional[float] = None  # since when goal_reached holds (reset when it leaves)
@@ -62,9 +63,14 @@ class Watch:
         self.track: List[Tuple[float, float, float]] = []    # (t, x, y) of base_link, each step()
 
     # -- inputs ---------------------------------------------------------------------------------------
-    def on_truth(self, x: float, y: float) -> None:
+    def on_truth(self, x: float, y: float, lag_s: Optional[float] = None) -> None:
+        """lag_s: wall time at receipt minus the stamp (the plant's clock, started at the wall time):
+        how far the simulation has fallen behind real time (plus transport)."""
         with self.lock:
             self.xy = (float(x), float(y))
+            if lag_s is not None:
+                self.lag_s = float(lag_s)
+                self.max_lag_s = max(self.max_lag_s, self.lag_s)
 
     def on_command(self, now: float, gait: str, kappa_per_m: float = 0.0) -> None:
         with self.lock:
@@ -145,7 +151,9 @@ class Watch:
                     "stops_no_free_arc": _int(self.planner.get("stops_no_free_arc")),
                     "started_after_s": None if self.t_move is None else round(self.t_move - self.t0, 1),
                     "end": self.end or "running",
-                    "watched_s": round(now - self.t0, 1)}
+                    "watched_s": round(now - self.t0, 1),
+                    "truth_lag_s": None if math.isnan(self.lag_s) else round(self.lag_s, 3),
+                    "truth_lag_s_max": round(self.max_lag_s, 3), "sim_status": dict(self.sim)}
 
 
 def _int(v) -> Optional[int]:
@@ -202,7 +210,8 @@ def watch(args) -> int:
     w = Watch(world.goal, world.goal_radius_m, args.time_limit, args.settle, args.startup, stop, time.monotonic())
     rospy.init_node("nav_ros_watch", disable_signals=True)
     rospy.Subscriber("ground_truth/base_pose", PoseStamped,
-                     lambda m: w.on_truth(m.pose.position.x, m.pose.position.y), queue_size=5)
+                     lambda m: w.on_truth(m.pose.position.x, m.pose.position.y, time.time() - m.header.stamp.to_sec()),
+                     queue_size=5)
     rospy.Subscriber("gait_command", GaitCommand, lambda m: w.on_command(time.monotonic(), m.gait, m.kappa),
                      queue_size=20)
 
