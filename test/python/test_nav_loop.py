@@ -81,6 +81,20 @@ def test_goal_reached_holds_for_good():
     assert loop.tick(2.0).state == GOAL_REACHED
 
 
+def test_the_loop_stops_the_goal_margin_inside_the_disc():
+    """follower.goal_margin_m (the stop's own move, bench/nav_stop_shift): 0.05 m inside a 0.2 m disc;
+    never nearer the centre than half the radius."""
+    loop, cfg = _loop(True, goal_xy=(1.0, 0.0), goal_radius_m=0.2)
+    loop.cfg = cfg = dataclasses.replace(cfg, follower=dataclasses.replace(cfg.follower, goal_margin_m=0.05))
+    assert loop.stop_radius_m() == pytest.approx(0.15)
+    _feed(loop, cfg, 0.0, _pose(0.83, 0.0, 0.0))          # inside the disc, not the margin
+    assert loop.tick(0.5).state != GOAL_REACHED
+    _feed(loop, cfg, 1.0, _pose(0.86, 0.0, 0.0))
+    assert loop.tick(1.0).state == GOAL_REACHED
+    loop.set_goal((1.0, 0.0), 0.06)
+    assert loop.stop_radius_m() == pytest.approx(0.03)
+
+
 def test_without_a_goal_the_loop_holds_until_one_is_set():
     loop, cfg = _loop(True)
     _feed(loop, cfg, 0.0, _pose(0.0, 0.0, 0.0))

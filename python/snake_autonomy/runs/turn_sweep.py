@@ -121,3 +121,32 @@ def reshape_step(kappa_per_m: float, robot_name: str = "cobra", seed: int = 0, s
     (a, th), b = before, plant.frame_positions()[:, :2]
     n = np.array([-math.sin(th), math.cos(th)])
     return ReshapeStep(kappa_per_m, (b - a) @ n, float((b.mean(axis=0) - a.mean(axis=0)) @ n))
+
+
+@dataclass
+class StopShift:
+    kappa_per_m: float
+    run_s: float                 # how long the gait ran before the stop
+    shift_m: float               # base_link's move from the stop command to settle_s after it
+
+
+def stop_shift(kappa_per_m: float, run_s: float, robot_name: str = "cobra", seed: int = 0,
+               settle_s: float = 10.0) -> StopShift:
+    """How far base_link moves when the navigation loop stops: the nav config's forward gait with
+    curve + kappa_per_m through the C++ driver on open floor for run_s, then its stop gait (gaits.stop,
+    the wave decays, kappa kept) for settle_s. What the loop's goal margin (follower.goal_margin_m)
+    must cover for the robot to come to rest inside a goal's disc it stopped in."""
+    robot, nav, plant = _open_floor(robot_name, seed)
+    drive = PlantGaitDriver(robot, plant)
+    drive.command(nav.gaits.forward, kappa_per_m=kappa_per_m)
+    t, dt, step, start = 0.0, 0.01, 0, None
+    while t < run_s + settle_s:
+        if start is None and t >= run_s:
+            start = plant.frame_transform("base_link")[:2, 3].copy()
+            drive.command(nav.gaits.stop, kappa_per_m=kappa_per_m)
+        drive.step(t, dt)
+        step += 1
+        t = step * dt
+        plant.step_to(t)
+    end = plant.frame_transform("base_link")[:2, 3]
+    return StopShift(kappa_per_m, run_s, float(np.hypot(*(end - start))))

@@ -52,6 +52,8 @@ class FollowerParams:
     back_off: bool = True                 # no free arc: back off along the track (else turn in place)
     back_off_replans: int = 2             # > 0: back off for this many replans in a row, then turn
                                           # in place with the room gained; 0: back off while no arc is free
+    goal_margin_m: float = 0.02           # the loop stops this far inside a goal's disc: the stop moves
+                                          # base_link up to 11 mm (bench/nav_stop_shift, both robots)
 
     def validate(self) -> List[str]:
         p = []
@@ -65,6 +67,8 @@ class FollowerParams:
             p.append(f"k_heading: must be >= 0, got {self.k_heading}")
         if not isinstance(self.back_off_replans, int) or self.back_off_replans < 0:
             p.append(f"back_off_replans: must be an integer >= 0, got {self.back_off_replans!r}")
+        if not (math.isfinite(self.goal_margin_m) and self.goal_margin_m >= 0):
+            p.append(f"goal_margin_m: must be a finite number >= 0, got {self.goal_margin_m}")
         if not self.kappa_rate_per_m_s >= 0:
             p.append(f"kappa_rate_per_m_s: must be >= 0, got {self.kappa_rate_per_m_s}")
         return p

@@ -25,7 +25,8 @@ first fresh frame after that is replanned at once. tick() never raises: an excep
 No free arc: `on_no_free_arc` "hold" (default) stops (gait hold) until a replan finds a free arc;
 "turn" turns in place with the follower's kappa_turn_per_m; "back_off" backs off tail first along the
 track (the reverse gait, NavTick.backwards; what the batch run does with follower.back_off).
-Goal reached (base_link within the goal radius): hold for good, until set_goal gives a new goal.
+Goal reached (base_link within the goal radius less follower.goal_margin_m, the move the stop itself
+makes: stop_radius_m): hold for good, until set_goal gives a new goal.
 No goal (goal_xy None at construction, or clear_goal()): hold (state NO_GOAL) until set_goal.
 Every hold keeps the body's curvature (NavTick.kappa_per_m is the last kappa commanded, for the nav
 config's gaits.stop, hold_curve): straightening a bent body swings its head sideways.
@@ -235,6 +236,11 @@ class NavLoop:
                 return f"{what} stamped {-age:.1f} s ahead of the clock"
         return None
 
+    def stop_radius_m(self) -> float:
+        """The loop stops at the goal when base_link is this near its centre: the goal radius less the
+        follower's goal_margin_m (the stop's own move), but never less than half the radius."""
+        return max(self.goal_radius_m - self.cfg.follower.goal_margin_m, 0.5 * self.goal_radius_m)
+
     def _tick(self, t_s: float) -> NavTick:
         if self.state == GOAL_REACHED:
             return NavTick(GOAL_REACHED, True, message="goal reached: holding")
@@ -242,7 +248,7 @@ class NavLoop:
             self.state = NO_GOAL
             return NavTick(NO_GOAL, True, message="no goal: holding")
         d = self.distance_to_goal_m()
-        if d is not None and d <= self.goal_radius_m:
+        if d is not None and d <= self.stop_radius_m():
             self.state = GOAL_REACHED
             return NavTick(GOAL_REACHED, True, message=f"goal reached: base_link {d:.3f} m from the goal, holding")
         if self._T_wb is None or self._frame is None:
