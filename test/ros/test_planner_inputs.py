@@ -172,5 +172,54 @@ class PlannerInputsTest(unittest.TestCase):
         self.assert_never_silent()
 
 
+    def test_map_and_traversability_mask_show_a_wall_ahead(self):
+        """nav/map (OccupancyGrid in the pose's frame, map.cell_m cells) marks cells near a wall the depth
+        frames show 0.5 m ahead; nav/traversability_mask is mono8 of the camera's size, 0 on the wall."""
+        from nav_msgs.msg import OccupancyGrid
+        from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera
+        cfg = NavConfig.from_yaml()
+        T = T_ground_camera(cfg.mount, self.radius)
+        k = self.k
+        v, u = np.mgrid[0:k.height, 0:k.width]
+        rays = np.dstack([(u - k.cx) / k.fx, (v - k.cy) / k.fy, np.ones(u.shape)]) @ T[:3, :3].T
+        ahead = rays[..., 0] > 1e-6
+        t_wall = np.where(ahead, (0.5 - T[0, 3]) / np.where(ahead, rays[..., 0], 1.0), np.inf)  # x = 0.5 m
+        on_wall = ahead & (T[2, 3] + t_wall * rays[..., 2] >= 0.0) & (T[2, 3] + t_wall * rays[..., 2] <= 0.3)
+        floor = np.where(self.depth > 0, self.depth, np.inf)
+        wall = np.where(on_wall & (t_wall < floor), t_wall, self.depth).astype(np.float32)
+        got = {}
+        subs = [rospy.Subscriber(topic, msg_type, lambda m, topic=topic: got.__setitem__(topic, m), queue_size=1)
+                for topic, msg_type in (("nav/map", OccupancyGrid), ("nav/traversability_mask", Image))]
+        flat = self.depth
+        try:
+            type(self).depth = wall
+            self.pub_info.publish(self.info(self.k.fx))
+            type(self).poses_on = type(self).frames_on = True
+
+            def occupied():
+                m = got.get("nav/map")
+                return m is not None and 100 in m.data
+            self.until(occupied, 30.0, "nav/map with an occupied cell (a replan of the wall)")
+        finally:
+            type(self).depth = flat
+            for sub in subs:
+                sub.unregister()
+        m = got["nav/map"]
+        self.assertEqual(m.header.frame_id, "map")
+        self.assertAlmostEqual(m.info.resolution, cfg.map.cell_m, places=6)
+        self.assertEqual(len(m.data), m.info.width * m.info.height)
+        grid = np.array(m.data, np.int8).reshape(m.info.height, m.info.width)
+        self.assertTrue(set(np.unique(grid)) <= {0, 100})
+        j, i = np.nonzero(grid == 100)
+        x = m.info.origin.position.x + (i + 0.5) * m.info.resolution
+        self.assertTrue(np.all((x > 0.2) & (x < 1.0)), f"occupied cells at x {x.min():.2f}..{x.max():.2f} m")
+        mask = got["nav/traversability_mask"]
+        self.assertEqual((mask.encoding, mask.width, mask.height), ("mono8", k.width, k.height))
+        self.assertEqual(mask.header.frame_id, "camera_color_optical_frame")
+        img = np.frombuffer(mask.data, np.uint8).reshape(k.height, k.width)
+        self.assertTrue(set(np.unique(img)) <= {0, 255})
+        self.assertTrue(np.any(img[on_wall] == 0) and np.any(img[-1] == 255), "the wall not ground, the floor ground")
+
+
 if __name__ == "__main__":
     rostest.rosrun("snake_autonomy", "planner_inputs", PlannerInputsTest)

@@ -15,8 +15,11 @@ Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with cur
             the route on the obstacle map the goal bias steers by, latched; nav config map.route), nav/arcs
             (visualization_msgs/MarkerArray: every candidate, chosen green, free parts yellow,
             blocked red), nav/traversability (sensor_msgs/Image rgb8: the frame with non-ground tinted
-            red and the arcs drawn), /diagnostics ("planner: navigation": WARN with no free arc,
-            OK otherwise; replans, stops, distance to the goal, the goal and its source, goals refused),
+            red and the arcs drawn), nav/traversability_mask (sensor_msgs/Image mono8, same stamp and frame:
+            255 ground, 0 not), nav/map (nav_msgs/OccupancyGrid, latched, after each replan when map.source
+            is not none: the obstacle map on map.cell_m cells; planner_display.occupancy),
+            /diagnostics ("planner: navigation": WARN with no free arc, OK otherwise; replans, stops,
+            distance to the goal, the goal and its source, goals refused),
             nav/goal (visualization_msgs/Marker, latched: the goal's disc; planner_goals.py).
 Goals       optional at start: ~world (a world file: its goal and goal radius) or ~goal ("x,y", the world
             frame) + ~goal_radius_m; without either the robot holds (state no_goal) until a goal comes:
@@ -51,7 +54,7 @@ import numpy as np
 import rospy
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Point, PoseStamped, PoseWithCovarianceStamped
-from nav_msgs.msg import Path
+from nav_msgs.msg import OccupancyGrid, Path
 from sensor_msgs.msg import CameraInfo, Image
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
@@ -59,6 +62,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 from snake_autonomy import _core
 from snake_autonomy.msg import GaitCommand
 from snake_autonomy.nodes.image_msgs import from_camera_info, from_image, to_image
+from snake_autonomy.nodes.planner_display import occupancy, traversability_mask
 from snake_autonomy.nodes.planner_goals import PARAMETER, Goal, GoalServer
 from snake_autonomy.paths import config_path, resolve_world_path
 from snake_autonomy.perception.block_classifier import BlockClassifier
@@ -125,6 +129,8 @@ class PlannerNode:
         self.pub_route = rospy.Publisher("nav/route", Path, queue_size=1, latch=True)
         self.pub_arcs = rospy.Publisher("nav/arcs", MarkerArray, queue_size=1, latch=True)
         self.pub_trav = rospy.Publisher("nav/traversability", Image, queue_size=1, latch=True)
+        self.pub_mask = rospy.Publisher("nav/traversability_mask", Image, queue_size=1, latch=True)
+        self.pub_map = rospy.Publisher("nav/map", OccupancyGrid, queue_size=1, latch=True)
         self.updater = diagnostic_updater.Updater()
         self.updater.setHardwareID("rectilinear_planner")
         self.updater.add("navigation", self.diagnose)
@@ -343,6 +349,12 @@ class PlannerNode:
             arcs.markers.append(m)
         self.pub_arcs.publish(arcs)
         self.pub_trav.publish(to_image(self.overlay(tick), "rgb8", stamp, "camera_color_optical_frame"))
+        self.pub_mask.publish(traversability_mask(tick.ground, stamp, "camera_color_optical_frame"))
+        omap = self.loop.planner.obstacle_map
+        if omap is not None:
+            mp = self.loop.cfg.map
+            self.pub_map.publish(occupancy(omap.geometry(), r.pose[:2], self.loop.goal_xy, mp.cell_m, mp.pad_m,
+                                           stamp, self.world_frame))
 
     def path_msg(self, stamp, poses) -> Path:
         """(N, 3) x, y, heading in the world frame (or None) -> nav_msgs/Path."""
