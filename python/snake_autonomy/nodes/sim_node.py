@@ -33,6 +33,9 @@ pair took 0.07-0.17 s, median 0.15 s, here: about 7 % of a core) and published a
             camera/color/image_raw (rgb8) + camera/color/camera_info, camera/depth/image_rect_raw
             (32FC1, m along the optical axis, 0 = nothing; ~camera_depth true), frame
             ~camera_optical_frame (camera_color_optical_frame), stamped with the snapshot's time.
+            sim/world_markers (visualization_msgs/MarkerArray, latched, once at start, frame ~world_frame):
+            the world's obstacles and goal disc as the simulation has them (ground truth, not what the
+            planner knows: that is nav/map; planner_display.world_markers).
 Contacts between the robot and the obstacles are counted per episode as the batch nav run counts
 them (sim/collisions.py): "obstacle_contacts" and "min_clearance_m" (sampled at 5 Hz) in the
 "sim: simulated robot" diagnostics, and a ROS_WARN at each new episode.
@@ -48,9 +51,11 @@ from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, WrenchStam
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image
+from visualization_msgs.msg import MarkerArray
 
 from snake_autonomy.msg import GaitCommand, TrackingStatus, TrajectoryStatus
 from snake_autonomy.nodes.image_msgs import to_camera_info, to_image
+from snake_autonomy.nodes.planner_display import world_markers
 from snake_autonomy.paths import config_path, resolve_world_path
 from snake_autonomy.planning.rectilinear.config import NavConfig
 from snake_autonomy.sim.camera_process import CameraProcess
@@ -80,9 +85,11 @@ class SimNode:
             self.world_file = str(resolve_world_path(self.world_file))
         self.nav_cfg, self.camera = None, None
         extra = {}
+        self.world = None
         if self.world_file:
             self.nav_cfg = NavConfig.from_yaml(rospy.get_param("~nav_config", str(config / "nav.yaml")))
-            extra = world_plant_fields(load_world(self.world_file), self.nav_cfg.plant.flat_belly_fraction)
+            self.world = load_world(self.world_file)
+            extra = world_plant_fields(self.world, self.nav_cfg.plant.flat_belly_fraction)
         setup = SimSetup(feedback=rospy.get_param("~feedback", "mocap"), seed=int(rospy.get_param("~seed", 0)),
                          start=start_t, port=rospy.get_param("~port", "/tmp/snake_sim_bus"),
                          sim_config=rospy.get_param("~sim_config", str(config / "sim.yaml")),
@@ -111,6 +118,9 @@ class SimNode:
         self.pub_gt_base = rospy.Publisher("ground_truth/base_pose", PoseStamped, queue_size=20)
         self.pub_gt_cam = rospy.Publisher("ground_truth/camera_pose", PoseStamped, queue_size=20)
         self.pub_gt_com = rospy.Publisher("ground_truth/com_pose", PoseStamped, queue_size=10)
+        if self.world is not None:   # latched: rviz started later still gets them
+            self.pub_world = rospy.Publisher("sim/world_markers", MarkerArray, queue_size=1, latch=True)
+            self.pub_world.publish(world_markers(self.world, rospy.Time.now(), self.world_frame))
         self.last_status = None
         self.updater = diagnostic_updater.Updater()
         self.updater.setHardwareID("mujoco")
