@@ -1,5 +1,6 @@
-"""The planner node's logic, ROS-free: camera frames and base poses in, gait commands and
-what to show out. planner_node (nodes/planner_node.py) only converts messages and calls this.
+"""The navigation loop, ROS-free: camera frames and base poses in, gait commands and what to show
+out. planner_node (nodes/planner_node.py) only converts messages and calls this; the batch run
+(runs/nav_batch.py) feeds it the simulated robot's poses and frames as the node gets them.
 
     loop = NavLoop(NavConfig.from_yaml(), head_width_m=0.09, perception=DepthTraversability(...),
                    goal_xy=(1.4, 0.0), goal_radius_m=0.15)
@@ -11,8 +12,7 @@ Every replan_period_s (config/nav.yaml follower.replan_period_s) the latest fram
 nearest its stamp (of the last POSE_HISTORY poses) becomes a replan (perception -> perception-space
 arcs -> the follower); between replans the follower turns the pose into kappa. The camera's pose
 in the replan's ground frame is base_link's pose (the one the driver uses, base_pose) times the
-mount of config/nav.yaml camera: (the head bobs with the gait: the mount is the camera's mean pose,
-the error the batch path does not have).
+mount of config/nav.yaml camera: (the head bobs with the gait: the mount is the camera's mean pose).
 
 Inputs are checked where they enter (on_pose, on_frame return the reason of a refusal, counted in
 `refused`): a pose must be finite, a rotation, inside POSE_WORKSPACE_M and not older than the last one;
@@ -22,9 +22,9 @@ FUTURE_TOLERANCE_S ahead of the clock) holds the robot (state STALE) until fresh
 first fresh frame after that is replanned at once. tick() never raises: an exception inside it
 (perception, planner) is counted in `errors`, kept in `last_error`, and the tick holds (state ERROR).
 
-No free arc: `on_no_free_arc` "hold" (default) stops (gait hold) until a replan finds a free arc;
-"turn" turns in place with the follower's kappa_turn_per_m; "back_off" backs off tail first along the
-track (the reverse gait, NavTick.backwards; what the batch run does with follower.back_off).
+No free arc: `on_no_free_arc` "hold" (default) stops until a replan finds a free arc; "turn" turns
+in place with the follower's kappa_turn_per_m; "back_off" backs off tail first along the track (the
+reverse gait, NavTick.backwards; planner_node and the batch run choose it when follower.back_off).
 Goal reached (base_link within the goal radius less follower.goal_margin_m, the move the stop itself
 makes: stop_radius_m): hold for good, until set_goal gives a new goal.
 No goal (goal_xy None at construction, or clear_goal()): hold (state NO_GOAL) until set_goal.
