@@ -15,7 +15,7 @@ chosen so that kappa > 0 bends the body to the left (CCW path), measured on the 
 
 Driving goes through the driver now (config/gaits.yaml `rectilinear`, derived from this
 discretisation, with the C++ `curvature` steering law; runs/gait_driver.py): this module stays the
-reference the gait map, the tests and `nav run --gait-source reference` check against.
+reference the gait map and the tests check against (navigation drives the driver's gait only).
 """
 import math
 from dataclasses import dataclass
