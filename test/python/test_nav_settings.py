@@ -62,6 +62,8 @@ def test_the_gaits_and_the_steering_law_are_nav_config_keys():
     assert (base.gaits.forward, base.gaits.reverse, base.gaits.stop) == ("rectilinear", "rectilinear_reverse",
                                                                          "hold_curve")
     assert base.gaits.steering == "uniform"
+    assert [base.gaits.command(hold, back) for hold, back in ((False, False), (False, True), (True, True))] == [
+        "rectilinear", "rectilinear_reverse", "hold_curve"]                # a stop wins over backing off
     ftl = NavConfig.from_dict({"gaits": {"steering": "follow_the_leader"}})
     assert ftl.gaits.steering == "follow_the_leader" and ftl.gaits.forward == base.gaits.forward
     with pytest.raises(NavConfigError,

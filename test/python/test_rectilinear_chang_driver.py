@@ -94,11 +94,11 @@ def test_nav_run_drives_the_12_link_robot_with_its_gait_without_naming_it(root):
     from snake_autonomy.sim.world_file import load_world
     world = load_world(root / "config" / "worlds" / "one_obstacle.yaml")
     run = NavRun(NavRunSpec(world, robot=ROBOT, time_limit_s=4.0, keep_frames=False))
-    assert (run.gait_name, run.reverse_gait_name) == ("rectilinear_chang", "rectilinear_chang_reverse")
+    assert (run.gaits.forward, run.gaits.reverse) == ("rectilinear_chang", "rectilinear_chang_reverse")
     assert run.loop.planner.follower.params.back_off is True             # nav_chang_rectilinear.yaml
     m = run.run().metrics
     assert (m["gait"], m["nav_config"]) == ("rectilinear_chang", f"nav_{ROBOT}.yaml")
     assert m["path_length_m"] > 0.005                                    # it moved (the first command at 0.5 s)
     cobra = NavRun(NavRunSpec(world, robot="cobra", time_limit_s=1.0, keep_frames=False))
     cobra.camera.close()
-    assert (cobra.gait_name, cobra.reverse_gait_name) == ("rectilinear", "rectilinear_reverse")
+    assert (cobra.gaits.forward, cobra.gaits.reverse) == ("rectilinear", "rectilinear_reverse")

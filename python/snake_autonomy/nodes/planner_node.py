@@ -71,7 +71,7 @@ from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m
 from snake_autonomy.planning.rectilinear.nav_loop import (ERROR, FOLLOWING, GOAL_REACHED, NO_FREE_ARC, NO_GOAL, STALE,
-                                                          WAITING, NavLoop)
+                                                          WAITING, NavLoop, checked_positive)
 from snake_autonomy.planning.rectilinear.overlay import overlay
 from snake_autonomy.planning.rectilinear.planner import to_world
 from snake_autonomy.sim.world_file import load_world
@@ -99,9 +99,10 @@ class PlannerNode:
         if self.cfg.gaits.steering != "uniform":
             raise ValueError(f"~nav_config: gaits.steering {self.cfg.gaits.steering!r} is a prototype of "
                              "bench/nav_follow_the_leader; this node commands curve + kappa (uniform)")
-        self.gait = rospy.get_param("~gait", self.cfg.gaits.forward)
-        self.reverse_gait = rospy.get_param("~reverse_gait", self.cfg.gaits.reverse)
-        self.stop_gait = rospy.get_param("~stop_gait", self.cfg.gaits.stop)
+        g = self.cfg.gaits
+        self.gaits = dataclasses.replace(g, forward=rospy.get_param("~gait", g.forward),
+                                         reverse=rospy.get_param("~reverse_gait", g.reverse),
+                                         stop=rospy.get_param("~stop_gait", g.stop))
         # the nav config's choice (follower.back_off: back off, else hold) unless the param says
         self.on_no_free_arc = rospy.get_param("~on_no_free_arc", "back_off" if self.cfg.follower.back_off else "hold")
         self.rate_hz = float(rospy.get_param("~rate_hz", 2.0))
@@ -110,8 +111,7 @@ class PlannerNode:
         for key, v in (("~rate_hz", self.rate_hz), ("~pose_timeout_s", self.pose_timeout_s),
                        ("~frame_timeout_s", self.frame_timeout_s), ("~goal_radius_m", self.goal_radius_m),
                        ("~abort_after_s", self.abort_after_s)):
-            if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"{key}: must be a finite number > 0, got {v!r}")
+            checked_positive(key, v)
         self.world_frame = rospy.get_param("~world_frame", "")
         self.loop = None
         self.applied = None               # (loop, goal seq) the loop's goal was last set for
@@ -146,7 +146,7 @@ class PlannerNode:
         self.timer = rospy.Timer(rospy.Duration(1.0 / self.rate_hz), self.on_timer)
         goal = self.goals.goal
         goal_text = "none (waiting for one)" if goal is None else f"{goal.xy} (radius {goal.radius_m:g} m)"
-        rospy.loginfo(f"planner: {self.perception} perception, goal {goal_text}, gait {self.gait}, "
+        rospy.loginfo(f"planner: {self.perception} perception, goal {goal_text}, gait {self.gaits.forward}, "
                       f"replan every {self.cfg.replan_period_s:g} s, commands at {self.rate_hz:g} Hz")
 
     def _goal(self):
@@ -319,8 +319,7 @@ class PlannerNode:
         if straight:
             c.gait = "hold"
         else:
-            gait = self.stop_gait if hold else self.reverse_gait if backwards else self.gait
-            c.gait, c.curve, c.kappa = gait, True, float(kappa_per_m)
+            c.gait, c.curve, c.kappa = self.gaits.command(hold, backwards), True, float(kappa_per_m)
         self.pub_cmd.publish(c)
 
     def publish_replan(self, stamp, tick):

@@ -33,6 +33,7 @@ contact episodes by the follower's mode when they began), the loop's refusals an
 import collections
 import copy
 import csv
+import dataclasses
 import json
 import math
 from collections import deque
@@ -50,7 +51,7 @@ from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m, nav_config_path
 from snake_autonomy.planning.rectilinear.follower import MODES
-from snake_autonomy.planning.rectilinear.nav_loop import GOAL_REACHED, NavLoop
+from snake_autonomy.planning.rectilinear.nav_loop import GOAL_REACHED, NavLoop, checked_positive
 from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
 from snake_autonomy.planning.rectilinear.overlay import overlay
 from snake_autonomy.planning.rectilinear.planner import ground_frame
@@ -98,9 +99,7 @@ class NavRunSpec:
     def check(self) -> None:
         """ValueError naming the field and value of anything a run cannot use."""
         for key in ("time_limit_s", "control_period_s", "command_period_s", "camera_rate_hz", "pose_timeout_s"):
-            v = getattr(self, key)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise ValueError(f"{key}: must be a finite number > 0, got {v!r}")
+            checked_positive(key, getattr(self, key))
         for key in ("frame_latency_s", "pose_latency_s", "settle_s"):
             v = getattr(self, key)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
@@ -234,9 +233,8 @@ class NavRun:
         mp = self.cfg.map
         if mp.route:   # the route's grid over the start-goal box is bounded: refused before the plant is built
             grid_shape(spec.world.start[:2], spec.world.goal, mp.cell_m, mp.pad_m, mp.route_max_cells)
-        self.gait_name = spec.gait_name or self.cfg.gaits.forward
-        self.reverse_gait_name = spec.reverse_gait_name or self.cfg.gaits.reverse
-        self.stop_gait_name = self.cfg.gaits.stop
+        self.gaits = dataclasses.replace(self.cfg.gaits, forward=spec.gait_name or self.cfg.gaits.forward,
+                                         reverse=spec.reverse_gait_name or self.cfg.gaits.reverse)
         ry = robot_yaml(spec.robot)
         self.robot = _core.RobotModel.from_yaml(str(ry))
         sim_cfg = SimConfig.from_yaml(spec.sim_config or str(config_path("sim.yaml")))
@@ -330,8 +328,7 @@ class NavRun:
                     replans.append(tick.replan)
                     if spec.keep_frames:
                         frames.append(self._overlay(tick))
-                gait = (self.stop_gait_name if tick.hold else self.reverse_gait_name if tick.backwards
-                        else self.gait_name)
+                gait = self.gaits.command(tick.hold, tick.backwards)
                 kappa = float(tick.kappa_per_m)
                 commands.append((t, gait, kappa, tick.state))
                 if (gait, kappa) != sent:
@@ -371,7 +368,7 @@ class NavRun:
                    "stops_no_free_arc": loop.stops_no_free_arc,
                    "rolled_over": rolled, "robot": self.robot.name, "perception": spec.perception,
                    "seed": spec.seed, "world": world.source or world.name,
-                   "flat_belly_fraction": self.flat_belly_fraction, "gait": self.gait_name,
+                   "flat_belly_fraction": self.flat_belly_fraction, "gait": self.gaits.forward,
                    "pose_source": spec.pose_source, "nav_config": Path(self.nav_config).name,
                    "on_no_free_arc": loop.on_no_free_arc,
                    "closest_to_goal_m": round(self._closest_to_goal(traj), 4),

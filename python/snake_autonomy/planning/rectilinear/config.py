@@ -92,6 +92,10 @@ class NavGaits:
                                              # kappa laid along the head's path (follow_the_leader.py, a
                                              # prototype measured by bench/nav_follow_the_leader only)
 
+    def command(self, hold: bool, backwards: bool) -> str:
+        """The gait of a loop command (NavTick hold / backwards): stop, reverse or forward."""
+        return self.stop if hold else self.reverse if backwards else self.forward
+
     @classmethod
     def from_dict(cls, d, problems: List[str]) -> "NavGaits":
         d = d or {}

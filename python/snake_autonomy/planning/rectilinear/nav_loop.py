@@ -54,7 +54,7 @@ CLOCK_TOLERANCE_S = 1e-6          # a replan due at t is due at a tick stamped a
 FUTURE_TOLERANCE_S = 0.5           # a stamp this far ahead of the loop's clock is a clock error, not latency
 
 
-def _checked_positive(key: str, v) -> float:
+def checked_positive(key: str, v) -> float:
     """v as a float when it is a finite number > 0, else ValueError naming key and v."""
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
         raise ValueError(f"{key}: must be a finite number > 0, got {v!r}")
@@ -100,7 +100,7 @@ class NavLoop:
             raise ValueError(f"on_no_free_arc: expected hold, turn or back_off, got {on_no_free_arc!r}")
         for key, v in (("goal_radius_m", goal_radius_m), ("pose_timeout_s", pose_timeout_s),
                        ("frame_timeout_s", frame_timeout_s)):
-            _checked_positive(key, v)
+            checked_positive(key, v)
         self.goal_xy = None if goal_xy is None else _checked_goal(goal_xy)
         self.goal_radius_m = float(goal_radius_m)
         self.cfg = cfg
@@ -138,7 +138,7 @@ class NavLoop:
     def set_goal(self, goal_xy: Tuple[float, float], goal_radius_m: float) -> None:
         """A new goal (world frame), checked as the constructor's (ValueError naming the value; nothing
         changes then). Ends GOAL_REACHED and NO_GOAL: the loop moves again, replanning at the next tick."""
-        xy, radius = _checked_goal(goal_xy), _checked_positive("goal_radius_m", goal_radius_m)
+        xy, radius = _checked_goal(goal_xy), checked_positive("goal_radius_m", goal_radius_m)
         self.goal_xy, self.goal_radius_m = xy, radius
         self.state = WAITING
         self._next_replan = None
