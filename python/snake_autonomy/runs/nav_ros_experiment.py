@@ -30,7 +30,6 @@ import time
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
-from snake_autonomy.planning.rectilinear.config import NavConfig, nav_config_path
 from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
 from snake_autonomy.runs.results import write_json_atomic
 from snake_autonomy.sim.world_file import World
@@ -258,9 +257,9 @@ def run_batch(world: World, seed: int, time_limit_s: float, run_dir: Path, robot
     (as the ROS run counts time), also run_dir/batch.json; its files (commands, replans, contacts,
     trajectory, top view) in run_dir/batch/."""
     t0 = time.monotonic()
-    result = NavRun(NavRunSpec(world, robot=robot, perception=perception, seed=seed, time_limit_s=time_limit_s,
-                               classifier=classifier, nav_config=nav_config, keep_frames=False)).run()
-    stop = NavConfig.from_yaml(nav_config or nav_config_path(robot)).gaits.stop
+    run = NavRun(NavRunSpec(world, robot=robot, perception=perception, seed=seed, time_limit_s=time_limit_s,
+                            classifier=classifier, nav_config=nav_config, keep_frames=False))
+    result, stop = run.run(), run.gaits.stop
     reached_t = next((c[0] for c in result.commands if c[3] == "goal_reached"), None)
     end_t = result.commands[-1][0] if result.commands else 0.0
     metrics = {**result.metrics, "time_from_move_s": moving_time_s(result.commands, reached_t, end_t, ("hold", stop)),
