@@ -74,20 +74,19 @@ def test_cobra_goes_round_two_cylinders_to_the_goal_without_touching_them():
 
 
 def test_how_a_run_ended_is_classified():
-    """NavRun._outcome on hand-made ends: COBRA's tightest circle (gait map) is 0.82 m."""
+    """nav_metrics.nav_outcome on hand-made ends: COBRA's tightest circle (gait map) is 0.82 m."""
     import types
     from snake_autonomy.planning.rectilinear.follower import FollowerParams
-    from snake_autonomy.runs.nav_batch import NavRun
     from snake_autonomy.runs.nav_experiment import random_corridor
+    from snake_autonomy.runs.nav_metrics import nav_outcome
     fp = FollowerParams(speed_m_s=0.00635, omega_per_kappa=0.0077, kappa_max_per_m=1.0)
     assert fp.min_radius_m == pytest.approx(0.825, abs=0.001)
 
     def outcome(reached=False, rolled=False, contacts=0, stops=(), pose=(0.0, 0.0, 0.0), loop_reached=False):
-        run = types.SimpleNamespace(collisions=types.SimpleNamespace(collisions=contacts),
-                                    spec=types.SimpleNamespace(world=random_corridor(0)),   # goal (1.4, 0)
-                                    cfg=types.SimpleNamespace(follower=fp))
         replans = [types.SimpleNamespace(path_world=None if s else 1) for s in stops]
-        return NavRun._outcome(run, reached, loop_reached or reached, rolled, replans, pose)
+        world = random_corridor(0)   # goal (1.4, 0)
+        return nav_outcome(world, reached, loop_reached or reached, rolled, contacts, replans,
+                           pose, fp.min_radius_m)
 
     assert outcome(reached=True) == "success"
     assert outcome(reached=True, contacts=3) == "reached_with_contact"

@@ -27,10 +27,10 @@ returns to the driver as driver_node would get it.
 
 metrics.json: goal_reached (by that rule), loop_reached (the loop said so), final_distance_m
 (base_link to the goal's centre at the end), closest_to_goal_m (how near base_link came to the
-goal's disc), outcome (NavRun._outcome), contacts_follow / _turn_in_place / _back_off / _idle (the
-contact episodes by the follower's mode when they began), the loop's refusals and errors.
+goal's disc), outcome (nav_metrics.nav_outcome), contacts_follow / _turn_in_place / _back_off /
+_idle (the contact episodes by the follower's mode when they began), the loop's refusals and errors:
+runs/nav_metrics.py, the contract shared with a run recorded through ROS.
 """
-import collections
 import copy
 import csv
 import dataclasses
@@ -50,13 +50,13 @@ from snake_autonomy.perception.depth_traversability import DepthTraversability
 from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m, nav_config_path
-from snake_autonomy.planning.rectilinear.follower import MODES
 from snake_autonomy.planning.rectilinear.nav_loop import GOAL_REACHED, NavLoop, checked_positive
 from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
 from snake_autonomy.planning.rectilinear.overlay import overlay
 from snake_autonomy.planning.rectilinear.planner import ground_frame
 from snake_autonomy.planning.rectilinear.route import grid_shape
 from snake_autonomy.runs.gait_driver import PlantGaitDriver
+from snake_autonomy.runs.nav_metrics import NavFacts, nav_metrics
 from snake_autonomy.runs.results import PathLength
 from snake_autonomy.sim.camera import HeadCamera
 from snake_autonomy.sim.collisions import CollisionMonitor
@@ -351,32 +351,19 @@ class NavRun:
 
     def _result(self, t, traj, replans, frames, commands, path, rolled, loop_reached_t) -> NavResult:
         spec, world, loop = self.spec, self.spec.world, self.loop
-        x, y, _ = ground_frame(self.plant.frame_transform("base_link"))
-        final_m = math.hypot(x - world.goal[0], y - world.goal[1])
-        reached = loop_reached_t is not None and final_m <= world.goal_radius_m
-        clearance = self.collisions.min_clearance_m
-        by_mode = collections.Counter(self._contact_modes)
+        final = ground_frame(self.plant.frame_transform("base_link"))
         traj = np.array(traj)
-        metrics = {"goal_reached": bool(reached), "loop_reached": loop_reached_t is not None,
-                   "time_s": round(float(t if loop_reached_t is None else loop_reached_t), 3),
-                   "final_distance_m": round(final_m, 4),
-                   "stop_shift_m": (round(math.hypot(x - self._stop_xy[0], y - self._stop_xy[1]), 4)
-                                    if loop_reached_t is not None else None),
-                   "collisions": int(self.collisions.collisions),
-                   "min_clearance_m": float(clearance) if math.isfinite(clearance) else None,
-                   "path_length_m": round(path.length_m, 4), "replans": len(replans),
-                   "stops_no_free_arc": loop.stops_no_free_arc,
-                   "rolled_over": rolled, "robot": self.robot.name, "perception": spec.perception,
-                   "seed": spec.seed, "world": world.source or world.name,
-                   "flat_belly_fraction": self.flat_belly_fraction, "gait": self.gaits.forward,
-                   "pose_source": spec.pose_source, "nav_config": Path(self.nav_config).name,
-                   "on_no_free_arc": loop.on_no_free_arc,
-                   "closest_to_goal_m": round(self._closest_to_goal(traj), 4),
-                   "outcome": self._outcome(reached, loop_reached_t is not None, rolled, replans,
-                                            ground_frame(self.plant.frame_transform("base_link"))),
-                   "loop_refused": dict(loop.refused), "loop_errors": loop.errors,
-                   "loop_last_error": loop.last_error,
-                   **{f"contacts_{m}": by_mode.get(m, 0) for m in MODES}}
+        metrics = nav_metrics(NavFacts(
+            world=world, trajectory=traj, t_end_s=t, final_pose=tuple(final), loop_reached_t_s=loop_reached_t,
+            stop_xy=self._stop_xy if loop_reached_t is not None else None,
+            collisions=self.collisions.collisions, min_clearance_m=self.collisions.min_clearance_m,
+            path_length_m=path.length_m, replans=replans, stops_no_free_arc=loop.stops_no_free_arc,
+            rolled_over=rolled, contact_modes=self._contact_modes, min_radius_m=self.cfg.follower.min_radius_m,
+            identity={"robot": self.robot.name, "perception": spec.perception, "seed": spec.seed,
+                      "world": world.source or world.name, "flat_belly_fraction": self.flat_belly_fraction,
+                      "gait": self.gaits.forward, "pose_source": spec.pose_source,
+                      "nav_config": Path(self.nav_config).name, "on_no_free_arc": loop.on_no_free_arc},
+            loop_refused=loop.refused, loop_errors=loop.errors, loop_last_error=loop.last_error))
         contacts = [(e, m) for e, m in zip(self.collisions.episodes, self._contact_modes)]
         omap = loop.planner.obstacle_map
         return NavResult(metrics, traj, replans, frames, world, contacts,
@@ -387,34 +374,3 @@ class NavRun:
         TURN_IN_PLACE, BACK_OFF, IDLE)."""
         new = self.collisions.update(self.plant.data, clearance=clearance)
         self._contact_modes += [self.loop.planner.follower.mode] * new
-
-    def _closest_to_goal(self, traj: np.ndarray) -> float:
-        """How near base_link came to the goal's disc (0: reached), over the 10 Hz samples (t, x, y)."""
-        w = self.spec.world
-        if not len(traj):
-            return math.nan
-        xy = traj[:, 1:3]
-        d = np.hypot(xy[:, 0] - w.goal[0], xy[:, 1] - w.goal[1]).min() - w.goal_radius_m
-        return float(max(0.0, d))
-
-    def _outcome(self, reached: bool, loop_reached: bool, rolled: bool, replans, pose) -> str:
-        """success | reached_with_contact | rolled_over | left_goal (the loop said reached, its hold
-        left base_link outside the disc) | circling_goal (at the time limit the goal lies inside the
-        tightest circle the follower drives, within its radius: the arcs circle it) | stopped (3 of
-        the last 5 replans found no free arc) | time_limit."""
-        if reached:
-            return "success" if self.collisions.collisions == 0 else "reached_with_contact"
-        if rolled:
-            return "rolled_over"
-        if loop_reached:
-            return "left_goal"
-        goal = self.spec.world.goal
-        r = self.cfg.follower.min_radius_m
-        x, y, th = pose
-        dx, dy = goal[0] - x, goal[1] - y
-        gx, gy = math.cos(th) * dx + math.sin(th) * dy, -math.sin(th) * dx + math.cos(th) * dy
-        if math.hypot(gx, gy) < r and gx * gx + (abs(gy) - r) ** 2 < r * r:
-            return "circling_goal"
-        if sum(1 for rp in replans[-5:] if rp.path_world is None) >= 3:
-            return "stopped"
-        return "time_limit"
