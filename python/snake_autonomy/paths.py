@@ -98,3 +98,12 @@ def resolve_world_path(path) -> Path:
                             f"directory {Path.cwd()}; a node roslaunch starts runs in ROS_HOME, not in your shell's "
                             f"directory: give an absolute path, $(find snake_autonomy)/config/worlds/NAME.yaml, or "
                             f"launch through sim.launch, which makes world:= absolute)")
+
+
+def default_results_dir() -> str:
+    """Where runs record when no results_dir is given: the clone's results/ (scripts/with-env sets
+    SNAKE_AUTONOMY_ROOT), else $ROS_HOME/snake_autonomy_results (ROS_HOME defaults to ~/.ros)."""
+    root = os.environ.get("SNAKE_AUTONOMY_ROOT")
+    if root:
+        return os.path.join(root, "results")
+    return os.path.join(os.environ.get("ROS_HOME", os.path.expanduser("~/.ros")), "snake_autonomy_results")

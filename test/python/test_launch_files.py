@@ -51,3 +51,34 @@ def test_driver_launch_mock_port_follows_the_clone_and_hardware_port_stays(root)
     assert _dump(env, "driver.launch", "mock:=true")["/driver/port"] == str(root / ".ws" / "snake_bus")
     assert _dump(env, "driver.launch")["/driver/port"] == "/dev/ttyUSB0"
     assert _dump(env, "mission.launch", "results_dir:=/data/runs")["/mission/results_dir"] == "/data/runs"
+
+
+def test_sim_launch_lists_no_required_arg(root):
+    """`roslaunch --ros-args`: every arg a user may leave out has a default (roslaunch calls an arg with
+    an empty default "Required")."""
+    r = subprocess.run(["roslaunch", "--ros-args", "snake_autonomy", "sim.launch"], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "Required" not in r.stdout, r.stdout
+    for arg in ("world", "classifier", "results_dir", "robot", "record"):
+        assert f"\n  {arg} (default " in r.stdout, arg
+
+
+def test_sim_launch_robot_reaches_every_node_and_a_world_is_recorded(root):
+    env = dict(os.environ, SNAKE_AUTONOMY_ROOT=str(root))
+    params = _dump(env, "sim.launch", "robot:=chang_rectilinear", "world:=config/worlds/one_obstacle.yaml")
+    robot_yaml = str(root / "config" / "robots" / "chang_rectilinear.yaml")
+    assert params["/sim/robot_config"].endswith("/config/robots/chang_rectilinear.yaml")
+    assert params["/planner/robot_config"] == params["/sim/robot_config"]
+    assert os.path.samefile(params["/sim/robot_config"], robot_yaml)
+    assert params["/driver/robot"] == "chang_rectilinear"
+    assert '<robot name="chang_rectilinear">' in params["/robot_description"]
+    assert params["/planner/nav_config"].endswith("/config/nav_chang_rectilinear.yaml")
+    assert params["/nav_record/robot"] == "chang_rectilinear"
+    assert params["/nav_record/results_dir"] == str(root / "results")
+    assert params["/nav_record/world"] == params["/planner/world"] == str(root / "config/worlds/one_obstacle.yaml")
+    assert "/mission/mission" not in params
+    # without a world: the mission, no planner and no nav recorder; the default robot is COBRA
+    params = _dump(env, "sim.launch")
+    assert "/nav_record/robot" not in params and "/planner/world" not in params and "/sim/world" not in params
+    assert params["/mission/robot"] == "cobra" and params["/driver/robot"] == "cobra"

@@ -100,13 +100,15 @@ def test_shutdown_leaves_no_process_of_the_launch_not_even_in_a_session_of_its_o
 
 def test_only_the_simulated_robot_is_accepted():
     check_robot("cobra")
-    with pytest.raises(ValueError, match="simulates cobra only"):
+    check_robot("chang_rectilinear")
+    with pytest.raises(ValueError, match="simulates cobra, chang_rectilinear only"):
         check_robot("unified_snake")
 
 
 @pytest.mark.parametrize("extra, message", [
     (["--world-files", "{tmp}/none-*.yaml"], "no file matches"),
-    (["--world-files", "{root}/test/ros/worlds/sim_nav.yaml", "--robot", "unified_snake"], "simulates cobra only"),
+    (["--world-files", "{root}/test/ros/worlds/sim_nav.yaml", "--robot", "unified_snake"],
+     "simulates cobra, chang_rectilinear only"),
     (["--family", "barn", "--world-files", "{root}/test/ros/worlds/sim_nav.yaml"], "one or the other"),
     (["--world-files", "{root}/test/ros/worlds/sim_nav.yaml", "--time-limit", "-5"], "--time-limit"),
     (["--world-files", "{root}/test/ros/worlds/sim_nav.yaml", "--seeds", "x"], "--seeds"),

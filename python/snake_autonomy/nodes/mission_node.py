@@ -61,6 +61,7 @@ from snake_autonomy.msg import (BoundState, GaitCommand, RunMissionAction, RunMi
                                 TrackingStatus, WaypointResult)
 from snake_autonomy.nodes.mission_action import DecisionSeries, fill_feedback, fill_result, mission_from_goal
 from snake_autonomy.nodes.scout_trajectory import TopicTrajectoryExecutor
+from snake_autonomy.paths import default_results_dir
 from snake_autonomy.runs.recorded_topics import STATIC_TF_TOPIC, StaticTransforms, standard_topic_types
 from snake_autonomy.runs.run_log import RunLog
 from snake_autonomy.sim.config import servo_torque_limit_nm
@@ -90,13 +91,6 @@ def _optional_types():
         pass
     out["bound_state"] = BoundState
     return out
-
-
-def default_results_dir() -> str:
-    root = os.environ.get("SNAKE_AUTONOMY_ROOT")
-    if root:
-        return os.path.join(root, "results")
-    return os.path.join(os.environ.get("ROS_HOME", os.path.expanduser("~/.ros")), "snake_autonomy_results")
 
 
 class MissionNode:

@@ -8,6 +8,7 @@ builders: no node, no master (planner_node and sim_node publish them).
 - world_markers(): a world file's obstacles and goal disc (sim/world_file.py World) ->
   visualization_msgs/MarkerArray (sim/world_markers: the simulation's ground truth, not what the
   planner knows).
+- contact_marker(): one contact episode of the simulated robot (sim/contacts).
 """
 import math
 from typing import Optional, Tuple
@@ -21,6 +22,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from snake_autonomy.nodes.image_msgs import to_image
 from snake_autonomy.nodes.viz_markers import _marker
+from snake_autonomy.runs.recorded_topics import CONTACT_TEXT
 
 OCCUPIED, FREE = 100, 0
 MAX_CELLS_PER_SIDE = 1000      # nav/map: at most 1000 x 1000 cells (40 m x 40 m at 4 cm; 1 MB a message)
@@ -125,3 +127,19 @@ def world_markers(world, stamp, frame_id: str) -> MarkerArray:
     out.markers.append(g)
     return out
 
+
+
+CONTACT_COLOUR = ColorRGBA(0.9, 0.1, 0.9, 0.9)
+CONTACT_SIZE_M = 0.04
+
+
+def contact_marker(episode, index: int, stamp, frame_id: str) -> Marker:
+    """One contact episode of the simulated robot with an obstacle (sim/collisions.ContactEpisode): a
+    sphere at the touching link's centre, its text "LINK touched OBSTACLE" (runs/nav_record.py reads
+    it back from a run's bag)."""
+    m = _marker(frame_id, stamp, "contacts", index, Marker.SPHERE)
+    m.pose.position.x, m.pose.position.y, m.pose.position.z = episode.x_m, episode.y_m, CONTACT_SIZE_M / 2
+    m.scale.x = m.scale.y = m.scale.z = CONTACT_SIZE_M
+    m.color = CONTACT_COLOUR
+    m.text = f"{episode.link}{CONTACT_TEXT}{episode.obstacle}"
+    return m

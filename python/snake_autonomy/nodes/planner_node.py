@@ -19,7 +19,7 @@ Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with cur
             255 ground, 0 not), nav/map (nav_msgs/OccupancyGrid, latched, after each replan when map.source
             is not none: the obstacle map on map.cell_m cells; planner_display.occupancy),
             /diagnostics ("planner: navigation": WARN with no free arc, OK otherwise; replans, stops,
-            distance to the goal, the goal and its source, goals refused),
+            distance to the goal, the follower's mode, the goal and its source, goals refused),
             nav/goal (visualization_msgs/Marker, latched: the goal's disc; planner_goals.py).
 Goals       optional at start: ~world (a world file: its goal and goal radius) or ~goal ("x,y", the world
             frame) + ~goal_radius_m; without either the robot holds (state no_goal) until a goal comes:
@@ -401,6 +401,7 @@ class PlannerNode:
         stat.add("replans", str(loop.replans))
         stat.add("stops_no_free_arc", str(loop.stops_no_free_arc))
         stat.add("kappa_per_m", f"{t.kappa_per_m:.3f}")
+        stat.add("follower_mode", loop.planner.follower.mode)   # a recorded run's contacts are tagged with it
         stat.add("distance_to_goal_m", "unknown" if d is None else f"{d:.3f}")
         return stat
 

@@ -38,7 +38,9 @@ pair took 0.07-0.17 s, median 0.15 s, here: about 7 % of a core) and published a
             planner knows: that is nav/map; planner_display.world_markers).
 Contacts between the robot and the obstacles are counted per episode as the batch nav run counts
 them (sim/collisions.py): "obstacle_contacts" and "min_clearance_m" (sampled at 5 Hz) in the
-"sim: simulated robot" diagnostics, and a ROS_WARN at each new episode.
+"sim: simulated robot" diagnostics, a ROS_WARN and a marker on sim/contacts (visualization_msgs/Marker,
+a sphere where the link touched, text "LINK touched OBSTACLE"; planner_display.contact_marker) at
+each new episode.
 """
 import math
 import threading
@@ -51,11 +53,11 @@ from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, WrenchStam
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image
-from visualization_msgs.msg import MarkerArray
+from visualization_msgs.msg import Marker, MarkerArray
 
 from snake_autonomy.msg import GaitCommand, TrackingStatus, TrajectoryStatus
 from snake_autonomy.nodes.image_msgs import to_camera_info, to_image
-from snake_autonomy.nodes.planner_display import world_markers
+from snake_autonomy.nodes.planner_display import contact_marker, world_markers
 from snake_autonomy.paths import config_path, resolve_world_path
 from snake_autonomy.planning.rectilinear.config import NavConfig
 from snake_autonomy.sim.camera_process import CameraProcess
@@ -119,6 +121,7 @@ class SimNode:
         self.pub_gt_cam = rospy.Publisher("ground_truth/camera_pose", PoseStamped, queue_size=20)
         self.pub_gt_com = rospy.Publisher("ground_truth/com_pose", PoseStamped, queue_size=10)
         if self.world is not None:   # latched: rviz started later still gets them
+            self.pub_contact = rospy.Publisher("sim/contacts", Marker, queue_size=10)
             self.pub_world = rospy.Publisher("sim/world_markers", MarkerArray, queue_size=1, latch=True)
             self.pub_world.publish(world_markers(self.world, rospy.Time.now(), self.world_frame))
         self.last_status = None
@@ -255,9 +258,10 @@ class SimNode:
         with self.sim.world.lock:
             new = self.contacts.update(self.sim.plant.data, clearance=k % 40 == 0)
         if new:
-            for e in self.contacts.episodes[-new:]:
+            for i, e in enumerate(self.contacts.episodes[-new:], len(self.contacts.episodes) - new):
                 rospy.logwarn(f"sim: {e.link} touched {e.obstacle} at ({e.x_m:.2f}, {e.y_m:.2f}) m "
                               f"({self.contacts.collisions} contact episode(s) so far)")
+                self.pub_contact.publish(contact_marker(e, i, rospy.Time.now(), self.world_frame))
 
     def stamp(self, t_s):
         if not self.use_sim_time:

@@ -11,7 +11,7 @@ import shutil
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Dict
+from typing import Any, Dict, Optional
 
 import numpy as np
 
@@ -63,6 +63,16 @@ def open_bag(path):
             yield bag, True
         finally:
             bag.close()
+
+
+def start_event(path) -> Optional[Dict[str, Any]]:
+    """The run's start event (a mission's, or a navigation run's with "kind"), None when the bag has none."""
+    with open_bag(path) as (bag, _):
+        for _, msg, _ in bag.read_messages(topics=[RUN_TOPIC]):
+            event = json.loads(msg.data)
+            if event.get("event") == "start":
+                return event
+    return None
 
 
 def _yaw(q) -> float:

@@ -38,7 +38,7 @@ SETTLE_S = 10.0         # goal_reached this long before the end (nav_batch.NavRu
 STARTUP_S = 300.0       # launch to the first command that moves (MuJoCo builds its model, the camera starts)
 SHUTDOWN_S = 30.0       # SIGINT to SIGKILL
 MARGIN_S = 120.0        # beyond startup + limit + settle: the watcher is hung, stop it
-SUPPORTED_ROBOTS = ("cobra",)   # sim.launch simulates COBRA (config/robots/cobra.yaml) only
+SUPPORTED_ROBOTS = ("cobra", "chang_rectilinear")   # the robots sim.launch robot:= simulates with a nav config
 
 
 def free_port() -> int:
@@ -108,9 +108,11 @@ def comparison_table(rows: List[Dict]) -> str:
 
 # -- one ROS run -------------------------------------------------------------------------------------
 def launch_command(world_file: str, seed: int, port: int, bus: str, perception: str = "depth",
-                   classifier: Optional[str] = None, nav_config: Optional[str] = None) -> List[str]:
+                   classifier: Optional[str] = None, nav_config: Optional[str] = None,
+                   robot: str = "cobra") -> List[str]:
+    """The run's sim.launch; record:=false: the watcher and the batch run write this run's files."""
     cmd = ["roslaunch", "-p", str(port), "snake_autonomy", "sim.launch", f"world:={world_file}", f"seed:={seed}",
-           "rviz:=false", f"port:={bus}", f"perception:={perception}"]
+           "rviz:=false", f"port:={bus}", f"perception:={perception}", f"robot:={robot}", "record:=false"]
     if classifier:
         cmd.append(f"classifier:={Path(classifier).resolve()}")
     if nav_config:
@@ -210,8 +212,8 @@ def run_ros(world: World, world_file: str, seed: int, time_limit_s: float, run_d
     watch_json.unlink(missing_ok=True)
     t0 = time.monotonic()
     with open(log, "w") as log_file:
-        launch = subprocess.Popen(launch_command(world_file, seed, port, bus, perception, classifier, nav_config),
-                                  env=env, stdout=log_file, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+        command = launch_command(world_file, seed, port, bus, perception, classifier, nav_config, robot)
+        launch = subprocess.Popen(command, env=env, stdout=log_file, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                   start_new_session=True)
     watcher, launch_ended = None, None
     try:

@@ -57,3 +57,8 @@ class StaticTransforms:
             return False
         log.write(STATIC_TF_TOPIC, msg, t_s)
         return True
+
+
+#: sim/contacts (visualization_msgs/Marker, one per contact episode of the simulated robot): its text is
+#: "LINK touched OBSTACLE" (nodes/planner_display.contact_marker writes it, runs/nav_record.py reads it)
+CONTACT_TEXT = " touched "

@@ -1,4 +1,5 @@
-"""The log of one run: a rosbag of the topics that matter plus a metrics file kept up to date.
+"""The log of one run: a rosbag of the topics that matter (RunBag) plus a metrics file kept up to date (RunLog,
+a mission run; a navigation run: runs/nav_record.py).
 
 ROS-free apart from rosbag (no master needed), so the killed-run behaviour is testable in a plain
 process. Crash safety:
@@ -30,35 +31,23 @@ def _to_time(t_s: float):
     return genpy.Time.from_sec(t_s)
 
 
-class RunLog:
-    def __init__(self, run_dir, mission_name: str, waypoints: Sequence[Sequence[float]], t_start_s: float,
-                 mission_yaml: str = "", tracker: Optional[Dict[str, Any]] = None,
-                 extra: Optional[Dict[str, Any]] = None):
+class RunBag:
+    """A run's bag: the run's events (JSON on RUN_TOPIC) and recorded messages, thread-safe, flushed on
+    request; close_bag() writes the end event and the index. The mission's RunLog and the navigation
+    recorder (runs/nav_record.py) each add their metrics on top."""
+
+    def __init__(self, run_dir, t_start_s: float):
         import rosbag  # lazy: ROS only on this path; the module is imported without ROS too
         from std_msgs.msg import String
         self._String = String
         self.run_dir = Path(run_dir)
         self.run_dir.mkdir(parents=True, exist_ok=True)
         self.bag_path = self.run_dir / BAG_NAME
-        self.metrics_path = self.run_dir / "metrics.json"
-        self.waypoints = [tuple(float(v) for v in w) for w in waypoints]
         self.t_start_s = float(t_start_s)
-        self.tracker = dict(tracker or {})
         self._lock = threading.Lock()
         self._bag = rosbag.Bag(str(self.bag_path), "w")
-        self._decisions: Dict[str, List[Any]] = {k: [] for k in (
-            "t", "waypoint_index", "target_index", "reached", "distance", "yaw_error_abs", "yaw_error_rel",
-            "yaw_error", "pose_stale")}
-        self._path = PathLength()
         self._last_t = self.t_start_s
         self.closed = False
-        self.meta = {"mission": mission_name, "t_start": self.t_start_s, "waypoints": self.waypoints,
-                     "tracker": self.tracker, "mission_yaml": mission_yaml,
-                     "wall_time_start": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
-        self.meta.update(extra or {})
-        self._event({"event": "start", **self.meta}, self.t_start_s)
-        (self.run_dir / "mission.yaml").write_text(mission_yaml or "")
-        self._write_metrics("running")
 
     def _event(self, event: Dict[str, Any], t_s: float) -> None:
         with self._lock:
@@ -76,6 +65,42 @@ class RunLog:
                 return
             self._bag.write(topic, msg, _to_time(t_s))
             self._last_t = max(self._last_t, t_s)
+
+    def flush(self) -> None:
+        with self._lock:
+            if self._bag is not None:
+                self._bag.flush()
+                self._bag._file.flush()   # rosbag keeps a buffered file object: push it to the OS
+
+    def close_bag(self, outcome: str, t_s: Optional[float] = None) -> float:
+        """Writes the end event and the bag's index; the end time. The caller sets self.closed first."""
+        t_end = t_s if t_s is not None else self._last_t
+        self._event({"event": "end", "outcome": outcome, "t": t_end}, max(t_end, self._last_t))
+        with self._lock:
+            bag, self._bag = self._bag, None
+            bag.close()
+        return t_end
+
+
+class RunLog(RunBag):
+    def __init__(self, run_dir, mission_name: str, waypoints: Sequence[Sequence[float]], t_start_s: float,
+                 mission_yaml: str = "", tracker: Optional[Dict[str, Any]] = None,
+                 extra: Optional[Dict[str, Any]] = None):
+        super().__init__(run_dir, t_start_s)
+        self.metrics_path = self.run_dir / "metrics.json"
+        self.waypoints = [tuple(float(v) for v in w) for w in waypoints]
+        self.tracker = dict(tracker or {})
+        self._decisions: Dict[str, List[Any]] = {k: [] for k in (
+            "t", "waypoint_index", "target_index", "reached", "distance", "yaw_error_abs", "yaw_error_rel",
+            "yaw_error", "pose_stale")}
+        self._path = PathLength()
+        self.meta = {"mission": mission_name, "t_start": self.t_start_s, "waypoints": self.waypoints,
+                     "tracker": self.tracker, "mission_yaml": mission_yaml,
+                     "wall_time_start": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+        self.meta.update(extra or {})
+        self._event({"event": "start", **self.meta}, self.t_start_s)
+        (self.run_dir / "mission.yaml").write_text(mission_yaml or "")
+        self._write_metrics("running")
 
     def add_pose(self, t_s: float, x: float, y: float) -> None:
         """The centre of mass, for the running path length of the metrics (results.PathLength)."""
@@ -101,12 +126,6 @@ class RunLog:
         self.flush()
         self._write_metrics("running")
 
-    def flush(self) -> None:
-        with self._lock:
-            if self._bag is not None:
-                self._bag.flush()
-                self._bag._file.flush()   # rosbag keeps a buffered file object: push it to the OS
-
     def metrics(self, outcome: str) -> Dict[str, Any]:
         return compute_metrics(self.waypoints, self._decisions, None, outcome, self.t_start_s,
                                extra={"path_length_m": self._path.length_m, "duration_s": self._last_t - self.t_start_s,
@@ -125,10 +144,6 @@ class RunLog:
         if self.closed:
             return {}
         self.closed = True
-        t_end = t_s if t_s is not None else self._last_t
-        self._event({"event": "end", "outcome": outcome, "t": t_end}, max(t_end, self._last_t))
-        with self._lock:
-            bag, self._bag = self._bag, None
-            bag.close()
+        self.close_bag(outcome, t_s)
         self._write_metrics(outcome)          # never lost, whatever happens below
         return report_from_bag(self.bag_path, self.run_dir, plots=plots)
