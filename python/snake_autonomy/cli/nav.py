@@ -8,12 +8,14 @@
                                                     precision/recall and ms per frame of the depth
                                                     method (and the classifier) on held-out scenes
     snake_autonomy nav run --world FILE [--robot R] [--perception depth|mono|truth] [--seed N]
+                           [--pose-source mocap|vio|truth] [--depth-model noisy|perfect]
                            [--time-limit S] [--classifier FILE] --out DIR
                                                     the closed loop in batch (runs/nav_batch.py):
                                                     DIR/metrics.json, topview.png, frames/
     snake_autonomy nav experiment --worlds N --seeds 0-4 [--perception depth|mono|both|truth]
                            [--family corridors|barn | --world-files GLOB] [--first-world K]
                            [--robot R] [--time-limit S|auto] [--time-factor F]
+                           [--pose-source mocap|vio|truth] [--depth-model noisy|perfect]
                            [--engine dask|threads|serial] [--scheduler ADDR] --out DIR
                                                     generated worlds K..K+N-1 of a family
                                                     (sim/nav_worlds.py), or the user's own world
@@ -40,7 +42,7 @@ from snake_autonomy.perception.block_classifier import BlockClassifier
 from snake_autonomy.perception.depth_traversability import DepthTraversability
 from snake_autonomy.perception.ground_region import precision_recall, traversable
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m, nav_config_path
-from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+from snake_autonomy.runs.nav_batch import DEPTH_MODELS, POSE_SOURCES, NavRun, NavRunSpec
 from snake_autonomy.runs.nav_experiment import (TIME_FACTOR, experiment_tasks, markdown_table, outcome_table,
                                                 random_corridor, run_nav_task, summarise, time_limit_s)
 from snake_autonomy.runs.nav_ros_experiment import check_robot, comparison_table, run_experiment
@@ -74,11 +76,16 @@ def add_arguments(parser):
     run.add_argument("--out", required=True, metavar="DIR")
     run.add_argument("--flat-belly", type=float, default=None, metavar="F",
                      help="plant option: flat belly F x the link diameter wide (default nav.yaml plant:)")
-    run.add_argument("--pose-source", choices=("mocap", "truth"), default="mocap",
-                     help="the planner's base pose: mocap (motion capture with its noise, as sim.launch; "
-                          "default) or truth (the plant's, a diagnostic)")
     ex = sub.add_parser("experiment", help="generated (or your own) worlds x seeds: success rate, collisions, time",
                         description=WORLDS_CONVENTION)
+    for p in (run, ex):
+        p.add_argument("--pose-source", choices=POSE_SOURCES, default="mocap",
+                       help="the planner's base pose: mocap (motion capture with its noise, as sim.launch; "
+                            "default), vio (the simulated RTAB-Map through the tracking gate and pose "
+                            "remapper: drift, tracking losses) or truth (the plant's, a diagnostic)")
+        p.add_argument("--depth-model", choices=DEPTH_MODELS, default=None,
+                       help="the head camera's depth: noisy (D435i-like, config/sim.yaml depth_noise:) or "
+                            "perfect (a diagnostic); default: depth_noise.enabled")
     ex.add_argument("--worlds", type=int, default=20,
                     help="generated worlds K..K+N-1 of the family (sim/nav_worlds.py; not with --world-files)")
     ex.add_argument("--first-world", type=int, default=0, metavar="K",
@@ -223,7 +230,7 @@ def main(args) -> int:
             run = NavRun(NavRunSpec(world, robot=args.robot, perception=args.perception, seed=args.seed,
                                     time_limit_s=args.time_limit, classifier=args.classifier,
                                     nav_config=args.config, flat_belly_fraction=args.flat_belly,
-                                    pose_source=args.pose_source))
+                                    pose_source=args.pose_source, depth_model=args.depth_model))
         except (ValueError, OSError) as e:      # a nav config, robot or classifier that cannot be used
             print(f"nav run: {e}", file=sys.stderr)
             return 1
@@ -292,6 +299,7 @@ def _experiment(args) -> int:
         return 1
     tasks = experiment_tasks(worlds, seeds, perceptions, robot=args.robot, time_limits_s=limits,
                              classifier=args.classifier, nav_config=args.config,
+                             pose_source=args.pose_source, depth_model=args.depth_model,
                              out_dir=str(out / "runs") if args.keep_runs else None)
     t0 = time.perf_counter()
     with open_executor(args.engine, args.scheduler, args.workers) as ex:
@@ -303,7 +311,8 @@ def _experiment(args) -> int:
     (out / "summary.json").write_text(json.dumps(
         {"robot": args.robot, "family": None if args.world_files else (args.family or "corridors"),
          "world_files": args.world_files, "worlds": [w.to_dict() for w in worlds], "seeds": seeds,
-         "perceptions": list(perceptions), "time_limit": args.time_limit,
+         "perceptions": list(perceptions), "pose_source": args.pose_source, "depth_model": args.depth_model,
+         "time_limit": args.time_limit,
          "time_factor": factor,
          "time_limits_s": {w.name: limit for w, limit in zip(worlds, limits)}, "engine": args.engine,
          "wall_s": round(time.perf_counter() - t0, 1), "summary": summary}, indent=2) + "\n")

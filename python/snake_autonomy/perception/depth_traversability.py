@@ -13,13 +13,23 @@
    hide the floor out to 1.8 D from a camera 4.6 cm up; a 5 % depth tolerance bounds that error to
    5 % of the distance (heights under 5 % of the camera's). The traversable region is grown from the
    bottom of the image (perception/ground_region.py).
+3. Pixels without depth (0: a real sensor's invalid pixels, below its minimum range, at edges,
+   beyond its range) are unknown, neither ground nor obstacle: a cell is judged on the pixels that
+   have depth (ground when min_fraction of them are), and a cell with fewer than
+   min_measured_fraction of its pixels measured is unknown. Growing from the bottom, a run of
+   unknown cells joins the region when the first measured cell above it is ground (the floor nearer
+   than the sensor's minimum range at the image's bottom, a hole in the floor) and ends it
+   otherwise (under an obstacle, or with nothing measured above).
 """
 from dataclasses import dataclass
 from typing import List, Optional, Tuple
 
 import numpy as np
 
-from .ground_region import traversable
+from .ground_region import cell_counts, expand_cells, grow_from_bottom
+
+
+MIN_LOWER_POINTS = 200    # fewer measured points in the image's lower two thirds: the fit takes the whole image's
 
 
 @dataclass
@@ -37,13 +47,15 @@ class DepthTraversabilityParams:
                                        # a band of 3 robust sigmas of its residuals (at least refine_floor_m,
                                        # at most inlier_m); 0: one least-squares fit to RANSAC's inliers
     refine_floor_m: float = 0.0005     # the narrowest band (below it: the sensor's noise, not the plane)
+    min_measured_fraction: float = 0.25  # a cell with fewer of its pixels having depth is unknown
 
     def validate(self) -> List[str]:
         p = [f"{key}: must be > 0, got {getattr(self, key)}"
              for key in ("depth_tolerance", "max_range_m", "inlier_m", "min_fraction", "max_plane_tilt_deg",
                          "max_height_error_m", "refine_floor_m") if not getattr(self, key) > 0]
-        if not self.min_fraction <= 1:
-            p.append(f"min_fraction: must be in (0, 1], got {self.min_fraction}")
+        for key in ("min_fraction", "min_measured_fraction"):
+            if not 0 < getattr(self, key) <= 1:
+                p.append(f"{key}: must be in (0, 1], got {getattr(self, key)}")
         p += [f"{key}: must be an integer >= {low}, got {getattr(self, key)!r}"
               for key, low in (("stride_px", 1), ("ransac_iterations", 1), ("block_px", 1), ("refine_iterations", 0))
               if not isinstance(getattr(self, key), int) or getattr(self, key) < low]
@@ -134,6 +146,10 @@ class DepthTraversability:
         s = p.stride_px
         lower = slice(self.k.height // 3, None, s)
         pts = (self._rays[lower, ::s] * z[lower, ::s, None])[valid[lower, ::s]]
+        if len(pts) < MIN_LOWER_POINTS:
+            # a real sensor has no depth nearer than its minimum range: a head pitched down (or a
+            # camera near the floor) sees the floor it can measure only in the image's upper part
+            pts = (self._rays[::s, ::s] * z[::s, ::s, None])[valid[::s, ::s]]
         n, d = self.prior_n, self.prior_d
         self.last_plane_fitted = False
         fit = fit_ground_plane(pts, p, self.rng)
@@ -150,4 +166,23 @@ class DepthTraversability:
         return valid & hits & (np.abs(z - expected) < p.depth_tolerance * expected)
 
     def __call__(self, depth_m: np.ndarray) -> np.ndarray:
-        return traversable(self.ground_mask(depth_m), self.params.block_px, self.params.min_fraction)
+        p = self.params
+        z = np.asarray(depth_m, float)
+        ground = cell_counts(self.ground_mask(z), p.block_px)
+        measured = cell_counts(z > 0, p.block_px)
+        unknown = measured < p.min_measured_fraction * p.block_px * p.block_px
+        cells = ~unknown & (ground >= p.min_fraction * measured)
+        return expand_cells(grow_from_bottom(fill_unknown_below_ground(cells, unknown)), p.block_px, z.shape)
+
+
+def fill_unknown_below_ground(ground: np.ndarray, unknown: np.ndarray) -> np.ndarray:
+    """(rows, cols) cells -> ground, plus each unknown cell whose nearest measured cell above it (a
+    smaller row) in its column is ground. Unknown cells under an obstacle, or with nothing measured
+    above, stay out."""
+    ground, unknown = np.asarray(ground, bool), np.asarray(unknown, bool)
+    out = ground.copy()
+    ground_above = np.zeros(ground.shape[1], bool)
+    for r in range(ground.shape[0]):
+        out[r] |= unknown[r] & ground_above
+        ground_above = np.where(unknown[r], ground_above, ground[r])
+    return out

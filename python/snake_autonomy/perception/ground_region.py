@@ -25,18 +25,23 @@ def window_origins(n_px: int, block_px: int, stride_px: int) -> np.ndarray:
     return np.clip(np.arange(n) * stride_px + (stride_px - block_px) // 2, 0, n_px - block_px)
 
 
-def cell_grid(mask: np.ndarray, block_px: int, min_fraction: float = 0.5, stride_px=None) -> np.ndarray:
-    """(H, W) bool -> (H // s, W // s) bool (s: stride_px, default block_px): a cell is ground when
-    at least min_fraction of the block judging it (window_origins) is. Rows/columns beyond whole
-    cells are dropped (the caller's image sizes are multiples of s)."""
+def cell_counts(mask: np.ndarray, block_px: int, stride_px=None) -> np.ndarray:
+    """(H, W) bool -> (H // s, W // s) int (s: stride_px, default block_px): how many pixels of the
+    block judging each cell (window_origins) are set. Rows/columns beyond whole cells are dropped
+    (the caller's image sizes are multiples of s)."""
     s = stride_px or block_px
     h, w = mask.shape
     ys, xs = window_origins(h, block_px, s), window_origins(w, block_px, s)
     ii = np.zeros((h + 1, w + 1), np.int64)
     ii[1:, 1:] = np.cumsum(np.cumsum(np.asarray(mask, bool), axis=0, dtype=np.int64), axis=1)
     y, x, b = ys[:, None], xs[None, :], block_px
-    count = ii[y + b, x + b] - ii[y, x + b] - ii[y + b, x] + ii[y, x]
-    return count >= min_fraction * b * b
+    return ii[y + b, x + b] - ii[y, x + b] - ii[y + b, x] + ii[y, x]
+
+
+def cell_grid(mask: np.ndarray, block_px: int, min_fraction: float = 0.5, stride_px=None) -> np.ndarray:
+    """(H, W) bool -> (H // s, W // s) bool: a cell is ground when at least min_fraction of the
+    block judging it is (cell_counts)."""
+    return cell_counts(mask, block_px, stride_px) >= min_fraction * block_px * block_px
 
 
 def grow_from_bottom(cells: np.ndarray) -> np.ndarray:

@@ -11,11 +11,15 @@ head camera, traversability (depth or the monocular classifier) and the robot's 
 
 This file has no navigation logic: it feeds NavLoop what planner_node gets, and sends what it
 returns to the driver as driver_node would get it.
-- Poses: the run's pose source at its rate, stamped when sampled and delivered pose_latency_s later:
-  `mocap` (default, as sim.launch feedback:=mocap: base_link at 100 Hz with config/sim.yaml's
-  mocap noise) or `truth` (the plant's base_link, no noise: a diagnostic, named in metrics.json).
+- Poses: the run's pose source at its rate (sim/nav_pose_source.py), stamped when sampled and
+  delivered pose_latency_s later (default: the source's): `mocap` (default, as sim.launch
+  feedback:=mocap: base_link at 100 Hz with config/sim.yaml's mocap noise), `vio` (the simulated
+  RTAB-Map through the tracking gate and pose remapper; while tracking is lost no pose comes and the
+  loop holds on its stale pose) or `truth` (the plant's base_link, no noise: a diagnostic).
 - Camera frames at camera_rate_hz (sim.launch's 0.5 Hz), stamped at capture and delivered
-  frame_latency_s later (sim_node renders in a child process: 0.07-0.17 s). A frame is rendered
+  frame_latency_s later (sim_node renders in a child process: 0.07-0.17 s). Depth through the
+  D435i-like model of config/sim.yaml depth_noise: (sim/depth_noise.py) unless depth_model is
+  "perfect" (or depth_noise.enabled is false and depth_model is not "noisy"). A frame is rendered
   when the loop first reads it, from a copy of the plant's state at its stamp: the same image as a
   render at the stamp, and a frame the loop drops unread costs nothing.
 - Commands: NavLoop.tick every command_period_s (planner_node's ~rate_hz 2) -> hold, or the nav
@@ -29,7 +33,9 @@ metrics.json: goal_reached (by that rule), loop_reached (the loop said so), fina
 (base_link to the goal's centre at the end), closest_to_goal_m (how near base_link came to the
 goal's disc), outcome (nav_metrics.nav_outcome), contacts_follow / _turn_in_place / _back_off /
 _idle (the contact episodes by the follower's mode when they began), the loop's refusals and errors:
-runs/nav_metrics.py, the contract shared with a run recorded through ROS.
+runs/nav_metrics.py, the contract shared with a run recorded through ROS. The batch run adds the
+pose source's error against the truth and the time tracking was lost (NavPoseSource.metrics),
+pose_latency_s, depth_model and ticks_stale (command ticks holding on a stale pose or frame).
 """
 import copy
 import csv
@@ -50,7 +56,7 @@ from snake_autonomy.perception.depth_traversability import DepthTraversability
 from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m, nav_config_path
-from snake_autonomy.planning.rectilinear.nav_loop import GOAL_REACHED, NavLoop, checked_positive
+from snake_autonomy.planning.rectilinear.nav_loop import GOAL_REACHED, STALE, NavLoop, checked_positive
 from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
 from snake_autonomy.planning.rectilinear.overlay import overlay
 from snake_autonomy.planning.rectilinear.planner import ground_frame
@@ -61,14 +67,14 @@ from snake_autonomy.runs.results import PathLength
 from snake_autonomy.sim.camera import HeadCamera
 from snake_autonomy.sim.collisions import CollisionMonitor
 from snake_autonomy.sim.config import SimConfig
-from snake_autonomy.sim.mocap import MocapSensor
+from snake_autonomy.sim.depth_noise import DepthNoise
+from snake_autonomy.sim.nav_pose_source import POSE_SOURCES, NavPoseSource
 from snake_autonomy.sim.scales import ScaledPlant
 from snake_autonomy.sim.scene import build_scene
 from snake_autonomy.sim.sensor_clock import SensorClock
 from snake_autonomy.sim.world_file import World
-from snake_autonomy.transforms import pose_to_matrix
 
-POSE_SOURCES = ("mocap", "truth")
+DEPTH_MODELS = ("noisy", "perfect")
 
 
 @dataclass
@@ -85,8 +91,9 @@ class NavRunSpec:
     command_period_s: float = 0.5         # planner_node's ~rate_hz 2
     camera_rate_hz: float = 0.5           # sim.launch camera_rate_hz
     frame_latency_s: float = 0.2          # capture to the planner: sim_node's render (0.07-0.17 s) + transport
-    pose_source: str = "mocap"            # mocap | truth (a diagnostic: no noise)
-    pose_latency_s: float = 0.01          # sample to the planner
+    pose_source: str = "mocap"            # mocap | vio | truth (a diagnostic: no noise)
+    pose_latency_s: Optional[float] = None   # sample to the planner; None: the source's (sim.yaml vio.latency_s)
+    depth_model: Optional[str] = None     # noisy | perfect; None: config/sim.yaml depth_noise.enabled
     pose_timeout_s: float = 1.0           # planner_node's ~pose_timeout_s
     frame_timeout_s: Optional[float] = None   # None: sim.launch's max(5, 3 camera periods)
     settle_s: float = 10.0                # after the loop's goal-reached hold: the robot comes to rest
@@ -102,10 +109,14 @@ class NavRunSpec:
             checked_positive(key, getattr(self, key))
         for key in ("frame_latency_s", "pose_latency_s", "settle_s"):
             v = getattr(self, key)
+            if v is None and key == "pose_latency_s":
+                continue
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ValueError(f"{key}: must be a finite number >= 0, got {v!r}")
         if self.pose_source not in POSE_SOURCES:
             raise ValueError(f"pose_source: expected one of {', '.join(POSE_SOURCES)}, got {self.pose_source!r}")
+        if self.depth_model is not None and self.depth_model not in DEPTH_MODELS:
+            raise ValueError(f"depth_model: expected one of {', '.join(DEPTH_MODELS)}, got {self.depth_model!r}")
         if self.perception not in ("depth", "mono", "truth"):
             raise ValueError(f"perception: expected depth, mono or truth, got {self.perception!r}")
         if self.perception == "mono" and not self.classifier:
@@ -244,11 +255,15 @@ class NavRun:
         scene = build_scene(spec.world)
         self.plant = ScaledPlant(self.robot, self.params, spec.world.start_rad,
                                  scene_xml=scene.scene_xml, assets_xml=scene.assets_xml)
-        self.camera = HeadCamera(self.plant.model, self.cfg.intrinsics, self.cfg.mount)
+        self.depth_model = spec.depth_model or ("noisy" if sim_cfg.depth_noise.enabled else "perfect")
+        noise = (DepthNoise(sim_cfg.depth_noise, self.cfg.intrinsics.fx, self.params.rng("depth_noise"))
+                 if self.depth_model == "noisy" else None)
+        self.camera = HeadCamera(self.plant.model, self.cfg.intrinsics, self.cfg.mount, depth_model=noise)
         self.collisions = CollisionMonitor(self.plant.model)
         self._contact_modes: List[str] = []
         self.rollover_deg = sim_cfg.monitor.rollover_tilt_deg
-        self.mocap = MocapSensor(self.params) if spec.pose_source == "mocap" else None
+        self.poses = NavPoseSource(spec.pose_source, self.params, self.robot)
+        self.pose_latency_s = self.poses.latency_s if spec.pose_latency_s is None else spec.pose_latency_s
         self.drive = PlantGaitDriver(self.robot, self.plant)
         self.render_kinds = {"colour": spec.perception == "mono" or spec.keep_frames,
                              "depth": spec.perception == "depth", "labels": spec.perception == "truth"}
@@ -278,13 +293,6 @@ class NavRun:
         c = self.cfg.classifier
         return lambda f: truth_traversable(f.ground_truth_ground(), c.block_px, c.stride_px, c.ground_fraction)
 
-    def _pose_sample(self, t: float, T_wb: np.ndarray):
-        """(stamp, 4x4) of the pose source's sample due at t, else None."""
-        if self.mocap is None:
-            return t, T_wb
-        s = self.mocap.poll(self.plant)
-        return None if s is None else (s.t_s, pose_to_matrix(s.position_m, s.quat_xyzw))
-
     def run(self) -> NavResult:
         spec, plant, loop = self.spec, self.plant, self.loop
         dt = spec.control_period_s
@@ -297,9 +305,9 @@ class NavRun:
         sent = None
         while t < end_t:
             T_wb = plant.frame_transform("base_link")
-            sample = self._pose_sample(t, T_wb)
+            sample = self.poses.poll(plant)
             if sample is not None:
-                poses.append((t + spec.pose_latency_s, *sample))
+                poses.append((sample[0] + self.pose_latency_s, *sample))
             if camera_clock.due(t):
                 camera_clock.tick(t)
                 camera_frames.append((t + spec.frame_latency_s, t,
@@ -364,6 +372,8 @@ class NavRun:
                       "gait": self.gaits.forward, "pose_source": spec.pose_source,
                       "nav_config": Path(self.nav_config).name, "on_no_free_arc": loop.on_no_free_arc},
             loop_refused=loop.refused, loop_errors=loop.errors, loop_last_error=loop.last_error))
+        metrics.update(self.poses.metrics(), pose_latency_s=self.pose_latency_s, depth_model=self.depth_model,
+                       ticks_stale=sum(1 for c in commands if c[3] == STALE))
         contacts = [(e, m) for e, m in zip(self.collisions.episodes, self._contact_modes)]
         omap = loop.planner.obstacle_map
         return NavResult(metrics, traj, replans, frames, world, contacts,

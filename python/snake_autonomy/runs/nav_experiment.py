@@ -51,6 +51,8 @@ class NavTask:
     time_limit_s: float = 300.0
     classifier: Optional[str] = None
     nav_config: Optional[str] = None
+    pose_source: str = "mocap"     # NavRunSpec.pose_source
+    depth_model: Optional[str] = None   # NavRunSpec.depth_model (None: config/sim.yaml's)
     out_dir: Optional[str] = None  # per-run figures and metrics (None: metrics only)
 
 
@@ -70,7 +72,8 @@ def run_nav_task(task: NavTask) -> Dict:
     t0 = time.perf_counter()
     spec = NavRunSpec(world, robot=task.robot, perception=task.perception, seed=task.seed,
                       time_limit_s=task.time_limit_s, classifier=task.classifier,
-                      nav_config=task.nav_config, keep_frames=task.out_dir is not None)
+                      nav_config=task.nav_config, keep_frames=task.out_dir is not None,
+                      pose_source=task.pose_source, depth_model=task.depth_model)
     result = NavRun(spec).run()
     if task.out_dir:
         result.write(Path(task.out_dir) / f"{world.name}_{task.perception}_s{task.seed}")

@@ -5,6 +5,9 @@
     frame.rgb (H, W, 3) uint8, frame.depth_m (H, W) float32 (z along the optical axis, 0 = nothing),
     frame.labels (H, W) uint8 of LABEL_*, frame.T_world_camera (4x4, OpenCV optical frame)
 
+depth_model: a callable applied to every depth render (sim/depth_noise.DepthNoise: the D435i's
+noise and invalid pixels); None renders perfect depth.
+
 The camera's model (intrinsics, mount, frame, labels) is perception/camera_model.py.
 
 Rendering sets MuJoCo's GL frustum from the intrinsics directly, so any fx, fy, cx, cy work. MuJoCo
@@ -25,13 +28,14 @@ class HeadCamera:
     """Renders what a camera on the robot's head sees. One GL context per instance (reuse it)."""
 
     def __init__(self, model, intrinsics: Optional[CameraIntrinsics] = None,
-                 mount: Optional[CameraMount] = None, max_depth_m: float = 10.0):
+                 mount: Optional[CameraMount] = None, max_depth_m: float = 10.0, depth_model=None):
         import mujoco  # lazy: MuJoCo is heavy and only this path needs it
         self._mujoco = mujoco
         self.model = model
         self.intrinsics = intrinsics or CameraIntrinsics.d435i_like()
         self.mount = mount or CameraMount()
         self.max_depth_m = max_depth_m
+        self.depth_model = depth_model
         self.T_base_optical = self.mount.T_base_optical()
         k = self.intrinsics
         if model.vis.global_.offwidth < k.width or model.vis.global_.offheight < k.height:
@@ -98,6 +102,8 @@ class HeadCamera:
             dep = r.render().astype(np.float32)
             r.disable_depth_rendering()
             dep[~np.isfinite(dep) | (dep > self.max_depth_m)] = 0.0
+            if self.depth_model is not None:
+                dep = self.depth_model(dep)
         if labels:
             r.enable_segmentation_rendering()
             self._set_camera(data, T)

@@ -21,6 +21,7 @@ import numpy as np
 from ..missions.mission import MissionError, load_defaults
 from ..paths import config_path
 from ..safe_yaml import load_yaml_file
+from .depth_noise import DepthNoiseConfig
 
 
 @dataclass(frozen=True)
@@ -79,6 +80,7 @@ class MocapConfig:
 @dataclass
 class VioConfig:
     rate_hz: float = 30.0
+    latency_s: float = 0.05             # sample to the planner (nav runs): odometry + transport
     calibration: str = "camera.yaml"    # T_head^camera, relative to the sim.yaml that names it
     position_noise_m: Range = Range(0.005, 0.015)       # white, per axis (std)
     rotation_noise_rad: Range = Range(0.005, 0.015)     # white, per axis (std)
@@ -114,7 +116,7 @@ class DisturbanceConfig:
 
 
 _SECTIONS = {"physics": PhysicsConfig, "servo": ServoConfig, "mocap": MocapConfig,
-             "vio": VioConfig, "monitor": MonitorConfig, "scales": ScalesConfig}
+             "vio": VioConfig, "monitor": MonitorConfig, "scales": ScalesConfig, "depth_noise": DepthNoiseConfig}
 
 
 @dataclass
@@ -125,6 +127,7 @@ class SimConfig:
     vio: VioConfig = field(default_factory=VioConfig)
     monitor: MonitorConfig = field(default_factory=MonitorConfig)
     scales: ScalesConfig = field(default_factory=ScalesConfig)
+    depth_noise: DepthNoiseConfig = field(default_factory=DepthNoiseConfig)
     disturbances: List[DisturbanceConfig] = field(default_factory=list)
     # config/tracker.yaml keys overridden for the simulated robot (snake_autonomy.missions.load_defaults)
     tracker: dict = field(default_factory=dict)
@@ -205,6 +208,7 @@ class SimConfig:
         non_negative("mocap.position_noise_m", m.position_noise_m)
         non_negative("mocap.rotation_noise_rad", m.rotation_noise_rad)
         positive("vio.rate_hz", v.rate_hz)
+        non_negative("vio.latency_s", v.latency_s)
         for key in ("position_noise_m", "rotation_noise_rad", "drift_xy_m_per_sqrt_s",
                     "drift_yaw_rad_per_sqrt_s", "loss_rate_per_min"):
             non_negative(f"vio.{key}", getattr(v, key))
@@ -214,6 +218,7 @@ class SimConfig:
                     or not all(isinstance(x, (int, float)) for x in ep) or ep[1] <= 0):
                 errs.append(f"vio.loss_episodes[{i}]: expected [start_s, duration_s > 0], "
                             f"got {ep!r}")
+        errs += self.depth_noise.problems("depth_noise")
         for i, d in enumerate(self.disturbances):
             if (d.force_n is None) == (d.torque_nm is None):
                 errs.append(f"disturbances[{i}]: give exactly one of force_n, torque_nm")

@@ -60,13 +60,20 @@ class VioFeedback:
             return None
         tp, tq = out.truth_camera
         self.samples.append((s.t_s, s.position_m.copy(), s.quat_xyzw.copy(), s.lost, np.asarray(tp), np.asarray(tq)))
-        cov = np.diag(s.covariance)
-        result = self.gate.check(s.t_s, s.position_m, s.quat_xyzw, cov)
+        T = self.base_in_world(s)
+        if T is None:
+            return None
+        p, q = matrix_to_pose(T)
+        return s.t_s, np.asarray(p, float), np.asarray(q, float)
+
+    def base_in_world(self, s) -> Optional[np.ndarray]:
+        """One odometry sample through the gate and eq. 3.1: base_link's 4x4 pose, or None when the
+        gate refuses it (lost, invalid, a jump)."""
+        result = self.gate.check(s.t_s, s.position_m, s.quat_xyzw, np.diag(s.covariance))
         if not result.ok:
             return None
         camera_in_world = make_transform(quat_to_matrix(*s.quat_xyzw), s.position_m)
-        p, q = matrix_to_pose(self.remapper.base_in_world(camera_in_world))
-        return s.t_s, np.asarray(p, float), np.asarray(q, float)
+        return self.remapper.base_in_world(camera_in_world)
 
     def status(self, t_s: float):
         state, detail = self.gate.state_at(t_s)
