@@ -9,8 +9,8 @@ import xml.etree.ElementTree as ET
 import pytest
 import yaml
 
-LAUNCH_FILES = ("driver.launch", "mission.launch", "orchestration.launch", "pose_remap.launch", "rviz.launch",
-                "sim.launch")
+LAUNCH_FILES = ("bringup.launch", "driver.launch", "mission.launch", "navigation.launch", "orchestration.launch",
+                "pose_remap.launch", "rviz.launch", "sim.launch", "sim_robot.launch")
 
 
 def _dump(env, launch, *args):
@@ -82,3 +82,84 @@ def test_sim_launch_robot_reaches_every_node_and_a_world_is_recorded(root):
     params = _dump(env, "sim.launch")
     assert "/nav_record/robot" not in params and "/planner/world" not in params and "/sim/world" not in params
     assert params["/mission/robot"] == "cobra" and params["/driver/robot"] == "cobra"
+
+
+RS_CAMERA_STUB = """<launch>
+  <!-- a stand-in of realsense2_camera's rs_camera.launch: the args bringup.launch passes (as the real
+       file declares them) and one node recording them -->
+  <arg name="camera" default="camera"/>
+  <arg name="align_depth" default="false"/>
+  <arg name="enable_sync" default="false"/>
+  <arg name="publish_tf" default="true"/>
+  <node ns="$(arg camera)" pkg="realsense2_camera" type="stub" name="realsense2_camera">
+    <param name="align_depth" value="$(arg align_depth)"/>
+    <param name="publish_tf" value="$(arg publish_tf)"/>
+  </node>
+</launch>
+"""
+NODES_SCRIPT = """
+import json, sys
+import roslaunch.config, roslaunch.xmlloader
+cfg = roslaunch.config.load_config_default([(sys.argv[1], sys.argv[2:])], None,
+    loader=roslaunch.xmlloader.XmlLoader(resolve_anon=False), verbose=False, assign_machines=False)
+print(json.dumps({(n.namespace.rstrip('/') + '/' + n.name): dict(n.remap_args) for n in cfg.nodes}))
+"""
+
+
+def _bringup_nodes(env, *args):
+    import json
+    r = subprocess.run(["python3", "-c", NODES_SCRIPT, os.path.join(env["SNAKE_LAUNCH_DIR"], "bringup.launch"),
+                        *args], env=env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def test_bringup_on_the_robot_parses_with_the_camera_driver_installed(root, tmp_path):
+    """The real configuration (servos on /dev/ttyUSB0, the D435i, RTAB-Map's odometry, the remapper, the
+    planner and its record), with realsense2_camera stood in by a package of the same name (it is not in
+    Debian); rtabmap_ros's node needs no package to be parsed."""
+    pkg = tmp_path / "realsense2_camera"
+    (pkg / "launch").mkdir(parents=True)
+    (pkg / "package.xml").write_text('<package format="2"><name>realsense2_camera</name><version>0.0.0</version>'
+                                     '<description>stand-in</description><maintainer email="a@b.c">t</maintainer>'
+                                     '<license>BSD</license></package>')
+    (pkg / "launch" / "rs_camera.launch").write_text(RS_CAMERA_STUB)
+    env = dict(os.environ, SNAKE_AUTONOMY_ROOT=str(root), SNAKE_LAUNCH_DIR=str(root / "launch"),
+               ROS_PACKAGE_PATH=f"{tmp_path}:{os.environ.get('ROS_PACKAGE_PATH', '')}")
+    params = _dump(env, "bringup.launch")
+    assert params["/driver/port"] == "/dev/ttyUSB0" and params["/driver/world_frame"] == "odom"
+    assert params["/camera/realsense2_camera/align_depth"] is True
+    assert params["/camera/realsense2_camera/publish_tf"] is False
+    assert params["/rtabmap/rgbd_odometry/frame_id"] == "camera_link"
+    assert params["/rtabmap/rgbd_odometry/publish_tf"] is False
+    assert "/sim/port" not in params and "/planner/world" not in params
+    nodes = _bringup_nodes(env)
+    assert set(nodes) == {"/driver", "/robot_state_publisher", "/camera/realsense2_camera", "/rtabmap/rgbd_odometry",
+                          "/pose_remapper", "/planner", "/nav_record"}
+    assert nodes["/pose_remapper"]["odom"] == "/rtabmap/odom"
+    assert nodes["/rtabmap/rgbd_odometry"]["depth/image"] == "/camera/aligned_depth_to_color/image_raw"
+    assert nodes["/planner"]["camera/depth/image_rect_raw"] == "camera/aligned_depth_to_color/image_raw"
+    # a mission instead of the planner; motion capture instead of RTAB-Map: no odometry, no remapper
+    nodes = _bringup_nodes(env, "autonomy:=mission", "odometry:=mocap", "mission:=star")
+    assert set(nodes) == {"/driver", "/robot_state_publisher", "/camera/realsense2_camera", "/mission", "/snake_viz"}
+
+
+def test_bringup_without_the_camera_driver_names_it(root):
+    r = subprocess.run(["roslaunch", "--nodes", "snake_autonomy", "bringup.launch"], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode != 0 and "realsense2_camera" in r.stdout + r.stderr
+
+
+def test_bringup_lists_no_required_arg_and_its_stand_ins_parse(root):
+    r = subprocess.run(["roslaunch", "--ros-args", "snake_autonomy", "bringup.launch"], capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 0 and "Required" not in r.stdout, r.stdout + r.stderr
+    world = str(root / "test" / "ros" / "worlds" / "nav_record.yaml")
+    env = dict(os.environ, SNAKE_AUTONOMY_ROOT=str(root), SNAKE_LAUNCH_DIR=str(root / "launch"))
+    nodes = _bringup_nodes(env, "bus:=sim", "camera:=sim", "odometry:=sim", f"world:={world}")
+    assert set(nodes) == {"/sim", "/driver", "/robot_state_publisher", "/pose_remapper", "/planner", "/nav_record"}
+    assert nodes["/pose_remapper"]["odom"] == "odom"
+    params = _dump(env, "bringup.launch", "bus:=sim", "camera:=sim", "odometry:=sim", f"world:={world}")
+    assert params["/sim/feedback"] == "vio" and params["/sim/world"] == world
+    assert params["/driver/port"] == params["/sim/port"] == str(root / ".ws" / "snake_sim_bus")
+    assert params["/nav_record/pose_source"] == "vio" and params["/planner/world"] == world
