@@ -55,15 +55,15 @@ def killed_run(tmp_path):
         p = PoseStamped()
         p.pose.position.x, p.pose.orientation.w = SPEED * max(0.0, t - T0), 1.0
         log.write("/ground_truth/base_pose", p, t)
-    log.write("/diagnostics", _diag("planner: navigation", {"state": "following", "follower_mode": "follow",
-                                                                  "replans": "2", "stops_no_free_arc": "1",
-                                                                  "refused_pose": "2", "tick_errors": "0"}), 12.0)
+    planner = {"state": "following", "follower_mode": "follow", "replans": "2", "stops_no_free_arc": "1",
+               "refused_pose": "2", "tick_errors": "0"}
+    log.write("/diagnostics", _diag("planner: navigation", planner), 12.0)
     log.write("/nav/path", _path(12.0, [0.05, 0.3, 0.6]), 12.0)
     contact = Marker(text="link_3 touched obstacle_0")
     contact.pose.position.x, contact.pose.position.y = 0.3, 0.1
     log.write("/sim/contacts", contact, 14.5)
-    log.write("/diagnostics", _diag("sim: simulated robot", {"obstacle_contacts": "1",
-                                                                   "min_clearance_m": "0.000"}), 15.0)
+    log.write("/diagnostics", _diag("sim: simulated robot", {"obstacle_contacts": "1", "min_clearance_m": "0.000"}),
+              15.0)
     log.write("/nav/path", _path(17.0, []), 17.0)                     # no free arc
     log.flush()
     log._bag.close()      # closed with its index but without the end event
