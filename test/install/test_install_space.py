@@ -32,7 +32,7 @@ from snake_autonomy.cli import SUBCOMMANDS
 
 ROOT = Path(__file__).resolve().parents[2]
 PKG = "snake_autonomy"
-NODES = ("driver_node", "sim_node", "mission_node", "planner_node", "pose_remap_node", "viz_node",
+NODES = ("driver_node", "sim_node", "mission_node", "planner_node", "nav_record_node", "pose_remap_node", "viz_node",
          "mock_servo_bus_node")
 SCRIPTS = ("snake_autonomy", "evaluate", "mock_servo_bus")
 NESTED_SUBCOMMANDS = [["mission", "check"], ["mission", "list"], ["sim", "run"], ["sim", "experiment"]]
