@@ -43,8 +43,8 @@ from snake_autonomy.perception.depth_traversability import DepthTraversability
 from snake_autonomy.perception.ground_region import precision_recall, traversable
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m, nav_config_path
 from snake_autonomy.runs.nav_batch import DEPTH_MODELS, POSE_SOURCES, NavRun, NavRunSpec
-from snake_autonomy.runs.nav_experiment import (TIME_FACTOR, experiment_tasks, markdown_table, outcome_table,
-                                                random_corridor, run_nav_task, summarise, time_limit_s)
+from snake_autonomy.runs.nav_experiment import (TIME_FACTOR, estimation_table, experiment_tasks, markdown_table,
+                                                outcome_table, random_corridor, run_nav_task, summarise, time_limit_s)
 from snake_autonomy.runs.nav_ros_experiment import check_robot, comparison_table, run_experiment
 from snake_autonomy.runs.render_set import render_scenes
 from snake_autonomy.runs.sweep_runner import open_executor, run_tasks
@@ -306,7 +306,7 @@ def _experiment(args) -> int:
         rows = run_tasks(ex, run_nav_task, tasks, desc=f"nav experiment {args.robot}",
                          progress=not args.no_progress)
     summary = summarise(rows)
-    table = markdown_table(summary) + "\n\n" + outcome_table(summary)
+    table = markdown_table(summary) + "\n\n" + outcome_table(summary) + "\n\n" + estimation_table(summary)
     write_csv(rows, out / "runs.csv")
     (out / "summary.json").write_text(json.dumps(
         {"robot": args.robot, "family": None if args.world_files else (args.family or "corridors"),

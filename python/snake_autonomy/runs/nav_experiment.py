@@ -99,8 +99,33 @@ def summarise(rows: List[Dict]) -> List[Dict]:
                     "mean_time_s": float(np.mean([r["time_s"] for r in ok])) if ok else math.nan,
                     "outcomes": {o: sum(r.get("outcome") == o for r in rs) for o in OUTCOMES},
                     "median_miss_m": _median([r.get("closest_to_goal_m") for r in rs if not r["goal_reached"]]),
-                    "contacts_by_mode": {m: sum(int(r.get(f"contacts_{m}", 0)) for r in rs) for m in MODES}})
+                    "contacts_by_mode": {m: sum(int(r.get(f"contacts_{m}", 0)) for r in rs) for m in MODES},
+                    **_estimation(rs)})
     return out
+
+
+def _estimation(rs: List[Dict]) -> Dict:
+    """What the runs' pose source and depth were and how far the pose was from the truth: the mean of
+    the runs' xy RMSE, the largest xy error, the total time tracking was lost (nav_pose_source)."""
+    rmse = [r["pose_error_xy_rmse_m"] for r in rs if r.get("pose_error_xy_rmse_m") is not None]
+    worst = [r["pose_error_xy_max_m"] for r in rs if r.get("pose_error_xy_max_m") is not None]
+    return {"pose_sources": sorted({str(r.get("pose_source", "-")) for r in rs}),
+            "depth_models": sorted({str(r.get("depth_model", "-")) for r in rs}),
+            "pose_error_xy_rmse_m": float(np.mean(rmse)) if rmse else math.nan,
+            "pose_error_xy_max_m": float(max(worst)) if worst else math.nan,
+            "tracking_lost_s": float(sum(float(r.get("tracking_lost_s") or 0.0) for r in rs))}
+
+
+def estimation_table(summary: List[Dict]) -> str:
+    """Per (robot, perception): the pose source, the depth model, the pose error against the truth
+    (mean of the runs' xy RMSE, the largest xy error) and the time tracking was lost over all runs."""
+    lines = ["| robot | perception | pose source | depth | pose error xy, mean RMSE (m) | pose error xy, max (m) "
+             "| tracking lost, total (s) |", "|---|---|---|---|---|---|---|"]
+    for s in summary:
+        fmt = ["-" if math.isnan(s[k]) else f"{s[k]:.3f}" for k in ("pose_error_xy_rmse_m", "pose_error_xy_max_m")]
+        lines.append(f"| {s['robot']} | {s['perception']} | {', '.join(s['pose_sources'])} | "
+                     f"{', '.join(s['depth_models'])} | {fmt[0]} | {fmt[1]} | {s['tracking_lost_s']:.1f} |")
+    return "\n".join(lines)
 
 
 def _median(values) -> float:
