@@ -15,12 +15,13 @@ def monitor(root, monkeypatch, cops):
     plant = Plant(robot, params)
     plant.step(0.3)
     m = scout_execute.Monitor(plant, params.config.servo.torque_limit_nm)
-    real = scout_execute.centre_of_pressure
+    real = scout_execute.floor_contacts
     for cop in cops:
         if cop == "real":
-            monkeypatch.setattr(scout_execute, "centre_of_pressure", real)
+            monkeypatch.setattr(scout_execute, "floor_contacts", real)
         else:
-            monkeypatch.setattr(scout_execute, "centre_of_pressure", lambda *_a: (None, np.zeros((0, 2))))
+            monkeypatch.setattr(scout_execute, "floor_contacts",
+                                lambda *_a: (np.zeros((0, 2)), np.zeros(0), np.zeros(0, int)))
         m()
     return m
 

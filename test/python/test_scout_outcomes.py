@@ -1,57 +1,84 @@
-"""`scout run` says how the run ended: metrics.json's `outcome` ("ok", "tipped", "missed_pipe"), and
-an exit status of 3 with a one-line reason when the robot tipped in physics or the head ended
-outside the pipe's bore (runs/scout_execute.verdict)."""
+"""`scout run` says how the run ended: metrics.json's `outcome` ("ok", "tipped", "missed_pipe",
+"missed_height"), and an exit status of 3 with a one-line reason when the robot tipped in physics or
+the head ended outside the pipe's bore or below the planned height (runs/scout_execute.verdict)."""
 import json
 
+import numpy as np
 import pytest
 
 from snake_autonomy import cli
 from snake_autonomy.cli import scout as scout_cli
 from snake_autonomy.planning.fbsr.build import build_planner
 from snake_autonomy.runs import scout_execute
-from snake_autonomy.runs.scout_execute import verdict
+from snake_autonomy.planning.fbsr.planner import Plan
+from snake_autonomy.planning.fbsr.stage import Stage
+from snake_autonomy.runs.scout_execute import Measured, verdict
 from snake_autonomy.sim.config import servo_torque_limit_nm
 
 
 def test_a_run_that_stayed_down_and_reached_the_bore_is_ok():
-    v = verdict(max_lift_m=0.001, longest_outside_s=0.0, longest_no_pressure_s=0.02,
-                head_to_axis_m=0.025, bore_limit_m=0.0446)
+    v = verdict(Measured(max_lift_m=0.001, longest_no_pressure_s=0.02, base_load_fraction=0.97, head_z_m=0.30,
+                         target_z_m=0.31, head_to_axis_m=0.025, bore_limit_m=0.0446, mouth_m=0.25))
     assert (v.tipped, v.outcome, v.reason) == (False, "ok", "")
-    assert verdict(0.0, 0.0, 0.0).outcome == "ok"          # no pipe given: nothing to miss
+    assert verdict(Measured()).outcome == "ok"          # no pipe, no height given: nothing to miss
 
 
-@pytest.mark.parametrize("lift, outside, no_pressure, words", [
-    (0.150, 0.0, 0.0, "a base module lifted 150 mm off the floor (limit 20 mm)"),
-    (0.0, 0.3, 0.0, "the centre of pressure left the contacts' polygon for 0.30 s (limit 0.1 s)"),
-    (0.0, 0.0, 0.2, "the floor carried no weight for 0.20 s (limit 0.1 s)"),
+@pytest.mark.parametrize("measured, words", [
+    (Measured(max_lift_m=0.150), "a base module lifted 150 mm off the floor (limit 20 mm)"),
+    (Measured(longest_outside_s=0.3), "the centre of pressure left the contacts' polygon for 0.30 s (limit 0.1 s)"),
+    (Measured(longest_no_pressure_s=0.2), "the floor carried no weight for 0.20 s (limit 0.1 s)"),
+    (Measured(longest_com_outside_s=0.2),
+     "the centre of mass left the polygon of the base's contacts for 0.20 s (limit 0.1 s)"),
+    (Measured(base_load_fraction=0.71), "the base carried 71 % of the weight in the raised posture (at least 90 %)"),
+    (Measured(base_load_fraction=float("nan")), "the base carried nan % of the weight"),
 ])
-def test_a_base_lift_or_a_lost_support_is_tipped_with_the_figure_and_the_limit(lift, outside, no_pressure, words):
-    v = verdict(lift, outside, no_pressure)
+def test_a_base_lift_a_lost_support_or_a_base_unloaded_is_tipped_with_the_figure_and_the_limit(measured, words):
+    v = verdict(measured)
     assert v.tipped is True and v.outcome == "tipped"
     assert v.reason.startswith("the robot tipped: ") and words in v.reason
 
 
+@pytest.mark.parametrize("measured", [Measured(longest_com_outside_s=0.1), Measured(base_load_fraction=0.9)])
+def test_a_spell_or_a_load_at_its_limit_is_not_tipped(measured):
+    assert verdict(measured).outcome == "ok"
+
+
 def test_a_head_outside_the_bore_is_missed_pipe_with_the_distance_and_the_limit():
-    v = verdict(0.0, 0.0, 0.0, head_to_axis_m=0.106, bore_limit_m=0.0446)
+    v = verdict(Measured(head_to_axis_m=0.106, bore_limit_m=0.0446))
     assert (v.tipped, v.outcome) == (False, "missed_pipe")
     assert v.reason == "missed the pipe: the head ended 0.106 m from the pipe's axis, outside the bore " \
                        "(0.045 m: the pipe's radius less a module's radius)"
 
 
+def test_a_head_on_the_axis_but_under_the_mouth_is_missed_pipe():
+    v = verdict(Measured(head_z_m=0.21, head_to_axis_m=0.01, bore_limit_m=0.0446, mouth_m=0.25))
+    assert v.outcome == "missed_pipe"
+    assert v.reason == "missed the pipe: the head ended at 0.210 m, below the mouth (0.250 m)"
+
+
 def test_a_head_at_a_nan_distance_is_not_in_the_bore():
-    assert verdict(0.0, 0.0, 0.0, head_to_axis_m=float("nan"), bore_limit_m=0.0446).outcome == "missed_pipe"
+    assert verdict(Measured(head_to_axis_m=float("nan"), bore_limit_m=0.0446)).outcome == "missed_pipe"
+
+
+@pytest.mark.parametrize("head, outcome", [(0.571, "ok"), (0.569, "missed_height"), (float("nan"), "missed_height")])
+def test_a_head_more_than_the_tolerance_below_the_plan_is_missed_height(head, outcome):
+    v = verdict(Measured(head_z_m=head, target_z_m=0.6))
+    assert v.outcome == outcome and v.tipped is False
+    if outcome != "ok":
+        assert v.reason.startswith("missed the height: the head ended at ") and "below the plan's 0.600 m" in v.reason
 
 
 def test_tipping_is_the_outcome_when_both_happened_and_the_reason_names_both():
-    v = verdict(0.15, 0.0, 0.0, head_to_axis_m=0.2, bore_limit_m=0.0446)
+    v = verdict(Measured(max_lift_m=0.15, head_z_m=0.08, target_z_m=0.64, head_to_axis_m=0.2, bore_limit_m=0.0446))
     assert v.outcome == "tipped" and "lifted 150 mm" in v.reason and "missed the pipe" in v.reason
+    assert "missed the height" in v.reason
 
 
 def fake_run_plan(max_lift_m, head_to_axis_m=None):
     """run_plan as the CLI calls it, its physics replaced by the given figures."""
     def run(plan, sim_yaml, seed, pipe, period):
         bore = pipe.radius_m - plan.chain.radius_m if pipe is not None else None
-        v = verdict(max_lift_m, 0.0, 0.0, head_to_axis_m, bore)
+        v = verdict(Measured(max_lift_m=max_lift_m, head_to_axis_m=head_to_axis_m, bore_limit_m=bore))
         metrics = {"tipped": v.tipped, "outcome": v.outcome, "cop_inside_fraction": 1.0,
                    "final_head_height_m": 0.1, "planned_head_height_m": 0.1, "max_torque_ratio": 0.2,
                    "active_modules": plan.active_modules}
@@ -85,8 +112,8 @@ def test_cli_run_help_documents_the_exit_status(capsys):
     with pytest.raises(SystemExit):
         cli.main(["scout", "run", "--help"])
     text = " ".join(capsys.readouterr().out.split())
-    assert "exit status: 0 the run is ok; 1 bad options or files; 2 usage; 3 the robot tipped or missed the pipe" \
-        in text
+    assert "exit status: 0 the run is ok; 1 bad options or files; 2 usage; 3 the robot tipped, missed the pipe or " \
+           "ended below the planned height in physics" in text
 
 
 def test_run_plan_records_the_outcome_of_a_plan_in_physics(root, monkeypatch):
@@ -120,3 +147,36 @@ def test_cli_run_of_a_plan_that_tips_in_physics_exits_3(tmp_path, capsys, monkey
     assert m["tipped"] is True and m["outcome"] == "tipped"
     err = capsys.readouterr().err.strip()
     assert err.startswith("scout run: the robot tipped: a base module lifted 1") and "mm off the floor" in err
+
+
+def test_a_plan_that_lifts_twelve_modules_off_a_five_module_base_tips_in_physics(root):
+    """A hand-made raise the planner would refuse (the pitch joint at the base's hinge lifts the whole
+    active portion: the CoM goes far beyond the base) tips in physics; the CoP, a weighted mean of
+    the contacts, stays inside them throughout, so only the base's lift, its load and the CoM
+    against the base's own contacts can tell."""
+    chain = build_planner("unified_snake", torque_limit_nm=servo_torque_limit_nm())[0].chain
+    m = 12
+    delta = np.zeros(m)
+    delta[10] = 0.8
+    plan = Plan(chain.robot.name, chain, [Stage("raise", m, chain.q_lying.copy(), delta, 3.0, chain.base_contacts(m))])
+    assert plan.final_head_height_m > 0.4
+    result = scout_execute.run_plan(plan, root / "config/sim.yaml", seed=0)
+    m, extra = result["metrics"], result["extra"]
+    assert m["tipped"] is True and m["outcome"] == "tipped"
+    assert m["cop_inside_fraction"] > 0.99
+    assert extra["max_base_lift_m"] > 0.05
+    assert extra["longest_com_outside_s"] > 1.0 and extra["base_load_fraction"] < 0.8
+    assert m["final_head_height_m"] < 0.1
+    for words in ("lifted", "centre of mass left", "of the weight", "missed the height"):
+        assert words in extra["reason"]
+
+
+def test_a_plan_the_planner_made_holds_its_base_in_physics(root):
+    """The figures of the verdict on a plan that does not tip: the resting modules carry the weight,
+    the CoM stays inside the base's contacts all along."""
+    planner = build_planner("unified_snake", torque_limit_nm=servo_torque_limit_nm())[0]
+    result = scout_execute.run_plan(planner.plan(max_active=4, seed=0), root / "config/sim.yaml", seed=0)
+    extra = result["extra"]
+    assert result["metrics"]["outcome"] == "ok"
+    assert extra["base_load_fraction"] == pytest.approx(1.0, abs=0.05)
+    assert extra["min_com_margin_m"] > 0.01 and extra["longest_com_outside_s"] == 0.0

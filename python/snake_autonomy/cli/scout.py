@@ -14,8 +14,9 @@ robot, a height no plan reaches, a pipe inside the robot or out of reach, a nega
 --config file) end with one message and exit 1, before planning.
 
 Exit status (EXIT_STATUS): 0 done and, for `run`, metrics.json's outcome "ok"; 1 bad options or
-files; 2 usage; 3 `run` executed the plan but the robot tipped in physics or the head ended outside
-the pipe's bore (outcome "tipped" / "missed_pipe"; the reason on one line, metrics.json written).
+files; 2 usage; 3 `run` executed the plan but the robot tipped in physics, the head ended outside
+the pipe's bore, or more than 3 cm below the planned height (outcome "tipped" / "missed_pipe" /
+"missed_height"; the reason on one line, metrics.json written).
 """
 import json
 import math
@@ -34,8 +35,9 @@ from snake_autonomy.runs.scout_execute import run_plan
 from snake_autonomy.sim.config import servo_torque_limit_nm
 
 
-EXIT_STATUS = ("exit status: 0 the run is ok; 1 bad options or files; 2 usage; 3 the robot tipped or missed "
-               "the pipe in physics (metrics.json outcome tipped / missed_pipe, the reason on one line)")
+EXIT_STATUS = ("exit status: 0 the run is ok; 1 bad options or files; 2 usage; 3 the robot tipped, missed the "
+               "pipe or ended below the planned height in physics (metrics.json outcome tipped / missed_pipe / "
+               "missed_height, the reason on one line)")
 OUTCOME_NOT_OK = 3
 PIPE_REACH_M = 2.0          # |x|, |y| of the pipe's axis: no robot of config/robots/ is longer
 PIPE_RADIUS_MAX_M = 0.5
@@ -155,9 +157,13 @@ def main(args) -> int:
     line = (f"physics: {m['outcome']}, tipped {m['tipped']}, CoP inside {m['cop_inside_fraction']:.3f}, head "
             f"{m['final_head_height_m']:.3f} m (planned {m['planned_head_height_m']:.3f}), "
             f"max torque {100 * m['max_torque_ratio']:.0f} % of the limit")
+    extra = result["extra"]
+    if "base_load_fraction" in extra:
+        line += (f", base carried {100 * extra['base_load_fraction']:.0f} % of the weight, CoM at least "
+                 f"{1000 * extra['min_com_margin_m']:.0f} mm inside the base's contacts")
     if pipe is not None:
-        line += (f", head {result['extra']['head_to_pipe_axis_m']:.3f} m from the pipe axis "
-                 f"(bore {result['extra']['bore_limit_m']:.3f} m)")
+        line += (f", head {'inside' if extra.get('head_in_bore') else 'not inside'} the bore, "
+                 f"{extra['head_to_pipe_axis_m']:.3f} m from the pipe axis (bore {extra['bore_limit_m']:.3f} m)")
     print(line + f" -> {out / 'metrics.json'}")
     if m["outcome"] != "ok":
         print(f"scout run: {result['extra']['reason']}", file=sys.stderr)

@@ -1,6 +1,6 @@
 """A plan run in the MuJoCo plant, checked from the contact forces: metrics.json of the contract
 
-    {"tipped": bool, "outcome": "ok" | "tipped" | "missed_pipe", "cop_inside_fraction": float,
+    {"tipped": bool, "outcome": "ok" | "tipped" | "missed_height" | "missed_pipe", "cop_inside_fraction": float,
      "final_head_height_m": float, "planned_head_height_m": float, "max_torque_ratio": float,
      "active_modules": int}
 
@@ -22,15 +22,25 @@
   tips) or on one capsule (the CoP then sits on a vertex of the polygon: on it, not outside).
   Tipping about an edge lifts the frames beyond it by more than CONTACT_GAP_M within a degree,
   leaving a polygon of no area: counted outside.
+- The base, as planned at each moment (the stage the trajectory is in: frames from its active-module
+  count on; before the first stage the first's, after the last the last's): the CoM's signed
+  distance to the polygon of the base's actual contacts (its floor contacts pushing up plus its
+  frames within CONTACT_GAP_M of the floor; no area: outside), as the planner keeps the ZMP inside
+  U of the base. While the last posture is held: the floor's normal force on the modules the plan
+  rests on (the base, and an active module planned within REST_GAP_M of the floor) against the
+  robot's weight; a tipped robot rests part of it on modules planned in the air.
 - tipped: a frame of the planned base rose more than LIFT_TIPPED_M off the floor (a base module
-  lifting off unplanned), or the CoP left the contacts' polygon (or the floor carried nothing) for
-  more than 0.1 s in a row.
+  lifting off unplanned), or the CoP left the contacts' polygon (or the floor carried nothing), or
+  the CoM left the base's contact polygon, for more than TIPPED_AFTER_S in a row; or the base
+  carried less than BASE_LOAD_MIN of the weight on average while the last posture was held.
 - Self-collision is on in the plant (physics.self_collision, whatever sim.yaml says): links that
   are not neighbours collide. Steps with a contact between two links are counted
   (run.json's self_contact_steps); the planner keeps the modules apart, so this should be 0.
 - outcome (verdict()): "tipped" as above; else "missed_pipe" when a pipe was given and the head
-  ended farther from its axis than the pipe's radius less a module's radius (the bore the planner
-  aims the head into); else "ok". run.json's `reason` says why in one line ("" when ok).
+  did not end inside its bore: farther from its axis than the pipe's radius less a module's radius
+  (the bore the planner aims the head into), or not above the mouth; else "missed_height" when the
+  head ended more than HEIGHT_TOL_M below the height the plan reached; else "ok". run.json's
+  `reason` says why in one line ("" when ok).
 """
 import dataclasses
 from typing import Callable, NamedTuple, Optional
@@ -44,7 +54,7 @@ from snake_autonomy.planning.fbsr.pipe_scene import pipe_mjcf
 from snake_autonomy.planning.fbsr.plan_io import stage_samples
 from snake_autonomy.planning.fbsr.planner import Plan
 from snake_autonomy.planning.fbsr.support import Support
-from snake_autonomy.planning.fbsr.trajectory import plan_points
+from snake_autonomy.planning.fbsr.trajectory import MIN_LEAD_IN_S, plan_points
 from snake_autonomy.runs.batch import LockStepDriver, load_driver_config
 from snake_autonomy.runs.scout_executor import DriverTrajectoryExecutor
 from snake_autonomy.sim.config import SimConfig
@@ -58,35 +68,72 @@ LIFT_TIPPED_M = 0.02
 MIN_NORMAL_FORCE_N = 0.05
 CONTACT_GAP_M = 0.001
 TIPPED_AFTER_S = 0.1
+BASE_LOAD_MIN = 0.9         # share of the weight the planned resting modules carry in the held posture
+REST_GAP_M = 0.005          # a module this close to the floor in the plan may rest on it
+HEIGHT_TOL_M = 0.03         # the head may end this much below the planned height (servo sag: 2-6 mm)
 
 
 class Verdict(NamedTuple):
     tipped: bool
-    outcome: str        # "ok", "tipped" or "missed_pipe"
+    outcome: str        # "ok", "tipped", "missed_pipe" or "missed_height"
     reason: str         # one line; "" when ok
 
 
-def verdict(max_lift_m: float, longest_outside_s: float, longest_no_pressure_s: float,
-            head_to_axis_m: Optional[float] = None, bore_limit_m: Optional[float] = None) -> Verdict:
+@dataclasses.dataclass
+class Measured:
+    """What the monitor measured over a run, as verdict() reads it."""
+    max_lift_m: float = 0.0                 # highest frame of the final base above lying
+    longest_outside_s: float = 0.0          # CoP outside the contacts' polygon, longest spell
+    longest_no_pressure_s: float = 0.0      # no floor pressure at all, longest spell
+    longest_com_outside_s: float = 0.0      # CoM outside the base's contact polygon, longest spell
+    base_load_fraction: float = 1.0         # floor force on the base / weight, mean over the hold
+    head_z_m: Optional[float] = None        # the head's final height ...
+    target_z_m: Optional[float] = None      # ... and the plan's (None: not checked)
+    head_to_axis_m: Optional[float] = None  # with a pipe: the head's final distance to its axis,
+    bore_limit_m: Optional[float] = None    # the bore's limit on it,
+    mouth_m: Optional[float] = None         # and the mouth's height
+
+
+def verdict(measured: Measured) -> Verdict:
     """How a run ended, from what the monitor measured: tipped when the planned base lifted more than
-    LIFT_TIPPED_M or the support was lost (CoP outside the contacts, or no floor pressure) for more
-    than TIPPED_AFTER_S; missed_pipe when a pipe was given (head_to_axis_m not None) and the head
-    is not within bore_limit_m of its axis. Tipping wins when both happened; the reason names both."""
+    LIFT_TIPPED_M, the support was lost (CoP outside the contacts, no floor pressure, or the CoM
+    outside the base's contacts) for more than TIPPED_AFTER_S, or the base carried less than
+    BASE_LOAD_MIN of the weight in the held posture; missed_pipe when a pipe was given
+    (head_to_axis_m not None) and the head is not within bore_limit_m of its axis above the mouth;
+    missed_height when the head ended more than HEIGHT_TOL_M below target_z_m. Tipping wins when
+    several happened; the reason names each."""
+    m = measured
     why = []
-    if max_lift_m > LIFT_TIPPED_M:
-        why.append(f"a base module lifted {1000 * max_lift_m:.0f} mm off the floor "
+    if m.max_lift_m > LIFT_TIPPED_M:
+        why.append(f"a base module lifted {1000 * m.max_lift_m:.0f} mm off the floor "
                    f"(limit {1000 * LIFT_TIPPED_M:.0f} mm)")
-    if longest_outside_s > TIPPED_AFTER_S:
-        why.append(f"the centre of pressure left the contacts' polygon for {longest_outside_s:.2f} s "
+    if m.longest_outside_s > TIPPED_AFTER_S:
+        why.append(f"the centre of pressure left the contacts' polygon for {m.longest_outside_s:.2f} s "
                    f"(limit {TIPPED_AFTER_S} s)")
-    if longest_no_pressure_s > TIPPED_AFTER_S:
-        why.append(f"the floor carried no weight for {longest_no_pressure_s:.2f} s (limit {TIPPED_AFTER_S} s)")
+    if m.longest_no_pressure_s > TIPPED_AFTER_S:
+        why.append(f"the floor carried no weight for {m.longest_no_pressure_s:.2f} s (limit {TIPPED_AFTER_S} s)")
+    if m.longest_com_outside_s > TIPPED_AFTER_S:
+        why.append(f"the centre of mass left the polygon of the base's contacts for {m.longest_com_outside_s:.2f} s "
+                   f"(limit {TIPPED_AFTER_S} s)")
+    if not m.base_load_fraction >= BASE_LOAD_MIN:
+        why.append(f"the base carried {100 * m.base_load_fraction:.0f} % of the weight in the raised posture "
+                   f"(at least {100 * BASE_LOAD_MIN:.0f} %)")
     reasons = ["the robot tipped: " + ", ".join(why)] if why else []
-    missed = head_to_axis_m is not None and not head_to_axis_m <= bore_limit_m
-    if missed:
-        reasons.append(f"missed the pipe: the head ended {head_to_axis_m:.3f} m from the pipe's axis, "
-                       f"outside the bore ({bore_limit_m:.3f} m: the pipe's radius less a module's radius)")
-    outcome = "tipped" if why else "missed_pipe" if missed else "ok"
+    missed_pipe = False
+    if m.head_to_axis_m is not None:
+        if not m.head_to_axis_m <= m.bore_limit_m:
+            missed_pipe = True
+            reasons.append(f"missed the pipe: the head ended {m.head_to_axis_m:.3f} m from the pipe's axis, outside "
+                           f"the bore ({m.bore_limit_m:.3f} m: the pipe's radius less a module's radius)")
+        elif m.mouth_m is not None and not m.head_z_m > m.mouth_m:
+            missed_pipe = True
+            reasons.append(f"missed the pipe: the head ended at {m.head_z_m:.3f} m, below the mouth "
+                           f"({m.mouth_m:.3f} m)")
+    missed_height = m.target_z_m is not None and not m.head_z_m >= m.target_z_m - HEIGHT_TOL_M
+    if missed_height:
+        reasons.append(f"missed the height: the head ended at {m.head_z_m:.3f} m, more than "
+                       f"{1000 * HEIGHT_TOL_M:.0f} mm below the plan's {m.target_z_m:.3f} m")
+    outcome = "tipped" if why else "missed_pipe" if missed_pipe else "missed_height" if missed_height else "ok"
     return Verdict(bool(why), outcome, "; ".join(reasons))
 
 
@@ -117,9 +164,9 @@ def send_through_driver(plant: Plant, plan: Plan, sample_period_s: float,
         raise ValueError(f"the driver aborted the plan's trajectory: {executor.aborted}")
 
 
-def centre_of_pressure(model, data, floor_geom: int):
-    """(CoP xy or None, (k, 2) contact points xy) of the floor contacts pushing up."""
-    points, forces = [], []
+def floor_contacts(model, data, floor_geom: int):
+    """((k, 2) points xy, (k,) normal forces N, (k,) robot body ids) of the floor contacts pushing up."""
+    points, forces, bodies = [], [], []
     f6 = np.zeros(6)
     for i in range(data.ncon):
         c = data.contact[i]
@@ -130,9 +177,15 @@ def centre_of_pressure(model, data, floor_geom: int):
         if fz > MIN_NORMAL_FORCE_N:
             points.append(c.pos[:2].copy())
             forces.append(fz)
-    if not forces:
-        return None, np.zeros((0, 2))
-    p, f = np.array(points), np.array(forces)
+            bodies.append(int(model.geom_bodyid[c.geom2 if c.geom1 == floor_geom else c.geom1]))
+    return np.array(points).reshape(-1, 2), np.array(forces), np.array(bodies, int)
+
+
+def centre_of_pressure(model, data, floor_geom: int):
+    """(CoP xy or None, (k, 2) contact points xy) of the floor contacts pushing up."""
+    p, f, _ = floor_contacts(model, data, floor_geom)
+    if not len(f):
+        return None, p
     return (f[:, None] * p).sum(axis=0) / f.sum(), p
 
 
@@ -143,10 +196,20 @@ def self_contacts(model, data) -> int:
                if body[data.contact[i].geom1] != 0 and body[data.contact[i].geom2] != 0)
 
 
-class Monitor:
-    """What one run measures at every driver step."""
+def longest_run(flags) -> int:
+    """The longest run of True in flags."""
+    longest = run = 0
+    for flag in flags:
+        run = run + 1 if flag else 0
+        longest = max(longest, run)
+    return longest
 
-    def __init__(self, plant: Plant, torque_limit_nm: float):
+
+class Monitor:
+    """What one run measures at every driver step. `schedule`: (time from the trajectory's start,
+    first base module) of each stage, in order; a call with no time is the held last posture."""
+
+    def __init__(self, plant: Plant, torque_limit_nm: float, schedule=((0.0, 0),), resting=None):
         self.plant = plant
         self.floor = mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
         self.torque_limit_nm = torque_limit_nm
@@ -154,17 +217,32 @@ class Monitor:
         self.inside, self.max_torque_ratio, self.max_lift_m = [], 0.0, 0.0
         self.no_pressure_steps = 0    # steps with no floor contact pushing up: no CoP to check
         self.longest_no_pressure, self._no_pressure_run = 0, 0
-        self.base_from = plant.robot.num_frames   # frames >= this index are the planned base
+        self.base_from = plant.robot.num_frames   # frames >= this index are the final base
         self.self_contact_steps = 0   # steps with a contact between two of the robot's links
+        self.schedule = list(schedule)
+        # The modules the held posture rests on as planned (the base and any active module left
+        # on the floor): MuJoCo body ids; None: the final base's.
+        self.resting = None if resting is None else np.asarray(resting, int)
+        self.com_margins = []         # the CoM's signed distance to the base's contact polygon (m)
+        self.hold_loads = []          # floor force on the base / weight, while the last posture is held
+        base_link = mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_BODY, "base_link")
+        self.weight_n = float(plant.model.body_subtreemass[base_link] * -plant.model.opt.gravity[2])
 
-    def __call__(self, _t=None) -> None:
-        cop, contacts = centre_of_pressure(self.plant.model, self.plant.data, self.floor)
-        if self_contacts(self.plant.model, self.plant.data):
+    def base_at(self, t) -> int:
+        """The first module of the base at trajectory time t (None: the held last posture)."""
+        if t is None:
+            return self.schedule[-1][1]
+        return [m for t0, m in self.schedule if t0 <= t][-1] if t >= self.schedule[0][0] else self.schedule[0][1]
+
+    def __call__(self, t=None) -> None:
+        model, data = self.plant.model, self.plant.data
+        points, forces, bodies = floor_contacts(model, data, self.floor)
+        if self_contacts(model, data):
             self.self_contact_steps += 1
         frames = self.plant.frame_positions()
-        touching = frames[frames[:, 2] - self.radius_m < CONTACT_GAP_M, :2]
-        contacts = np.vstack([contacts, touching])
-        if cop is None:
+        touching = frames[:, 2] - self.radius_m < CONTACT_GAP_M
+        contacts = np.vstack([points, frames[touching, :2]])
+        if not len(forces):
             # MuJoCo's soft contacts can carry no normal force for one 10 ms step while the body
             # lies within a millimetre of the floor (a micro-bounce as tick-quantised goals step):
             # no pressure, no centre of pressure; counted apart, tipping shows as lift instead.
@@ -173,7 +251,17 @@ class Monitor:
             self.longest_no_pressure = max(self.longest_no_pressure, self._no_pressure_run)
         else:
             self._no_pressure_run = 0
+            cop = (forces[:, None] * points).sum(axis=0) / forces.sum()
             self.inside.append(bool(Support.of(contacts).signed_distance([cop])[0] >= -COP_TOLERANCE_M))
+        # The base: module j (frames j, j + 1) is MuJoCo body j + 1 (body 0 the world, 1 base_link).
+        first = self.base_at(t)
+        on_base = bodies >= first + 1
+        base_contacts = np.vstack([points[on_base], frames[first:][touching[first:], :2]])
+        com = self.plant.center_of_mass()[:2]
+        self.com_margins.append(float(Support.of(base_contacts).signed_distance([com])[0]))
+        if t is None:
+            rests = on_base if self.resting is None else np.isin(bodies, self.resting)
+            self.hold_loads.append(float(forces[rests].sum()) / self.weight_n)
         ratio = np.abs(self.plant.actuator_torques_nm()).max() / self.torque_limit_nm
         self.max_torque_ratio = max(self.max_torque_ratio, float(ratio))
         z = frames[self.base_from:, 2]
@@ -181,11 +269,24 @@ class Monitor:
             self.max_lift_m = max(self.max_lift_m, float((z - self.radius_m).max()))
 
     def longest_outside_s(self) -> float:
-        longest = run = 0
-        for ok in self.inside:
-            run = 0 if ok else run + 1
-            longest = max(longest, run)
-        return longest * DRIVER_PERIOD_S
+        return longest_run(not ok for ok in self.inside) * DRIVER_PERIOD_S
+
+    def measured(self) -> Measured:
+        return Measured(
+            max_lift_m=self.max_lift_m, longest_outside_s=self.longest_outside_s(),
+            longest_no_pressure_s=self.longest_no_pressure * DRIVER_PERIOD_S,
+            longest_com_outside_s=longest_run(d < -COP_TOLERANCE_M for d in self.com_margins) * DRIVER_PERIOD_S,
+            base_load_fraction=float(np.mean(self.hold_loads)) if self.hold_loads else 1.0)
+
+
+def resting_bodies(chain, q, active_modules: int) -> np.ndarray:
+    """MuJoCo body ids of the modules that posture q rests on as planned: the base (modules from
+    active_modules on) and every active module with a frame within REST_GAP_M of the floor.
+    Module j spans frames j and j + 1 and is body j + 1 (body 0 the world, 1 base_link)."""
+    z = chain.pose(q).positions[:, 2] - chain.radius_m
+    low = np.minimum(z[:-1], z[1:]) < REST_GAP_M
+    low[active_modules:] = True
+    return np.flatnonzero(low) + 1
 
 
 def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
@@ -202,10 +303,14 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
     heading = float(np.arctan2(start_pose.rotations[0][1, 0], start_pose.rotations[0][0, 0]))
     plant = Plant(robot, params, start=(*start_pose.positions[0, :2], heading), q0_rad=q[0],
                   scene_xml=pipe_mjcf(pipe) if pipe is not None else "")
-    monitor = Monitor(plant, params.config.servo.torque_limit_nm)
+    # The base of every stage: frames from its active-module count on, from the stage's start in
+    # the driver's trajectory (plan_points: the first point at MIN_LEAD_IN_S); the final base is
+    # the smallest, and the one held at the end. Lift is measured on the final base's frames.
+    starts = MIN_LEAD_IN_S + np.concatenate([[0.0], np.cumsum([s.t_end_s for s in plan.stages])[:-1]])
+    monitor = Monitor(plant, params.config.servo.torque_limit_nm,
+                      [(float(t), s.active_modules) for t, s in zip(starts, plan.stages)],
+                      resting_bodies(chain, plan.q_end, plan.active_modules))
     plant.step(SETTLE_S)
-    # The base of every stage: frames from its active-module count on; the final base is the
-    # smallest, and the one held at the end. Lift is measured on the final base's frames.
     monitor.base_from = plan.active_modules
     step = (lambda t: (monitor(), record.append((t, plant.frame_positions())))) \
         if record is not None else monitor
@@ -214,12 +319,14 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
         plant.step(DRIVER_PERIOD_S)
         monitor()
     head = plant.frame_positions()[0]
-    head_to_axis_m = bore_limit_m = None
+    measured = dataclasses.replace(monitor.measured(), head_z_m=float(head[2]),
+                                   target_z_m=float(plan.final_head_height_m))
     if pipe is not None:
-        head_to_axis_m = float(np.hypot(head[0] - pipe.x_m, head[1] - pipe.y_m))
-        bore_limit_m = float(pipe.radius_m - chain.radius_m)   # the planner's "under the mouth" rule
-    v = verdict(monitor.max_lift_m, monitor.longest_outside_s(), monitor.longest_no_pressure * DRIVER_PERIOD_S,
-                head_to_axis_m, bore_limit_m)
+        measured = dataclasses.replace(
+            measured, head_to_axis_m=float(np.hypot(head[0] - pipe.x_m, head[1] - pipe.y_m)),
+            bore_limit_m=float(pipe.radius_m - chain.radius_m),   # the planner's "under the mouth" rule
+            mouth_m=float(pipe.mouth_m))
+    v = verdict(measured)
     metrics = {
         "tipped": v.tipped,
         "outcome": v.outcome,
@@ -232,7 +339,12 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
     extra = {"head_xy_m": head[:2].tolist(), "max_base_lift_m": monitor.max_lift_m,
              "no_pressure_steps": monitor.no_pressure_steps,
              "self_contact_steps": monitor.self_contact_steps,
+             "base_load_fraction": measured.base_load_fraction,
+             "min_com_margin_m": float(min(monitor.com_margins)) if monitor.com_margins else None,
+             "longest_com_outside_s": measured.longest_com_outside_s,
              "limit_violations": int(plant.limit_violations), "reason": v.reason}
     if pipe is not None:
-        extra.update(head_to_pipe_axis_m=head_to_axis_m, bore_limit_m=bore_limit_m)
+        extra.update(head_to_pipe_axis_m=measured.head_to_axis_m, bore_limit_m=measured.bore_limit_m,
+                     head_in_bore=bool(measured.head_to_axis_m <= measured.bore_limit_m
+                                       and measured.head_z_m > pipe.mouth_m))
     return {"metrics": metrics, "extra": extra}
