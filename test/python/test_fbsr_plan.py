@@ -40,6 +40,19 @@ def test_last_raise_ends_above_every_earlier_raise(planner):
     assert raises[-1] > max(raises[:-1])
 
 
+def test_with_every_module_active_more_raises_are_kept_while_the_head_ends_higher(planner):
+    """Seed 14 once ended at 0.492 m (the other seeds 0.535-0.617 m): one last raise's optimum
+    depends on where it starts. Further raises from where it ended, each kept only when the head
+    ends higher by head_height_tol_m, lift it above 0.5 m."""
+    plan = planner.plan(seed=14)
+    tol = planner.cfg.head_height_tol_m
+    last = [planner.chain.pose(st.q_end).head[2] for st in plan.stages
+            if st.kind == "raise" and st.active_modules == 12]
+    assert plan.final_head_height_m >= 0.5
+    assert len(last) >= 2 and all(b > a + tol for a, b in zip(last, last[1:]))
+    assert len(last) <= 1 + planner.cfg.max_final_cycles
+
+
 def test_plan_checker_catches_a_zmp_outside_and_a_gap(planner):
     doc = plan_io.to_dict(planner.plan(max_active=2, seed=0))
     assert plan_io.problems(doc) == []

@@ -159,7 +159,8 @@ def main(args) -> int:
             f"max torque {100 * m['max_torque_ratio']:.0f} % of the limit")
     extra = result["extra"]
     if "base_load_fraction" in extra:
-        line += (f", base carried {100 * extra['base_load_fraction']:.0f} % of the weight, CoM at least "
+        line += (f", base carried {100 * extra['base_load_fraction']:.0f} % of the weight (modules planned in the "
+                 f"air {100 * extra['air_load_fraction']:.0f} %), CoM at least "
                  f"{1000 * extra['min_com_margin_m']:.0f} mm inside the base's contacts")
     if pipe is not None:
         line += (f", head {'inside' if extra.get('head_in_bore') else 'not inside'} the bore, "

@@ -32,7 +32,9 @@
 - tipped: a frame of the planned base rose more than LIFT_TIPPED_M off the floor (a base module
   lifting off unplanned), or the CoP left the contacts' polygon (or the floor carried nothing), or
   the CoM left the base's contact polygon, for more than TIPPED_AFTER_S in a row; or the base
-  carried less than BASE_LOAD_MIN of the weight on average while the last posture was held.
+  floor carried more than AIR_LOAD_MAX of the weight on modules planned in the air, on average while
+  the last posture was held (what the base does not carry then is on those, or on the pipe's wall
+  when the head leans on it: the wall is no tipping).
 - Self-collision is on in the plant (physics.self_collision, whatever sim.yaml says): links that
   are not neighbours collide. Steps with a contact between two links are counted
   (run.json's self_contact_steps); the planner keeps the modules apart, so this should be 0.
@@ -68,7 +70,7 @@ LIFT_TIPPED_M = 0.02
 MIN_NORMAL_FORCE_N = 0.05
 CONTACT_GAP_M = 0.001
 TIPPED_AFTER_S = 0.1
-BASE_LOAD_MIN = 0.9         # share of the weight the planned resting modules carry in the held posture
+AIR_LOAD_MAX = 0.1          # share of the weight the floor carries on modules planned in the air, held
 REST_GAP_M = 0.005          # a module this close to the floor in the plan may rest on it
 HEIGHT_TOL_M = 0.03         # the head may end this much below the planned height (servo sag: 2-6 mm)
 
@@ -86,7 +88,8 @@ class Measured:
     longest_outside_s: float = 0.0          # CoP outside the contacts' polygon, longest spell
     longest_no_pressure_s: float = 0.0      # no floor pressure at all, longest spell
     longest_com_outside_s: float = 0.0      # CoM outside the base's contact polygon, longest spell
-    base_load_fraction: float = 1.0         # floor force on the base / weight, mean over the hold
+    base_load_fraction: float = 1.0         # floor force on the resting modules / weight, mean over the hold
+    air_load_fraction: float = 0.0          # floor force on the modules planned in the air / weight, same
     head_z_m: Optional[float] = None        # the head's final height ...
     target_z_m: Optional[float] = None      # ... and the plan's (None: not checked)
     head_to_axis_m: Optional[float] = None  # with a pipe: the head's final distance to its axis,
@@ -98,7 +101,7 @@ def verdict(measured: Measured) -> Verdict:
     """How a run ended, from what the monitor measured: tipped when the planned base lifted more than
     LIFT_TIPPED_M, the support was lost (CoP outside the contacts, no floor pressure, or the CoM
     outside the base's contacts) for more than TIPPED_AFTER_S, or the base carried less than
-    BASE_LOAD_MIN of the weight in the held posture; missed_pipe when a pipe was given
+    AIR_LOAD_MAX of the weight on modules planned in the air; missed_pipe when a pipe was given
     (head_to_axis_m not None) and the head is not within bore_limit_m of its axis above the mouth;
     missed_height when the head ended more than HEIGHT_TOL_M below target_z_m. Tipping wins when
     several happened; the reason names each."""
@@ -115,9 +118,9 @@ def verdict(measured: Measured) -> Verdict:
     if m.longest_com_outside_s > TIPPED_AFTER_S:
         why.append(f"the centre of mass left the polygon of the base's contacts for {m.longest_com_outside_s:.2f} s "
                    f"(limit {TIPPED_AFTER_S} s)")
-    if not m.base_load_fraction >= BASE_LOAD_MIN:
-        why.append(f"the base carried {100 * m.base_load_fraction:.0f} % of the weight in the raised posture "
-                   f"(at least {100 * BASE_LOAD_MIN:.0f} %)")
+    if not m.air_load_fraction <= AIR_LOAD_MAX:
+        why.append(f"the floor carried {100 * m.air_load_fraction:.0f} % of the weight on modules planned in the air "
+                   f"(at most {100 * AIR_LOAD_MAX:.0f} %; the base {100 * m.base_load_fraction:.0f} %)")
     reasons = ["the robot tipped: " + ", ".join(why)] if why else []
     missed_pipe = False
     if m.head_to_axis_m is not None:
@@ -165,8 +168,10 @@ def send_through_driver(plant: Plant, plan: Plan, sample_period_s: float,
 
 
 def floor_contacts(model, data, floor_geom: int):
-    """((k, 2) points xy, (k,) normal forces N, (k,) robot body ids) of the floor contacts pushing up."""
-    points, forces, bodies = [], [], []
+    """((k, 2) points xy, (k,) normal forces N, (k,) modules) of the floor contacts pushing up. Module j
+    (frames j, j + 1) is the j-th body from base_link (the head) on, as mjcf.py nests them."""
+    head = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "base_link")
+    points, forces, modules = [], [], []
     f6 = np.zeros(6)
     for i in range(data.ncon):
         c = data.contact[i]
@@ -177,8 +182,8 @@ def floor_contacts(model, data, floor_geom: int):
         if fz > MIN_NORMAL_FORCE_N:
             points.append(c.pos[:2].copy())
             forces.append(fz)
-            bodies.append(int(model.geom_bodyid[c.geom2 if c.geom1 == floor_geom else c.geom1]))
-    return np.array(points).reshape(-1, 2), np.array(forces), np.array(bodies, int)
+            modules.append(int(model.geom_bodyid[c.geom2 if c.geom1 == floor_geom else c.geom1]) - head)
+    return np.array(points).reshape(-1, 2), np.array(forces), np.array(modules, int)
 
 
 def centre_of_pressure(model, data, floor_geom: int):
@@ -190,10 +195,12 @@ def centre_of_pressure(model, data, floor_geom: int):
 
 
 def self_contacts(model, data) -> int:
-    """Contacts between two geoms of the robot (both on a body other than the world)."""
-    body = model.geom_bodyid
+    """Contacts between two geoms of the robot (both on bodies of base_link's tree: the pipe's wall
+    is a body of the world's too, not of the robot)."""
+    robot = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "base_link")
+    root = model.body_rootid[model.geom_bodyid]
     return sum(1 for i in range(data.ncon)
-               if body[data.contact[i].geom1] != 0 and body[data.contact[i].geom2] != 0)
+               if root[data.contact[i].geom1] == robot and root[data.contact[i].geom2] == robot)
 
 
 def longest_run(flags) -> int:
@@ -221,10 +228,11 @@ class Monitor:
         self.self_contact_steps = 0   # steps with a contact between two of the robot's links
         self.schedule = list(schedule)
         # The modules the held posture rests on as planned (the base and any active module left
-        # on the floor): MuJoCo body ids; None: the final base's.
+        # on the floor): module indices; None: the final base's.
         self.resting = None if resting is None else np.asarray(resting, int)
         self.com_margins = []         # the CoM's signed distance to the base's contact polygon (m)
-        self.hold_loads = []          # floor force on the base / weight, while the last posture is held
+        self.hold_loads = []          # floor force on the resting modules / weight, while the last posture is held
+        self.hold_air_loads = []      # ... and on the others
         base_link = mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_BODY, "base_link")
         self.weight_n = float(plant.model.body_subtreemass[base_link] * -plant.model.opt.gravity[2])
 
@@ -236,7 +244,7 @@ class Monitor:
 
     def __call__(self, t=None) -> None:
         model, data = self.plant.model, self.plant.data
-        points, forces, bodies = floor_contacts(model, data, self.floor)
+        points, forces, modules = floor_contacts(model, data, self.floor)
         if self_contacts(model, data):
             self.self_contact_steps += 1
         frames = self.plant.frame_positions()
@@ -253,15 +261,15 @@ class Monitor:
             self._no_pressure_run = 0
             cop = (forces[:, None] * points).sum(axis=0) / forces.sum()
             self.inside.append(bool(Support.of(contacts).signed_distance([cop])[0] >= -COP_TOLERANCE_M))
-        # The base: module j (frames j, j + 1) is MuJoCo body j + 1 (body 0 the world, 1 base_link).
         first = self.base_at(t)
-        on_base = bodies >= first + 1
+        on_base = modules >= first
         base_contacts = np.vstack([points[on_base], frames[first:][touching[first:], :2]])
         com = self.plant.center_of_mass()[:2]
         self.com_margins.append(float(Support.of(base_contacts).signed_distance([com])[0]))
         if t is None:
-            rests = on_base if self.resting is None else np.isin(bodies, self.resting)
+            rests = on_base if self.resting is None else np.isin(modules, self.resting)
             self.hold_loads.append(float(forces[rests].sum()) / self.weight_n)
+            self.hold_air_loads.append(float(forces[~rests].sum()) / self.weight_n)
         ratio = np.abs(self.plant.actuator_torques_nm()).max() / self.torque_limit_nm
         self.max_torque_ratio = max(self.max_torque_ratio, float(ratio))
         z = frames[self.base_from:, 2]
@@ -276,17 +284,17 @@ class Monitor:
             max_lift_m=self.max_lift_m, longest_outside_s=self.longest_outside_s(),
             longest_no_pressure_s=self.longest_no_pressure * DRIVER_PERIOD_S,
             longest_com_outside_s=longest_run(d < -COP_TOLERANCE_M for d in self.com_margins) * DRIVER_PERIOD_S,
-            base_load_fraction=float(np.mean(self.hold_loads)) if self.hold_loads else 1.0)
+            base_load_fraction=float(np.mean(self.hold_loads)) if self.hold_loads else 1.0,
+            air_load_fraction=float(np.mean(self.hold_air_loads)) if self.hold_air_loads else 0.0)
 
 
-def resting_bodies(chain, q, active_modules: int) -> np.ndarray:
-    """MuJoCo body ids of the modules that posture q rests on as planned: the base (modules from
-    active_modules on) and every active module with a frame within REST_GAP_M of the floor.
-    Module j spans frames j and j + 1 and is body j + 1 (body 0 the world, 1 base_link)."""
+def resting_modules(chain, q, active_modules: int) -> np.ndarray:
+    """The modules that posture q rests on as planned: the base (modules from active_modules on) and
+    every active module with a frame within REST_GAP_M of the floor (module j spans frames j, j + 1)."""
     z = chain.pose(q).positions[:, 2] - chain.radius_m
     low = np.minimum(z[:-1], z[1:]) < REST_GAP_M
     low[active_modules:] = True
-    return np.flatnonzero(low) + 1
+    return np.flatnonzero(low)
 
 
 def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
@@ -309,7 +317,7 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
     starts = MIN_LEAD_IN_S + np.concatenate([[0.0], np.cumsum([s.t_end_s for s in plan.stages])[:-1]])
     monitor = Monitor(plant, params.config.servo.torque_limit_nm,
                       [(float(t), s.active_modules) for t, s in zip(starts, plan.stages)],
-                      resting_bodies(chain, plan.q_end, plan.active_modules))
+                      resting_modules(chain, plan.q_end, plan.active_modules))
     plant.step(SETTLE_S)
     monitor.base_from = plan.active_modules
     step = (lambda t: (monitor(), record.append((t, plant.frame_positions())))) \
@@ -339,7 +347,7 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
     extra = {"head_xy_m": head[:2].tolist(), "max_base_lift_m": monitor.max_lift_m,
              "no_pressure_steps": monitor.no_pressure_steps,
              "self_contact_steps": monitor.self_contact_steps,
-             "base_load_fraction": measured.base_load_fraction,
+             "base_load_fraction": measured.base_load_fraction, "air_load_fraction": measured.air_load_fraction,
              "min_com_margin_m": float(min(monitor.com_margins)) if monitor.com_margins else None,
              "longest_com_outside_s": measured.longest_com_outside_s,
              "limit_violations": int(plant.limit_violations), "reason": v.reason}

@@ -40,7 +40,7 @@ class PlannerConfig:
     max_shift_replans: int = 4
     shift_restarts: int = 2
     max_backtracks: int = 4
-    max_final_cycles: int = 2
+    max_final_cycles: int = 4
     head_height_tol_m: float = 0.005
     target_tol_m: float = 0.02
 

@@ -12,7 +12,15 @@ non-adjacent modules self_collision_margin_m apart (collision.py; a cost term pu
 check refuses); a plan that cannot is refused with the modules and the distance. The last raise
 to the highest head (every module active, no height or target asked) runs all its restarts and
 keeps the best that passes: its first local optimum often leaves the head well below what the
-same modules reach.
+same modules reach; then up to max_final_cycles more raises from where it ended, each kept only
+when the head ends higher.
+
+The pipe (paper fig. 6): the head aims under the mouth, and once under it, the next raise (with
+the same modules) aims 5 cm inside; with every module active, up to max_final_cycles more raises
+(the best of each's restarts, without the pipe potential, which pulls every module to the axis
+against the head's way in). The plan ends once the head is PIPE_DEPTH_M past the mouth within the
+bore (the pipe's radius less a module's); a plan whose last raise leaves it elsewhere is refused
+with where the head ended.
 """
 import time
 from dataclasses import dataclass, field
@@ -25,6 +33,7 @@ from . import collision
 from .chain import Chain, lying_posture
 from .config import PlannerConfig, RobotPosture
 from .cost import Directive, Pipe, StageCost, Weights
+from .pipe_scene import head_in_mouth
 from .stage import Checks, PlanningError, Stage, optimise, self_collision_problem
 from .support import Support, convex_hull
 
@@ -53,6 +62,10 @@ class Plan:
     @property
     def duration_s(self) -> float:
         return float(sum(s.t_end_s for s in self.stages))
+
+
+#: A plan into the pipe ends with the head at least this far above the mouth, within the bore.
+PIPE_DEPTH_M = 0.02
 
 
 class FbsrPlanner:
@@ -120,6 +133,7 @@ class FbsrPlanner:
         transferred = False
         backtracks = 0
         extra_cycles = 0
+        entered_at = None        # the active modules with which a raise from under the mouth was tried
         reseed = False
         previous = None          # where the last raise started: (stages, q, m, head, transferred, raised)
         raised = -np.inf         # the highest head at the end of a raise so far
@@ -137,12 +151,14 @@ class FbsrPlanner:
                 # before it. The last raise (every module active) must also end above the highest
                 # raise so far: the shifts lower the head, and a last raise that recovers only part
                 # of that is a local optimum (re-planned from a random start).
-                floor = max(head_before, raised) if m >= max_active else head_before
+                # Aiming at a point (the pipe), the head may have to come down to get under it.
+                highest = m >= max_active and target_m is None and height_m is None
+                floor = max(head_before, raised) if highest else head_before
                 stage = self._stage("raise", m, q, u, Checks(
                     u, head_above_m=floor if transferred else None,
                     period_s=cfg.sample_period_s, self_margin_m=cfg.self_collision_margin_m),
                     directive, pipe, rng, cfg.k1, restarts, random_first=reseed,
-                    keep_best=m >= max_active and target_m is None and height_m is None)
+                    keep_best=m >= max_active and height_m is None)
             except PlanningError:
                 # No raise from here passes the checks: re-plan the previous raise (and the
                 # transfer after it) from a random start, at most max_backtracks times.
@@ -164,6 +180,12 @@ class FbsrPlanner:
                 break
             if target_m is not None and np.linalg.norm(head_xyz - np.asarray(target_m)) < cfg.target_tol_m:
                 break
+            if into_pipe and head_in_mouth(head_xyz, pipe, self.chain.radius_m, PIPE_DEPTH_M):
+                break                   # in the bore (a later cycle aiming closer may come out again)
+            if into_pipe and directive.target_m is below and entered_at != m and \
+                    np.hypot(*(head_xyz[:2] - below[:2])) < pipe.radius_m - self.chain.radius_m:
+                entered_at = m          # under the mouth: the next raise, with the same modules, goes in
+                continue
             if m >= max_active and target_m is not None and extra_cycles < cfg.max_final_cycles:
                 extra_cycles += 1       # paper II: plan again until the end condition or a
                 continue                # cycle limit; no module left to transfer
@@ -172,6 +194,10 @@ class FbsrPlanner:
                     raise PlanningError(
                         f"--height-m {height_m}: no plan reaches it with at most {max_active} "
                         f"active modules of {self.robot.name} (highest found: {head:.3f} m)")
+                if into_pipe:
+                    raise PlanningError(self._pipe_missed(pipe, head_xyz, max_active))
+                if target_m is None:
+                    self._raise_higher(plan, m, u, directive, rng, restarts)
                 break
             m_next = min(m + 2, max_active)
             try:
@@ -192,6 +218,24 @@ class FbsrPlanner:
         plan.stage_times_s = [st.planning_time_s for st in plan.stages]
         plan.restarts = sum(st.restarts for st in plan.stages) + backtracks
         return plan
+
+    def _raise_higher(self, plan, m, u, directive, rng, restarts) -> None:
+        """Going as high as it can: up to max_final_cycles more raises with every module active,
+        each from where the last ended and kept only when the head ends head_height_tol_m higher
+        (the best of its restarts); the first that does not ends the plan. One raise's optimum
+        depends on where it starts: this is how no seed stays well below the others."""
+        cfg = self.cfg
+        for _ in range(cfg.max_final_cycles):
+            q = plan.q_end
+            above = self.chain.pose(q).head[2] + cfg.head_height_tol_m
+            try:
+                stage = self._stage("raise", m, q, u, Checks(
+                    u, head_above_m=above, period_s=cfg.sample_period_s,
+                    self_margin_m=cfg.self_collision_margin_m),
+                    directive, None, rng, cfg.k1, restarts, random_first=True, keep_best=True)
+            except PlanningError:
+                return
+            self._add(plan, stage)
 
     def _prepare_transfer(self, plan, m, m_next, q, directive, pipe, rng, restarts):
         """Eq. 1: re-plan with decreasing K1 until the ZMP is in U ∩ U'."""
@@ -230,6 +274,8 @@ class FbsrPlanner:
         cfg = self.cfg
         # The pipe's pull is a directive too: a shift lowers K3 in proportion with K1.
         k3 = cfg.k3 * (k1 / cfg.k1 if cfg.k1 > 0 else 1.0) if pipe is not None else 0.0
+        if keep_best and pipe is not None:
+            k3 = 0.0    # going in: the potential pulls every module to the axis, against the head's way in
         weights = Weights(k1=k1, k2=cfg.k2, k3=k3,
                           k_torque=cfg.k_torque, ks_per_m2=cfg.ks_per_m2,
                           k_out_per_m2=cfg.k_out_per_m2, k_wall_per_m2=cfg.k_wall_per_m2,
@@ -248,6 +294,14 @@ class FbsrPlanner:
         plan.stages.append(stage)
         plan.restarts += stage.restarts
         plan.stage_times_s.append(stage.planning_time_s)
+
+    def _pipe_missed(self, pipe: Pipe, head_xyz, max_active: int) -> str:
+        """Why a plan into the pipe is refused: where its last raise left the head."""
+        d = float(np.hypot(head_xyz[0] - pipe.x_m, head_xyz[1] - pipe.y_m))
+        return (f"--pipe {pipe.x_m:g},{pipe.y_m:g},{pipe.radius_m:g}: no plan found puts the head into the "
+                f"pipe with at most {max_active} active modules of {self.robot.name} (the last raise "
+                f"ended {d:.3f} m from the axis at {head_xyz[2]:.3f} m; inside the bore is within "
+                f"{pipe.radius_m - self.chain.radius_m:.3f} m of the axis above the mouth at {pipe.mouth_m:g} m)")
 
     def _check_pipe(self, pipe: Pipe) -> None:
         if not pipe.radius_m > self.chain.radius_m:
