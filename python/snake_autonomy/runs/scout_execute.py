@@ -25,8 +25,10 @@
 - The base, as planned at each moment (the stage the trajectory is in: frames from its active-module
   count on; before the first stage the first's, after the last the last's): the CoM's signed
   distance to the polygon of the base's actual contacts (its floor contacts pushing up plus its
-  frames within CONTACT_GAP_M of the floor; no area: outside), as the planner keeps the ZMP inside
-  U of the base. While the last posture is held: the floor's normal force on the modules the plan
+  frames within BASE_GAP_M of the floor; no area: outside), as the planner keeps the ZMP inside
+  U of the base. BASE_GAP_M is wider than CONTACT_GAP_M: the servos give, and a base module may
+  rise a few millimetres while the modules just made active still rest on the floor (COBRA's
+  base frames 6-8 rise 3.5 mm as its last raise starts); tipping lifts the base far more. While the last posture is held: the floor's normal force on the modules the plan
   rests on (the base, and an active module planned within REST_GAP_M of the floor) against the
   robot's weight; a tipped robot rests part of it on modules planned in the air.
 - tipped: a frame of the planned base rose more than LIFT_TIPPED_M off the floor (a base module
@@ -69,6 +71,7 @@ COP_TOLERANCE_M = 1e-6
 LIFT_TIPPED_M = 0.02
 MIN_NORMAL_FORCE_N = 0.05
 CONTACT_GAP_M = 0.001
+BASE_GAP_M = 0.005
 TIPPED_AFTER_S = 0.1
 AIR_LOAD_MAX = 0.1          # share of the weight the floor carries on modules planned in the air, held
 REST_GAP_M = 0.005          # a module this close to the floor in the plan may rest on it
@@ -263,7 +266,8 @@ class Monitor:
             self.inside.append(bool(Support.of(contacts).signed_distance([cop])[0] >= -COP_TOLERANCE_M))
         first = self.base_at(t)
         on_base = modules >= first
-        base_contacts = np.vstack([points[on_base], frames[first:][touching[first:], :2]])
+        base = frames[first:]
+        base_contacts = np.vstack([points[on_base], base[base[:, 2] - self.radius_m < BASE_GAP_M, :2]])
         com = self.plant.center_of_mass()[:2]
         self.com_margins.append(float(Support.of(base_contacts).signed_distance([com])[0]))
         if t is None:
