@@ -28,12 +28,13 @@
   frames within BASE_GAP_M of the floor; no area: outside), as the planner keeps the ZMP inside
   U of the base. BASE_GAP_M is wider than CONTACT_GAP_M: the servos give, and a base module may
   rise a few millimetres while the modules just made active still rest on the floor (COBRA's
-  base frames 6-8 rise 3.5 mm as its last raise starts); tipping lifts the base far more. While the last posture is held: the floor's normal force on the modules the plan
-  rests on (the base, and an active module planned within REST_GAP_M of the floor) against the
-  robot's weight; a tipped robot rests part of it on modules planned in the air.
+  base frames 6-8 rise 3.5 mm as its last raise starts); tipping lifts the base far more.
+  While the last posture is held: the floor's normal force on the modules the plan rests on (the
+  base, and an active module planned within REST_GAP_M of the floor) and on the others, against
+  the robot's weight; a tipped robot rests part of it on modules planned in the air.
 - tipped: a frame of the planned base rose more than LIFT_TIPPED_M off the floor (a base module
   lifting off unplanned), or the CoP left the contacts' polygon (or the floor carried nothing), or
-  the CoM left the base's contact polygon, for more than TIPPED_AFTER_S in a row; or the base
+  the CoM left the base's contact polygon, for more than TIPPED_AFTER_S in a row; or the
   floor carried more than AIR_LOAD_MAX of the weight on modules planned in the air, on average while
   the last posture was held (what the base does not carry then is on those, or on the pipe's wall
   when the head leans on it: the wall is no tipping).
