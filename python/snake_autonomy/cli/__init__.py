@@ -30,19 +30,47 @@ SUBCOMMANDS = {
 }
 
 
-def main(argv=None) -> int:
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Every option's help ends with its default, except an option whose default is None (its help
+    says what happens without it)."""
+
+    def _get_help_string(self, action):
+        if action.default is None:
+            return action.help
+        return super()._get_help_string(action)
+
+
+def build_parser(chosen=None, load_all: bool = False) -> argparse.ArgumentParser:
+    """The whole parser; only the chosen subcommand's module is imported (every one with load_all),
+    so the others' options are absent. Every (sub-)parser gets HelpFormatter."""
     parser = argparse.ArgumentParser(
         prog="snake_autonomy",
         description="snake_autonomy: autonomy stack for modular snake robots")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    argv = list(sys.argv[1:] if argv is None else argv)
-    chosen = next((a for a in argv if not a.startswith("-")), None)
     for name, (module_name, help_text) in SUBCOMMANDS.items():
         sub_parser = sub.add_parser(name, help=help_text, description=help_text)
-        if name == chosen:
+        if load_all or name == chosen:
             module = importlib.import_module(module_name)
             module.add_arguments(sub_parser)
             sub_parser.set_defaults(_main=module.main)
+    for p in walk_parsers(parser):
+        p.formatter_class = HelpFormatter
+    return parser
+
+
+def walk_parsers(parser: argparse.ArgumentParser):
+    """parser and every parser under it (subcommands, their actions, ...), depth first."""
+    yield parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                yield from walk_parsers(child)
+
+
+def main(argv=None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    chosen = next((a for a in argv if not a.startswith("-")), None)
+    parser = build_parser(chosen)
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()

@@ -38,18 +38,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     algo = parser.add_argument_group("metric (evo's meaning and defaults)")
     algo.add_argument("--metric", choices=("ape", "rpe"), default="ape", help="absolute or relative pose error")
     algo.add_argument("--relation", choices=tuple(RELATIONS), default="trans",
-                      help="which part of the pose error: trans (m, default), angle_deg, ...")
+                      help="which part of the pose error: trans (m), angle_deg, ...")
     algo.add_argument("--align", choices=ALIGN_MODES, default="none",
-                      help="none (default), se3/sim3 (Umeyama), origin, or yaw (4-DoF: yaw + translation)")
+                      help="none, se3/sim3 (Umeyama), origin, or yaw (4-DoF: yaw + translation)")
     algo.add_argument("--n-to-align", type=int, default=-1, metavar="N",
-                      help="align on the first N pairs only (default: all)")
+                      help="align on the first N pairs only (-1: all)")
     algo.add_argument("--t-max-diff", type=float, default=0.01, metavar="S",
-                      help="association window in seconds (default 0.01)")
+                      help="association window in seconds")
     algo.add_argument("--t-offset", type=float, default=0.0, metavar="S",
-                      help="added to the estimate's stamps before association (default 0)")
+                      help="added to the estimate's stamps before association")
     algo.add_argument("--sync", choices=("nearest", "interpolation"), default="nearest",
-                      help="associate nearest stamps (default) or interpolate the denser trajectory")
-    algo.add_argument("--delta", type=float, default=1.0, metavar="N", help="RPE step (default 1)")
+                      help="associate nearest stamps or interpolate the denser trajectory")
+    algo.add_argument("--delta", type=float, default=1.0, metavar="N", help="RPE step")
     algo.add_argument("--delta-unit", choices=("f", "m"), default="f", help="RPE step in frames (f) or metres (m)")
     algo.add_argument("--all-pairs", action="store_true", help="RPE: all pairs, not only consecutive ones")
     loss = parser.add_argument_group("tracking loss and segments")
@@ -57,12 +57,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                       help="estimate stamps further apart than S seconds are a tracking loss "
                            "(0: off; default: max(1 s, 20 median periods); negative: refused)")
     loss.add_argument("--lost-covariance", type=float, default=LOST_COVARIANCE, metavar="C",
-                      help=f"Odometry covariance at or above C means lost (default {LOST_COVARIANCE:g}, RTAB-Map's)")
+                      help="Odometry covariance at or above C means lost (the default is RTAB-Map's)")
     loss.add_argument("--keep-loss", action="store_true",
                       help="flag tracking loss but keep its pairs in alignment and statistics")
     loss.add_argument("--status-bag", metavar="BAG",
                       help="bag with the tracker's TrackingStatus (default: EST or REF if a bag holds it)")
-    loss.add_argument("--status-topic", default=STATUS_TOPIC, help=f"default {STATUS_TOPIC}")
+    loss.add_argument("--status-topic", default=STATUS_TOPIC, help="the tracker's TrackingStatus topic")
     loss.add_argument("--segment-by", action="append", choices=SEGMENT_KEYS,
                       help="segment tables to print (repeatable; default: all of gait, leg, mode)")
     out = parser.add_argument_group("outputs")

@@ -18,12 +18,12 @@ from snake_autonomy.paths import config_path, robot_yaml
 def add_arguments(parser):
     parser.add_argument("--robot", default="cobra", help="robot name under config/robots/ or a YAML path")
     parser.add_argument("--gaits", default=None, help="gait library YAML (default: config/gaits.yaml)")
-    parser.add_argument("--gait", default="sidewind", help="gait name (default: sidewind)")
-    parser.add_argument("--duration", type=float, default=10.0, help="seconds to run (default: 10)")
-    parser.add_argument("--dt", type=float, default=0.01, help="step in seconds (default: 0.01, 100 Hz)")
+    parser.add_argument("--gait", default="sidewind", help="gait name")
+    parser.add_argument("--duration", type=float, default=10.0, help="seconds to run")
+    parser.add_argument("--dt", type=float, default=0.01, help="step in seconds (0.01: 100 Hz)")
     parser.add_argument("--steer-deg", type=float, default=0.0,
                         help="amplitude-modulation steering delta in degrees (steerable gaits only)")
-    parser.add_argument("--out", default="results/gait", help="output folder (default: results/gait)")
+    parser.add_argument("--out", default="results/gait", help="output folder")
 
 
 def run_open_loop(model, gaits, gait, duration_s, dt_s, steer_rad=0.0):

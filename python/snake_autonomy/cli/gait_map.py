@@ -25,12 +25,12 @@ def add_engine_arguments(p) -> None:
                    help="dask: a LocalCluster (or --scheduler); threads/serial: reference engines")
     p.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler (tcp://host:8786)")
     p.add_argument("--workers", type=int, default=2, help="LocalCluster processes / threads")
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (on stderr)")
 
 
 def add_arguments(p) -> None:
     p.add_argument("--robot", default="cobra", help="config/robots/NAME.yaml or a YAML file")
-    p.add_argument("--gait", choices=("rectilinear", "sidewinding"), default="rectilinear")
+    p.add_argument("--gait", choices=("rectilinear", "sidewinding"), default="rectilinear", help="the gait swept")
     p.add_argument("--amplitudes", nargs="+", type=float, default=None,
                    help="rectilinear: A in m (default 0.01 0.02); sidewinding: yaw amplitude deg (35 45)")
     p.add_argument("--kappas", nargs="+", type=float, default=[-1.0, -0.5, 0.0, 0.5, 1.0],
@@ -44,12 +44,12 @@ def add_arguments(p) -> None:
     p.add_argument("--wavelength", type=float, default=1.0, metavar="M", help="rectilinear: lambda in m")
     p.add_argument("--nominal-amplitude", type=float, default=None,
                    help="the amplitude whose fit becomes the follower's keys (default: the fastest)")
-    p.add_argument("--measure-cycles", type=int, default=4)
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--measure-cycles", type=int, default=4, help="gait cycles measured per point")
+    p.add_argument("--seed", type=int, default=0, help="plant seed")
     p.add_argument("--scales", action="store_true", help="ventral scales on (config/sim.yaml scales:)")
     p.add_argument("--flat-belly", type=float, default=0.0, metavar="F",
                    help="plant option physics.flat_belly_fraction (nav runs: config/nav.yaml plant:)")
-    p.add_argument("--out", required=True, metavar="DIR")
+    p.add_argument("--out", required=True, metavar="DIR", help="points.csv, gait_map.yaml, gait_map.png")
     add_engine_arguments(p)
 
 

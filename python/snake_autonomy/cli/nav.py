@@ -9,7 +9,7 @@
                                                     method (and the classifier) on held-out scenes
     snake_autonomy nav run --world FILE [--robot R] [--perception depth|mono|truth] [--seed N]
                            [--pose-source mocap|vio|truth] [--depth-model noisy|perfect]
-                           [--time-limit S] [--classifier FILE] --out DIR
+                           [--time-limit S] [--classifier FILE] [--no-progress] --out DIR
                                                     the closed loop in batch (runs/nav_batch.py):
                                                     DIR/metrics.json, topview.png, frames/
     snake_autonomy nav experiment --worlds N --seeds 0-4 [--perception depth|mono|both|truth]
@@ -47,7 +47,7 @@ from snake_autonomy.runs.nav_experiment import (TIME_FACTOR, estimation_table, e
                                                 outcome_table, random_corridor, run_nav_task, summarise, time_limit_s)
 from snake_autonomy.runs.nav_ros_experiment import check_robot, comparison_table, run_experiment
 from snake_autonomy.runs.render_set import render_scenes
-from snake_autonomy.runs.sweep_runner import open_executor, run_tasks
+from snake_autonomy.runs.sweep_runner import open_executor, progress_bar, run_tasks
 from snake_autonomy.sim.config import SimConfig
 from snake_autonomy.sim.nav_worlds import barn_layout
 from snake_autonomy.sim.world_file import WorldError, load_world
@@ -56,32 +56,35 @@ from snake_autonomy.sim.world_file import WorldError, load_world
 def add_arguments(parser):
     sub = parser.add_subparsers(dest="nav_command", metavar="ACTION")
     chk = sub.add_parser("check-world", help="validate world files; list every problem")
-    chk.add_argument("files", nargs="+", metavar="FILE")
+    chk.add_argument("files", nargs="+", metavar="FILE", help="world files (YAML)")
     tr = sub.add_parser("train-classifier", help="render a training set and train the block classifier")
     tr.add_argument("--out", required=True, metavar="FILE", help="model file to write (joblib)")
     tr.add_argument("--scenes", type=int, default=60, help="training scenes (one frame each)")
     tr.add_argument("--test-scenes", type=int, default=15, help="held-out scenes for the figures")
     tr.add_argument("--seed", type=int, default=0, help="training scenes' seed; held-out: seed + 100000")
+    tr.add_argument("--no-progress", action="store_true", help="no progress bar (rendered scenes, on stderr)")
     ev = sub.add_parser("eval-perception", help="depth (and classifier) traversability on held-out scenes")
     ev.add_argument("--model", metavar="FILE", help="a classifier model from train-classifier")
-    ev.add_argument("--scenes", type=int, default=15)
-    ev.add_argument("--seed", type=int, default=100000)
+    ev.add_argument("--scenes", type=int, default=15, help="held-out scenes (one frame each)")
+    ev.add_argument("--seed", type=int, default=100000,
+                    help="the scenes' seed (train-classifier's held out: its seed + 100000)")
     run = sub.add_parser("run", help="the closed loop on the simulated robot in batch")
-    run.add_argument("--world", required=True, metavar="FILE")
+    run.add_argument("--world", required=True, metavar="FILE", help="world file (YAML)")
     run.add_argument("--perception", choices=("depth", "mono", "truth"), default="depth",
                      help="truth: the segmentation render through the classifier's cells (a perfect classifier)")
-    run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--seed", type=int, default=0, help="plant seed (physics and sensor noise)")
     run.add_argument("--time-limit", type=float, default=1200.0, metavar="S", help="simulated seconds (> 0)")
     run.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono)")
-    run.add_argument("--out", required=True, metavar="DIR")
+    run.add_argument("--out", required=True, metavar="DIR", help="metrics.json, topview.png, frames/")
     run.add_argument("--flat-belly", type=float, default=None, metavar="F",
                      help="plant option: flat belly F x the link diameter wide (default nav.yaml plant:)")
+    run.add_argument("--no-progress", action="store_true", help="no progress bar (simulated seconds, on stderr)")
     ex = sub.add_parser("experiment", help="generated (or your own) worlds x seeds: success rate, collisions, time",
                         description=WORLDS_CONVENTION)
     for p in (run, ex):
         p.add_argument("--pose-source", choices=POSE_SOURCES, default="mocap",
-                       help="the planner's base pose: mocap (motion capture with its noise, as sim.launch; "
-                            "default), vio (the simulated RTAB-Map through the tracking gate and pose "
+                       help="the planner's base pose: mocap (motion capture with its noise, as sim.launch), "
+                            "vio (the simulated RTAB-Map through the tracking gate and pose "
                             "remapper: drift, tracking losses) or truth (the plant's, a diagnostic)")
         p.add_argument("--depth-model", choices=DEPTH_MODELS, default=None,
                        help="the head camera's depth: noisy (D435i-like, config/sim.yaml depth_noise:) or "
@@ -105,13 +108,13 @@ def add_arguments(parser):
                     help="with --time-limit auto (default 3; runs/nav_experiment.py time_limit_s)")
     ex.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono, both)")
     ex.add_argument("--keep-runs", action="store_true", help="each run's figures under DIR/runs/")
-    ex.add_argument("--out", required=True, metavar="DIR")
+    ex.add_argument("--out", required=True, metavar="DIR", help="runs.csv, summary.json, table.md, worlds/")
     add_engine_arguments(ex)
     wd = sub.add_parser("worlds", help="write generated worlds as world files with a top view each",
                         description=WORLDS_CONVENTION)
-    wd.add_argument("--family", choices=("barn", "corridors"), default="barn")
+    wd.add_argument("--family", choices=("barn", "corridors"), default="barn", help="generated world family")
     wd.add_argument("--first-world", type=int, default=0, metavar="K", help="0-19 tune, 100 up held out")
-    wd.add_argument("--worlds", type=int, default=5, metavar="N")
+    wd.add_argument("--worlds", type=int, default=5, metavar="N", help="generated worlds K..K+N-1")
     wd.add_argument("--out", required=True, metavar="DIR", help="DIR/NAME.yaml (sim.launch world:=FILE), DIR/NAME.png")
     rx = sub.add_parser("ros-experiment", help="worlds x seeds through ROS (sim.launch) in real time, each "
                         "beside its batch run: one table", description=WORLDS_CONVENTION)
@@ -121,12 +124,13 @@ def add_arguments(parser):
     rx.add_argument("--first-world", type=int, default=0, metavar="K", help="0-19 tune, 100 up held out")
     rx.add_argument("--worlds", type=int, default=3, metavar="N", help="generated worlds K..K+N-1")
     rx.add_argument("--seeds", default="0", help="plant seeds: 0-4 or 0,2,3")
-    rx.add_argument("--perception", choices=("depth", "mono"), default="depth")
+    rx.add_argument("--perception", choices=("depth", "mono"), default="depth",
+                    help="traversability from depth or the classifier")
     rx.add_argument("--classifier", metavar="FILE", help="model of train-classifier (mono)")
     rx.add_argument("--time-limit", default="auto", metavar="S|auto",
                     help="seconds after the first command that moves, or auto (as nav experiment)")
     rx.add_argument("--time-factor", type=float, default=None, metavar="F", help="with --time-limit auto")
-    rx.add_argument("--out", required=True, metavar="DIR")
+    rx.add_argument("--out", required=True, metavar="DIR", help="table.md, summary.json, runs/, worlds/")
     for p in (tr, ev, run, ex, wd, rx):
         p.add_argument("--robot", default="cobra", help="robot name (config/robots/NAME.yaml) or YAML file")
         p.add_argument("--config", default=None,
@@ -188,8 +192,17 @@ def main(args) -> int:
     if args.nav_command == "train-classifier":
         cfg, robot, params = _setup(args)
         t0 = time.perf_counter()
-        train = [(f.rgb, f.ground_truth_ground()) for f in render_scenes(
-            robot, params, args.scenes, args.seed, cfg.intrinsics, cfg.mount, depth=False)]
+        scenes = render_scenes(robot, params, args.scenes, args.seed, cfg.intrinsics, cfg.mount, depth=False)
+        bar = progress_bar(args.scenes, "nav train-classifier: rendering", "scene", enabled=not args.no_progress)
+        train = []
+        try:
+            for f in scenes:
+                train.append((f.rgb, f.ground_truth_ground()))
+                if bar is not None:
+                    bar.update(1)
+        finally:
+            if bar is not None:
+                bar.close()
         t1 = time.perf_counter()
         clf = BlockClassifier.train(train, cfg.classifier.block_px, cfg.classifier.dct_coefficients,
                                     cfg.classifier.svm_c, stride_px=cfg.classifier.stride_px,
@@ -236,7 +249,12 @@ def main(args) -> int:
             return 1
         print(f"nav run: {world.name}, {args.robot}, {args.perception}, seed {args.seed}, up to "
               f"{args.time_limit:g} simulated s ...", file=sys.stderr, flush=True)
-        result = run.run()
+        bar = progress_bar(args.time_limit, f"nav run {world.name}", "sim s", enabled=not args.no_progress)
+        try:
+            result = run.run(progress=None if bar is None else lambda t_s: bar.update(t_s - bar.n))
+        finally:
+            if bar is not None:
+                bar.close()
         result.write(args.out)
         print(json.dumps(result.metrics))
         return 0

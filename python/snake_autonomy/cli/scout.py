@@ -83,7 +83,7 @@ def add_arguments(parser):
                        help="most active modules (default: the robot's in config/scout.yaml)")
         p.add_argument("--pipe", metavar="X,Y,R",
                        help="vertical pipe: axis x, y and inner radius (m); a negative x: --pipe=-0.1,0.3,0.06")
-        p.add_argument("--seed", default="0", metavar="S", help=f"planner seed, 0..{SEED_MAX} (default 0)")
+        p.add_argument("--seed", default="0", metavar="S", help=f"planner seed, 0..{SEED_MAX}")
         p.add_argument("--out", required=True, metavar="DIR", help="results folder")
         p.add_argument("--no-restarts", action="store_true", help="no random restarts (benchmarks)")
         p.add_argument("--config", metavar="YAML", help="planner configuration (default config/scout.yaml)")
@@ -92,7 +92,7 @@ def add_arguments(parser):
                            help="write the inverse: from the raised posture back to the lying one")
         if name == "run":
             p.add_argument("--sim-seed", default="0", metavar="S",
-                           help=f"physics draws of config/sim.yaml, 0..{SEED_MAX} (default 0)")
+                           help=f"physics draws of config/sim.yaml, 0..{SEED_MAX}")
 
 
 def main(args) -> int:

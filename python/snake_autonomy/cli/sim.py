@@ -53,20 +53,21 @@ def add_arguments(parser):
     sub = parser.add_subparsers(dest="sim_command", metavar="SIM_COMMAND")
     run = sub.add_parser("run", help="one mission on the simulated robot")
     run.add_argument("--mission", required=True, help="mission file or provided mission name (config/missions)")
-    run.add_argument("--seed", type=int, default=0, help="randomised physics and sensor noise (default 0)")
+    run.add_argument("--seed", type=int, default=0, help="randomised physics and sensor noise")
     run.add_argument("--feedback", choices=("mocap", "vio"), default="mocap",
-                     help="base pose from motion capture or the simulated RTAB-Map (default mocap)")
+                     help="base pose from motion capture or the simulated RTAB-Map")
     run.add_argument("--out", required=True, metavar="DIR", help="results folder")
     run.add_argument("--start", default="0,0,0", metavar="X,Y,HEADING_DEG",
                      help="centre of mass of a straight body and its heading (direction of travel)")
     run.add_argument("--time-limit", type=float, metavar="S", help="override the mission's time limit")
     _common(run)
     exp = sub.add_parser("experiment", help="one of the thesis's experiments over seeds (chapter 4.2)")
-    exp.add_argument("name", choices=EXPERIMENT_NAMES)
-    exp.add_argument("--seeds", default="0-4", help="e.g. 0-4 or 0,3 (default 0-4)")
-    exp.add_argument("--feedback", choices=("mocap", "vio", "both"), default="both")
-    exp.add_argument("--out", required=True, metavar="DIR")
-    exp.add_argument("--jobs", type=int, default=1, help="parallel runs (default 1; the machine is shared)")
+    exp.add_argument("name", choices=EXPERIMENT_NAMES, help="the experiment")
+    exp.add_argument("--seeds", default="0-4", help="e.g. 0-4 or 0,3")
+    exp.add_argument("--feedback", choices=("mocap", "vio", "both"), default="both",
+                     help="the base pose: motion capture, the simulated RTAB-Map, or each in turn")
+    exp.add_argument("--out", required=True, metavar="DIR", help="results folder")
+    exp.add_argument("--jobs", type=int, default=1, help="parallel runs (the machine is shared)")
     exp.add_argument("--starts", help="single only: a subset of the 13 start poses, e.g. 0,7 or 0-3 (default all)")
     exp.add_argument("--time-limit", type=float, metavar="S", help="override the mission's time limit")
     _common(exp)
@@ -74,8 +75,8 @@ def add_arguments(parser):
 
 def _common(p):
     root = config_path()
-    p.add_argument("--sim-config", default=str(root / "sim.yaml"), help="simulated robot (default config/sim.yaml)")
-    p.add_argument("--gaits", default=str(root / "gaits.yaml"), help="gait library (default config/gaits.yaml)")
+    p.add_argument("--sim-config", default=str(root / "sim.yaml"), help="simulated robot")
+    p.add_argument("--gaits", default=str(root / "gaits.yaml"), help="gait library")
     p.add_argument("--no-plots", action="store_true", help="metrics and CSVs only")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 

@@ -11,10 +11,10 @@ from snake_autonomy.paths import config_path, robot_yaml
 def add_arguments(parser):
     parser.add_argument("robot", nargs="?", default="cobra", help="robot name under config/robots/ or a YAML path")
     parser.add_argument("--camera", default=str(config_path("camera.yaml")), metavar="YAML",
-                        help="camera calibration giving camera_in_head (default config/camera.yaml)")
+                        help="camera calibration giving camera_in_head")
     parser.add_argument("--no-camera", action="store_true", help="leave the camera links out")
     parser.add_argument("--camera-name", default="camera",
-                        help="prefix of the camera links: NAME_link, NAME_color_optical_frame (default camera)")
+                        help="prefix of the camera links: NAME_link, NAME_color_optical_frame")
 
 
 def main(args) -> int:

@@ -45,7 +45,7 @@ import math
 from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, List, Optional
+from typing import Any, Callable, List, Optional
 
 import numpy as np
 
@@ -293,8 +293,11 @@ class NavRun:
         c = self.cfg.classifier
         return lambda f: truth_traversable(f.ground_truth_ground(), c.block_px, c.stride_px, c.ground_fraction)
 
-    def run(self) -> NavResult:
+    def run(self, progress: Optional[Callable[[float], None]] = None) -> NavResult:
+        """The closed loop to the time limit (or the goal plus settling); progress(t_s), if given,
+        is called once per simulated second."""
         spec, plant, loop = self.spec, self.plant, self.loop
+        next_progress_s = 1.0
         dt = spec.control_period_s
         t, step = 0.0, 0             # t = step x dt: no rounding drift against the tick and sample grids
         traj, replans, frames, commands = [], [], [], []
@@ -349,6 +352,9 @@ class NavRun:
             step += 1
             t = step * dt
             plant.step_to(t)
+            if progress is not None and t >= next_progress_s - 1e-9:
+                next_progress_s += 1.0
+                progress(t)
         self.camera.close()
         return self._result(t, traj, replans, frames, commands, path, rolled, loop_reached_t)
 

@@ -13,6 +13,7 @@ so run_tasks uses concurrent.futures.as_completed for every engine. Progress: a 
 """
 import concurrent.futures as cf
 import contextlib
+import sys
 from typing import Callable, Iterable, List, Optional
 
 from tqdm import tqdm
@@ -59,6 +60,13 @@ def open_executor(engine: str = "dask", scheduler: Optional[str] = None, n_worke
         yield client.get_executor(pure=False)
 
 
+def progress_bar(total: float, desc: str, unit: str, enabled: bool = True) -> Optional[tqdm]:
+    """The commands' progress bar on stderr (kept when done), or None when not enabled."""
+    if not enabled:
+        return None
+    return tqdm(total=total, desc=desc, unit=unit, leave=True, file=sys.stderr)
+
+
 def run_tasks(executor: cf.Executor, fn: Callable, tasks: Iterable, desc: str = "tasks",
               progress: bool = True) -> List:
     """fn(task) for every task on executor; the results in task order (a task's exception is
@@ -66,9 +74,7 @@ def run_tasks(executor: cf.Executor, fn: Callable, tasks: Iterable, desc: str = 
     tasks = list(tasks)
     futures = {executor.submit(fn, t): i for i, t in enumerate(tasks)}
     results: List = [None] * len(tasks)
-    bar = None
-    if progress:
-        bar = tqdm(total=len(tasks), desc=desc, unit="run", leave=True)
+    bar = progress_bar(len(tasks), desc, "run", enabled=progress)
     try:
         for f in cf.as_completed(futures):
             results[futures[f]] = f.result()
