@@ -23,7 +23,11 @@ from ...perception.depth_traversability import DepthTraversabilityParams
 from ...perception.camera_model import CameraIntrinsics, CameraMount
 from .follower import FollowerParams
 from .gait import RectilinearGait
+from .body_sweep import SweepParams
+from .critics import CriticParams
+from .local_map import LocalMapParams
 from .obstacle_map import MapParams
+from .recovery import RecoveryParams
 from .sampler import SamplerParams
 
 NAV_YAML = config_path("nav.yaml")
@@ -118,6 +122,18 @@ class NavGaits:
 
 
 
+PLANNERS = ("perception_space", "layered")
+
+
+@dataclass(frozen=True)
+class PlannerChoice:
+    """config/nav.yaml `planner:`: which local planner the loop runs."""
+    kind: str = "perception_space"      # perception_space (planner.py) | layered (layered_planner.py)
+
+    def validate(self) -> List[str]:
+        return [] if self.kind in PLANNERS else [f"kind: expected one of {', '.join(PLANNERS)}, got {self.kind!r}"]
+
+
 @dataclass
 class NavConfig:
     """config/nav.yaml; the defaults are its values (COBRA's)."""
@@ -132,6 +148,11 @@ class NavConfig:
     plant: PlantOptions = PlantOptions()
     gaits: NavGaits = NavGaits()
     map: MapParams = MapParams()
+    planner: PlannerChoice = PlannerChoice()
+    local_map: LocalMapParams = LocalMapParams()
+    body_sweep: SweepParams = SweepParams()
+    critics: CriticParams = CriticParams()
+    recovery: RecoveryParams = RecoveryParams()
 
     @classmethod
     def from_yaml(cls, path=None) -> "NavConfig":
@@ -144,7 +165,7 @@ class NavConfig:
         if not isinstance(data, dict):
             raise NavConfigError(source, [f"expected a mapping of sections, got {data!r}"])
         known = ("camera", "depth_traversability", "sampler", "follower", "classifier", "gait", "plant", "gaits",
-                 "map")
+                 "map", "planner", "local_map", "body_sweep", "critics", "recovery")
         for key in data:
             if key not in known:
                 problems.append(f"{key}: unknown section; known: {', '.join(known)}")
@@ -180,15 +201,18 @@ class NavConfig:
         plant = _section(defaults.plant, data.get("plant"), "plant", problems)
         gaits = NavGaits.from_dict(data.get("gaits"), problems)
         omap = _section(defaults.map, data.get("map"), "map", problems)
+        layers = {name: _section(getattr(defaults, name), data.get(name), name, problems)
+                  for name in ("planner", "local_map", "body_sweep", "critics", "recovery")}
         for key in ("amplitude_m", "wavelength_m", "frequency_hz"):
             if not getattr(gait, key) > 0:
                 problems.append(f"gait.{key}: must be > 0, got {getattr(gait, key)}")
         for name, obj in (("depth_traversability", depth), ("sampler", sampler), ("follower", follower),
-                          ("plant", plant), ("classifier", classifier), ("map", omap)):
+                          ("plant", plant), ("classifier", classifier), ("map", omap), *layers.items()):
             problems += [f"{name}.{p}" for p in obj.validate()]
         if problems:
             raise NavConfigError(source, problems)
-        return cls(intr, mount, depth, sampler, follower, classifier, float(replan), gait, plant, gaits, omap)
+        return cls(intr, mount, depth, sampler, follower, classifier, float(replan), gait, plant, gaits, omap,
+                   **layers)
 
 
 def nav_config_path(robot: str) -> Path:
@@ -301,7 +325,12 @@ def _section(default, d, name: str, problems: List[str]):
             problems.append(f"{name}.{key}: unknown key (value {value!r}); known: {', '.join(known)}")
             continue
         was = getattr(default, key)
-        if isinstance(was, bool):
+        if isinstance(was, tuple):
+            ok, want = isinstance(value, list) and all(isinstance(v, str) for v in value), "a list of names"
+            if ok:
+                kwargs[key] = tuple(value)
+                continue
+        elif isinstance(was, bool):
             ok, want = isinstance(value, bool), "true or false"
         elif isinstance(was, str):
             ok, want = isinstance(value, str), "a string"

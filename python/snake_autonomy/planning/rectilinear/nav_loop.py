@@ -41,6 +41,7 @@ from typing import Callable, Optional, Tuple
 import numpy as np
 
 from .follower import BACK_OFF, RecedingHorizonFollower
+from .layered_planner import LayeredPlanner
 from .planner import NavPlanner, Replan, T_world_ground, ground_frame
 
 FOLLOWING, WAITING, NO_FREE_ARC, GOAL_REACHED = "following", "waiting", "no_free_arc", "goal_reached"
@@ -70,6 +71,14 @@ def _checked_goal(goal_xy) -> Tuple[float, float]:
     if not (math.isfinite(x) and math.isfinite(y)):
         raise ValueError(f"goal_xy: must be finite, got {tuple(goal_xy)!r}")
     return x, y
+
+
+def make_planner(cfg, head_width_m: float, body):
+    """The local planner config/nav.yaml `planner.kind` names, with a follower of cfg.follower."""
+    follower = RecedingHorizonFollower(cfg.follower)
+    if cfg.planner.kind == "layered":
+        return LayeredPlanner(cfg.intrinsics, head_width_m, cfg, follower, body)
+    return NavPlanner(cfg.intrinsics, head_width_m, cfg.sampler, follower, body, cfg.map)
 
 
 @dataclass
@@ -114,8 +123,9 @@ class NavLoop:
             raise ValueError("map.source: truth is the simulator's diagnostic (the world's obstacles, given as "
                              "obstacle_map); a robot's planner maps the faces it sees: use faces or none"
                              if obstacle_map is None else "obstacle_map: given only with map.source truth")
-        self.planner = NavPlanner(cfg.intrinsics, head_width_m, cfg.sampler, RecedingHorizonFollower(follower),
-                                  body, cfg.map)
+        if cfg.planner.kind == "layered" and obstacle_map is not None:
+            raise ValueError("map.source truth: the layered planner maps what its views show (local_map)")
+        self.planner = make_planner(dataclasses.replace(cfg, follower=follower), head_width_m, body)
         if obstacle_map is not None:
             self.planner.obstacle_map = obstacle_map
         self.replan_period_s = float(cfg.replan_period_s)
@@ -266,7 +276,7 @@ class NavLoop:
             self._next_replan = t_s + self.replan_period_s
             out = self._replan(t_s, pose)
         cmd = self.planner.command(t_s, pose)
-        if self.state == NO_FREE_ARC and self.on_no_free_arc == "hold":
+        if self.state == NO_FREE_ARC and (self.on_no_free_arc == "hold" or getattr(self.planner, "holding", False)):
             out.hold = True
         else:
             out.hold, out.kappa_per_m = False, float(cmd.kappa_per_m)

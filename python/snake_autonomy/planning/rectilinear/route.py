@@ -16,12 +16,12 @@ The grid covers the start-goal box grown by pad_m; its cells are bounded (map.ro
 a goal 150 m away once took 3.85 GB here. grid_shape refuses a larger grid, naming its extent,
 before anything is allocated; the simulator asks it before a run starts.
 """
-import math
 
 import numpy as np
 import shapely
-from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
+
+from .grid_route import grid_graph
 
 
 MAX_CELLS = 1_000_000   # map.route_max_cells' default (MapParams)
@@ -81,7 +81,7 @@ class Route:
         cost[shapely.contains_xy(geometry, X, Y)] = self.blocked_cost
         self._lo, self._shape = lo, (nx, ny)
         g, s = self._cell(goal), self._cell(start)
-        dist, pred = dijkstra(_grid_graph(cost, self.cell_m), directed=False, indices=g,
+        dist, pred = dijkstra(grid_graph(cost, self.cell_m), directed=False, indices=g,
                               return_predecessors=True)
         self._field = dist.reshape(nx, ny)
         cells = [s]
@@ -110,18 +110,3 @@ class Route:
         snapped = self._lo + self.cell_m * np.column_stack([i, j])
         return self._field[i, j] + np.hypot(*(xy - snapped).T)
 
-
-def _grid_graph(cost: np.ndarray, cell_m: float):
-    """8-connected grid, each edge its length times the mean cost of its two cells."""
-    nx, ny = cost.shape
-    ids = np.arange(nx * ny).reshape(nx, ny)
-    rows, cols, w = [], [], []
-    for dx, dy in ((1, 0), (0, 1), (1, 1), (1, -1)):
-        a = ids[0:nx - dx, max(0, -dy):ny - max(0, dy)]
-        b = ids[dx:nx, max(0, dy):ny + min(0, dy)]
-        length = cell_m * math.hypot(dx, dy)
-        rows.append(a.ravel())
-        cols.append(b.ravel())
-        w.append(length * 0.5 * (cost.ravel()[a.ravel()] + cost.ravel()[b.ravel()]))
-    n = nx * ny
-    return coo_matrix((np.concatenate(w), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()

@@ -1,0 +1,126 @@
+"""The body sweep: the one validity check of the layered planner, ROS-free.
+
+A candidate motion of the rectilinear robot is a body curvature kappa held until the next replan.
+What the whole body sweeps doing it (body_model.py, measured on COBRA with the gait map,
+test/python/test_nav_body_model.py):
+1. the body reshapes from the current kappa to the new one about its centroid (COBRA) or its middle
+   (`reshape_keeps_centroid`): both ends swing (L^2/8) dkappa to the inside of the bend;
+2. then it crawls: the body in its new shape is carried rigidly with its middle along the middle's
+   tangent, turning at the gait map's omega(kappa) (none within `dead_band_per_m`: below it the
+   measured body translates, it does not turn), forwards or (backing off, the reverse gait)
+   backwards.
+The sweep is every station of the body (every `station_m` from tail to head) in each reshape shape and
+at every `step_m` of the crawl. A sweep is clear up to the travel where a station first comes nearer
+an occupied cell of the local map than half the body's width + `margin_m` -- or, when the body already
+lies nearer than that (beside an obstacle), more than SLACK_M nearer than its nearest station is now:
+it may move along the obstacle or away. The model places the body as a uniform arc through base_link;
+a body that has just changed its curvature lies elsewhere, and a modelled station can overlap an
+obstacle the real body is clear of: such a station is the model's error, and only may not go deeper.
+A reshape that is not clear makes the whole motion invalid (free travel 0).
+One model for every motion the planner asks about: the candidate arcs, the follower's curvature
+bounds, backing off and turning in place (recovery.py).
+"""
+from dataclasses import dataclass
+from typing import List, Tuple
+
+import numpy as np
+
+from .body_model import BodyGeometry, body_poses, middle_pose
+from .unicycle import arc_poses
+
+SLACK_M = 0.02              # the body may come this much nearer than it is now (half a station spacing)
+
+
+@dataclass(frozen=True)
+class SweepParams:
+    """config/nav.yaml `body_sweep:`; the defaults are its values (COBRA's)."""
+    margin_m: float = 0.06                # clearance beyond half the body's width
+    station_m: float = 0.04               # body stations, tail to head
+    step_m: float = 0.05                  # crawl samples
+    reshape_keeps_centroid: bool = True   # COBRA's measured body; the 12-link robot's: about the middle
+    dead_band_per_m: float = 0.35         # the body does not turn below this curvature (COBRA)
+
+    def validate(self) -> List[str]:
+        p = [f"{k}: must be > 0, got {getattr(self, k)}" for k in ("station_m", "step_m") if not getattr(self, k) > 0]
+        p += [f"{k}: must be >= 0, got {getattr(self, k)}" for k in ("margin_m", "dead_band_per_m")
+              if not getattr(self, k) >= 0]
+        if not isinstance(self.reshape_keeps_centroid, bool):
+            p.append(f"reshape_keeps_centroid: must be true or false, got {self.reshape_keeps_centroid!r}")
+        return p
+
+
+@dataclass
+class Sweep:
+    rows: np.ndarray         # (R, N, 2) stations in the ground frame: row 0 the body now, then the reshape, the crawl
+    travel_m: np.ndarray     # (R,) the crawl's travel at each row (0 for the reshape's rows)
+    reshape_rows: int        # rows 1..reshape_rows are the reshape
+
+
+@dataclass
+class SweepCheck:
+    free_m: float            # travel before the first station that is not clear (-1: the reshape is not)
+    clearance_m: float       # the least distance to an obstacle beyond half the width, up to free_m
+
+
+class BodySweep:
+    def __init__(self, geometry: BodyGeometry, follower_params, params: SweepParams = SweepParams()):
+        self.geometry, self.fp, self.params = geometry, follower_params, params
+        self.need_m = 0.5 * geometry.width_m + params.margin_m
+
+    def turn_rate(self, kappa: float) -> float:
+        """The body's turn rate at kappa (rad/s): the gait map's omega beyond the dead band."""
+        k = np.sign(kappa) * max(0.0, abs(kappa) - self.params.dead_band_per_m)
+        return self.fp.omega(float(k))
+
+    def sweep(self, kappa_now: float, kappa_new: float, travel_m: float) -> Sweep:
+        """The body's stations from its shape now (base_link at the ground frame's origin, heading 0)
+        through the reshape to kappa_new and travel_m of crawl (negative: backwards)."""
+        g, p = self.geometry, self.params
+        middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
+        now = body_poses(middle, kappa_now, kappa_now, g.half_length_m, p.station_m,
+                         p.reshape_keeps_centroid)[-1]
+        shapes = body_poses(middle, kappa_now, kappa_new, g.half_length_m, p.station_m, p.reshape_keeps_centroid)
+        final = shapes[-1]
+        mid = final[len(final) // 2]
+        c0, s0 = np.cos(mid[2]), np.sin(mid[2])
+        d = final[:, :2] - mid[:2]
+        rel = np.column_stack([c0 * d[:, 0] + s0 * d[:, 1], -s0 * d[:, 0] + c0 * d[:, 1]])
+        rows = [now[:, :2]] + [s[:, :2] for s in shapes]
+        travel = [0.0] * len(rows)
+        if abs(travel_m) > 0:
+            path = arc_poses(self.turn_rate(kappa_new) / self.fp.speed_m_s, travel_m, p.step_m,
+                             start=tuple(mid))[1:]
+            c, s = np.cos(path[:, 2])[:, None], np.sin(path[:, 2])[:, None]
+            xs = path[:, 0:1] + c * rel[None, :, 0] - s * rel[None, :, 1]
+            ys = path[:, 1:2] + s * rel[None, :, 0] + c * rel[None, :, 1]
+            rows += list(np.stack([xs, ys], axis=-1))
+            travel += list(np.linspace(0.0, travel_m, len(path) + 1)[1:])
+        return Sweep(np.stack(rows), np.abs(np.array(travel)), len(shapes))
+
+    def check(self, sweep: Sweep, local_map, T_world_g: np.ndarray) -> SweepCheck:
+        """How far the sweep is clear of the map's occupied cells (T_world_g: the ground frame in the
+        world, 4x4)."""
+        R, N, _ = sweep.rows.shape
+        pts = sweep.rows.reshape(-1, 2) @ T_world_g[:2, :2].T + T_world_g[:2, 3]
+        d = local_map.distance(pts).reshape(R, N)
+        half = 0.5 * self.geometry.width_m
+        overlaps = d[0] < half                  # the model's error: the body cannot lie in an obstacle
+        nearest = float(d[0][~overlaps].min()) if (~overlaps).any() else self.need_m
+        allowed = np.where(overlaps, d[0] - SLACK_M, min(self.need_m, nearest - SLACK_M))
+        ok = (d >= allowed[None, :]).all(axis=1)
+        margin = (d - 0.5 * self.geometry.width_m).min(axis=1)
+        if not ok[:sweep.reshape_rows + 1].all():
+            return SweepCheck(-1.0, float(margin[:sweep.reshape_rows + 1].min()))
+        bad = np.nonzero(~ok)[0]
+        last = R - 1 if not len(bad) else int(bad[0]) - 1
+        return SweepCheck(float(sweep.travel_m[last]), float(margin[:last + 1].min()))
+
+
+def sweep_bounds(kappas: np.ndarray, clear: np.ndarray, chosen: int) -> Tuple[float, float]:
+    """The contiguous run of clear candidate curvatures around the chosen one: the follower's bounds."""
+    a = b = chosen
+    while a > 0 and clear[a - 1]:
+        a -= 1
+    while b < len(kappas) - 1 and clear[b + 1]:
+        b += 1
+    return float(kappas[a]), float(kappas[b])

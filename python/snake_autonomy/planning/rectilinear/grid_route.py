@@ -1,0 +1,90 @@
+"""The route to the goal on the local map, ROS-free: the cost to go the route critic scores by.
+
+The arcs see 1.2 m; the goal may lie behind a cluster whose gaps are narrower than the body. The
+route is the global planner's part in Nav2's split (NavFn: Dijkstra on the costmap): scipy's
+Dijkstra from the goal over an 8-connected grid of the local map at `route_cell_m`, each cell's
+cost 1 where the nearest occupied cell is at least `inflation_m` away (half the robot's checked
+width), `inflated_cost` nearer, `lethal_cost` within `lethal_m` (passable, so that a route always
+exists, even from inside an obstacle's inflation); unknown cells cost 1 (optimistic: what no view
+showed is seen before the robot gets there). A goal outside the window is reached through the window
+cell nearest to it, plus the straight line from there.
+"""
+import math
+from typing import Optional
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
+
+
+def grid_graph(cost: np.ndarray, cell_m: float):
+    """8-connected grid, each edge its length times the mean cost of its two cells."""
+    nx, ny = cost.shape
+    ids = np.arange(nx * ny).reshape(nx, ny)
+    flat = cost.ravel()
+    rows, cols, w = [], [], []
+    for dx, dy in ((1, 0), (0, 1), (1, 1), (1, -1)):
+        a = ids[0:nx - dx, max(0, -dy):ny - max(0, dy)].ravel()
+        b = ids[dx:nx, max(0, dy):ny + min(0, dy)].ravel()
+        rows.append(a)
+        cols.append(b)
+        w.append(cell_m * math.hypot(dx, dy) * 0.5 * (flat[a] + flat[b]))
+    n = nx * ny
+    return coo_matrix((np.concatenate(w), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
+
+
+class GridRoute:
+    def __init__(self, route_cell_m: float, inflation_m: float, lethal_m: float, inflated_cost: float = 20.0,
+                 lethal_cost: float = 1000.0):
+        self.route_cell_m, self.inflation_m, self.lethal_m = route_cell_m, inflation_m, lethal_m
+        self.inflated_cost, self.lethal_cost = inflated_cost, lethal_cost
+        self.path = None                    # (K, 2) world points, robot to goal, of the last update
+        self._field = None
+
+    def update(self, local_map, start_xy, goal_xy) -> None:
+        """The cost-to-go field on the map's window to goal_xy, and the route from start_xy."""
+        self._goal = np.asarray(goal_xy, float)
+        start = np.asarray(start_xy, float)
+        if local_map.origin is None:
+            self._field, self.path = None, np.array([start, self._goal])
+            return
+        f = max(1, int(round(self.route_cell_m / local_map.params.cell_m)))
+        dist = local_map.distance_field()
+        n = (dist.shape[0] // f) * f
+        d = dist[:n, :n].reshape(n // f, f, n // f, f).min(axis=(1, 3))     # the nearest in each block
+        cost = np.where(d < self.lethal_m, self.lethal_cost, np.where(d < self.inflation_m, self.inflated_cost, 1.0))
+        cell = f * local_map.params.cell_m
+        self._lo = local_map.origin + 0.5 * (f - 1) * local_map.params.cell_m
+        self._cell, self._shape = cell, cost.shape
+        g_idx = self._index(self._goal[None])[0]
+        g_cell = self._lo + cell * np.array(g_idx)
+        self._goal_gap = float(np.hypot(*(self._goal - g_cell)))     # goal outside the window: the way there
+        ny = cost.shape[1]
+        field, pred = dijkstra(grid_graph(cost, cell), directed=False, indices=g_idx[0] * ny + g_idx[1],
+                               return_predecessors=True)
+        self._field = field.reshape(cost.shape) + self._goal_gap
+        s_idx = self._index(start[None])[0]
+        cells = [s_idx[0] * ny + s_idx[1]]
+        while pred[cells[-1]] >= 0:
+            cells.append(int(pred[cells[-1]]))
+        cells = np.array(cells)
+        pts = self._lo + cell * np.column_stack([cells // ny, cells % ny])
+        self.path = np.vstack([start, pts[1:], self._goal])
+
+    def _index(self, xy: np.ndarray) -> np.ndarray:
+        ij = np.rint((np.asarray(xy, float).reshape(-1, 2) - self._lo) / self._cell).astype(np.int64)
+        return np.clip(ij, 0, np.array(self._shape) - 1)
+
+    def cost_to_go(self, xy: np.ndarray) -> np.ndarray:
+        """(M, 2) world points -> (M,) cost to the goal (metres, inflated cells counted inflated_cost
+        times); straight-line distance without a field."""
+        xy = np.asarray(xy, float).reshape(-1, 2)
+        if self._field is None:
+            return np.hypot(xy[:, 0] - self._goal[0], xy[:, 1] - self._goal[1])
+        ij = self._index(xy)
+        snapped = self._lo + self._cell * ij
+        return self._field[ij[:, 0], ij[:, 1]] + np.hypot(*(xy - snapped).T)
+
+    @property
+    def ready(self) -> Optional[bool]:
+        return self._field is not None

@@ -1,0 +1,181 @@
+"""The layered local planner, ROS-free: one replan of the navigation loop, in Nav2's layers.
+
+    traversability image -> local map (local_map.py: one rolling occupancy grid)
+      -> route (grid_route.py: Dijkstra on the map, the global planner's part)
+      -> candidate arcs (the head's unicycle arcs, Chang et al. III)
+      -> body sweep (body_sweep.py: the one validity check, the measured body of each robot)
+      -> critics (critics.py: weighted scores, the least wins)
+      -> recovery (recovery.py: back off / turn / wait, with a progress checker)
+      -> the follower (follower.py: receding-horizon pursuit of the chosen arc, its curvature bounded to
+         the run of candidates whose reshape the sweep found clear)
+
+An arc's free prefix ends where the head's footprint (its width + lateral_margin_m a side, growing
+to sampler.body_clearance_m a side over the first footprint_taper_m: the body's reach beyond the
+head's path) comes nearer an occupied cell than it already is at the start, where the head's path leaves the floor the
+views showed within its first known_free_m (the camera's blind near field, blind_m, excepted: the
+floor under the head was seen before), or where the body's sweep is no longer clear; margin_m (the
+head cap ahead of base_link and a safety distance) comes off it. Valid arcs are at least min_free_m
+long (resume_free_m after a stop). The ground frame of a replan: base_link on the floor (x, y,
+heading).
+"""
+import math
+from typing import Optional
+
+import numpy as np
+
+from .body_sweep import BodySweep, sweep_bounds
+from .critics import Candidate, score
+from .follower import RecedingHorizonFollower
+from .grid_route import GridRoute
+from .local_map import LocalMap
+from .collision_check import prefix_length
+from .planner import Replan, T_world_ground, to_world, world_xy
+from .recovery import BACK_OFF, TURN, WAIT, ProgressChecker, Recovery
+from .sampler import Arc, Selection
+from .unicycle import arc_poses
+
+
+class LayeredPlanner:
+    def __init__(self, intrinsics, head_width_m: float, cfg, follower: RecedingHorizonFollower, body):
+        """cfg: the NavConfig (its sampler, local_map, body_sweep, critics, recovery sections); body: the
+        robot's BodyGeometry (body_model.py)."""
+        if body is None:
+            raise ValueError("body: the layered planner needs the robot's body geometry (BodyGeometry.of_robot)")
+        self.intrinsics, self.cfg, self.follower = intrinsics, cfg, follower
+        self.sp = cfg.sampler
+        self.head_need_m = 0.5 * head_width_m + self.sp.lateral_margin_m
+        self.map = LocalMap(cfg.local_map)
+        self.sweep = BodySweep(body, follower.params, cfg.body_sweep)
+        lm = cfg.local_map
+        cp = cfg.critics
+        self.route = GridRoute(2 * lm.cell_m, cp.route_inflation_m, 0.5 * body.width_m, cp.route_inflated_cost)
+        self.recovery = Recovery(cfg.recovery)
+        self.progress = ProgressChecker(cfg.recovery.progress_m, cfg.recovery.progress_window_s)
+        self.holding = False                 # the last replan chose to wait (the loop holds)
+        self.obstacle_map = None             # the loop's diagnostic map (map.source truth): not used here
+        p = self.sp
+        half = p.num_arcs // 2
+        self.curvatures = (np.linspace(-p.max_curvature_per_m, p.max_curvature_per_m, p.num_arcs)
+                           if half else np.zeros(1))
+        self._arcs = [(float(c), arc_poses(float(c), p.horizon_m, p.spacing_m)) for c in self.curvatures]
+
+    @property
+    def footprint_width_m(self) -> float:
+        return 2.0 * self.head_need_m
+
+    def replan(self, t_s: float, ground: np.ndarray, T_ground_camera: np.ndarray, pose,
+               goal_xy=None, goal_radius_m: float = 0.0) -> Replan:
+        T_world_g = T_world_ground(pose)
+        self.map.add_view(ground, self.intrinsics.K(), T_world_g @ np.asarray(T_ground_camera, float))
+        route_path = None
+        if goal_xy is not None:
+            self.route.update(self.map, pose[:2], goal_xy)
+            route_path = self.route.path
+        kappa_now = self.follower.kappa_per_m
+        cands = [self._candidate(c, poses, kappa_now, T_world_g) for c, poses in self._arcs]
+        need = max(self.sp.min_free_m, self.sp.resume_free_m) if self.recovery.active else self.sp.min_free_m
+        valid = [i for i, c in enumerate(cands) if c.free_m >= need]
+        sel = Selection([Arc(c.curvature_per_m, c.poses, c.s_m, c.free_m) for c in cands], None)
+        stuck = bool(valid) and self.progress.stuck(t_s, pose[:2])
+        if not valid or stuck:
+            return self._recover(t_s, pose, sel, cands, T_world_g, goal_xy, goal_radius_m, route_path,
+                                 "no progress" if stuck else "no valid arc")
+        fp = self.follower.params
+        # the loop stops goal_margin_m inside the disc (the stop's own move): aim there
+        ctg = self._route_cost(cands, valid, T_world_g, goal_xy, max(0.0, goal_radius_m - fp.goal_margin_m))
+        totals = score([cands[i] for i in valid], self.cfg.critics, self.sp.horizon_m, kappa_now,
+                       fp.kappa_max_per_m, self.sp.max_curvature_per_m, ctg)
+        best = valid[int(np.argmin(totals))]
+        sel.chosen = best
+        self.recovery.reset()
+        self.holding = False
+        arc = cands[best]
+        bounds = sweep_bounds(np.array([c.kappa_per_m for c in cands]), np.array([c.reshape_clear for c in cands]),
+                              best)
+        keep = arc.s_m <= arc.free_m + 1e-9
+        path = to_world(arc.poses[keep], pose)
+        self.follower.set_path(path, arc.curvature_per_m, bounds)
+        reason = (f"arc c {arc.curvature_per_m:+.2f}/m, free {arc.free_m:.2f} m, kappa {bounds[0]:+.2f}.."
+                  f"{bounds[1]:+.2f} /m (body sweep)")
+        return Replan(t_s, tuple(pose), sel, path, reason, route_path)
+
+    def _candidate(self, c: float, poses: np.ndarray, kappa_now: float, T_world_g) -> Candidate:
+        p, fp = self.sp, self.follower.params
+        kappa = fp.kappa(fp.speed_m_s * c)
+        s = np.linspace(0.0, p.horizon_m, len(poses))
+        head = world_xy(T_world_g, poses[:, :2])
+        d = self.map.distance(head)
+        ramp = np.clip(s / p.footprint_taper_m, 0.0, 1.0) if p.footprint_taper_m > 0 else np.ones_like(s)
+        need = self.head_need_m + ramp * (max(self.head_need_m, p.body_clearance_m) - self.head_need_m)
+        ok = d >= np.minimum(need, d[0] - 1e-3)
+        seen = self.map.seen_free(head) | (s < self.cfg.local_map.blind_m) | (s > p.known_free_m)
+        head_free = prefix_length(ok & seen, s)
+        why = "head" if head_free < p.horizon_m else ""
+        chk = self.sweep.check(self.sweep.sweep(kappa_now, kappa, p.horizon_m), self.map, T_world_g)
+        free = head_free
+        if chk.free_m < free:
+            free, why = max(0.0, chk.free_m), "body"
+        return Candidate(c, kappa, poses, s, max(0.0, free - p.margin_m), chk.clearance_m, chk.free_m >= 0, why)
+
+    def _route_cost(self, cands, valid, T_world_g, goal_xy, goal_radius_m):
+        """Per valid candidate, the route's cost to go at the end of its free prefix, or (a prefix
+        entering the goal's disc) minus its deepest point's depth in the disc; None without a goal."""
+        if goal_xy is None:
+            return None
+        out = []
+        for i in valid:
+            c = cands[i]
+            n = max(1, int(np.searchsorted(c.s_m, c.free_m, side="right")))
+            xy = world_xy(T_world_g, c.poses[:n, :2])
+            dist = np.hypot(xy[:, 0] - goal_xy[0], xy[:, 1] - goal_xy[1])
+            inside = dist <= goal_radius_m
+            out.append(float(np.min(dist[inside]) - goal_radius_m) if inside.any()
+                       else float(self.route.cost_to_go(xy[-1:])[0]))
+        return np.array(out)
+
+    def _recover(self, t_s, pose, sel, cands, T_world_g, goal_xy, goal_radius_m, route_path, cause) -> Replan:
+        rp = self.cfg.recovery
+        kappa_now = self.follower.kappa_per_m
+        self.progress.reset()
+        if self.recovery.side is None:
+            self.recovery.side = self._turn_side(cands, T_world_g, goal_xy)
+        back = self.sweep.check(self.sweep.sweep(kappa_now, kappa_now, -rp.back_off_m), self.map, T_world_g)
+        turn = self._free_turn(kappa_now, T_world_g)
+        b = self.recovery.next({BACK_OFF: back.free_m >= rp.back_off_m - 1e-9, TURN: turn is not None})
+        self.holding = b == WAIT
+        if b == BACK_OFF:
+            self.follower.back_off_now()
+            why = f"{cause}: back off along the track"
+        elif b == TURN:
+            self.follower.stop_and_turn(turn, abs(turn))
+            why = f"{cause}: turn in place (kappa {turn:+.2f} /m)"
+        else:
+            why = f"{cause}: wait (no back-off or turn the body sweep finds clear)"
+        return Replan(t_s, tuple(pose), sel, None, why, route_path)
+
+    def _turn_side(self, cands, T_world_g, goal_xy) -> float:
+        """Towards the side of the candidate whose end has the least cost to go (the route's side);
+        without a goal, the side with more free length."""
+        if goal_xy is not None:
+            ends = np.array([world_xy(T_world_g, c.poses[-1:, :2])[0] for c in cands])
+            best = cands[int(np.argmin(self.route.cost_to_go(ends)))]
+            if best.curvature_per_m != 0:
+                return math.copysign(1.0, best.curvature_per_m)
+        left = sum(c.free_m for c in cands if c.curvature_per_m > 0)
+        right = sum(c.free_m for c in cands if c.curvature_per_m < 0)
+        return 1.0 if left >= right else -1.0
+
+    def _free_turn(self, kappa_now: float, T_world_g) -> Optional[float]:
+        """A turn in place whose reshape and crawl (recovery.turn_crawl_m) the body sweep finds clear:
+        the recovery's side first, kappa_turn_per_m then half of it; None if none is."""
+        fp, rp = self.follower.params, self.cfg.recovery
+        for side in (self.recovery.side, -self.recovery.side):
+            for k in (fp.kappa_turn_per_m, 0.5 * fp.kappa_turn_per_m):
+                chk = self.sweep.check(self.sweep.sweep(kappa_now, side * k, rp.turn_crawl_m), self.map, T_world_g)
+                if chk.free_m >= rp.turn_crawl_m - 1e-9:
+                    return side * k
+        return None
+
+    def command(self, t_s: float, pose=None):
+        return self.follower.update(t_s, pose)
+

@@ -1,0 +1,203 @@
+"""The local map: one rolling occupancy grid of what the head camera's views showed, ROS-free.
+
+Every replan's traversability image (depth or monocular alike: a boolean ground mask) is laid on
+the floor through the camera's pose: the ground pixels are free observations of the cells they fall
+in, the obstacle faces (where a column's ground region, counted from the image's bottom row, ends
+below a non-ground pixel) occupied observations of the cells from the face to `face_depth_m` behind
+it along the ray (a face tells where an obstacle's near side is; what lies behind it stays unknown
+until a view shows it). Each cell keeps the log-odds of being occupied (the occupancy-grid update
+of Thrun et al., Probabilistic Robotics ch. 9, as costmap_2d's obstacle layer and OctoMap keep it),
+clamped so that later views can clear a cell a misjudged view marked: a cell is occupied above
+`occupied_log_odds`, free below `free_log_odds`, unknown between.
+
+The grid is a window of `size_m` around the robot, rolled (whole cells, the cells that enter are
+unknown) when the camera moves more than a quarter of the window from its centre. The checks ask it
+for each point's distance to the nearest occupied cell (scipy's Euclidean distance transform,
+computed once per update) and whether a point was seen free; grid_route.py plans the route on it.
+numpy + scipy only: costmap_2d and grid_map are C++ ROS libraries, and the planner must run without
+ROS in the batch simulator.
+"""
+import math
+from dataclasses import dataclass
+from typing import List, Tuple
+
+import numpy as np
+from scipy.ndimage import distance_transform_edt
+
+from .collision_check import floor_rays
+
+UNKNOWN, FREE, OCCUPIED = -1, 0, 100       # nav_msgs/OccupancyGrid values
+
+
+@dataclass(frozen=True)
+class LocalMapParams:
+    """config/nav.yaml `local_map:`; the defaults are its values."""
+    cell_m: float = 0.04
+    size_m: float = 8.0               # the window's side (the route is planned inside it)
+    free_range_m: float = 1.5         # ground pixels further than this from the camera are not taken
+    face_range_m: float = 0.8         # faces further than this are not taken (a pixel row spans 3.6 cm
+                                      # of floor at 1 m with the camera 4.6 cm up)
+    face_depth_m: float = 0.1         # a face marks the cells this far behind it along its ray
+    edge_px: int = 6                  # a face is placed this many rows below the ground region's edge
+    stride_px: int = 4                # every 4th row and column of the image
+    hit_log_odds: float = 0.85        # an occupied observation (p 0.7)
+    miss_log_odds: float = 0.4        # a free observation (p 0.4): about two views clear one mark
+    min_log_odds: float = -2.0
+    max_log_odds: float = 3.5
+    occupied_log_odds: float = 0.6    # above: occupied
+    free_log_odds: float = -0.3       # below: free (seen as floor)
+    blind_m: float = 0.15             # the head's first metres need not be seen free: the camera's near
+                                      # field (it sees the floor from about 0.06 m ahead of the head)
+
+    def validate(self) -> List[str]:
+        p = []
+        for key in ("cell_m", "size_m", "free_range_m", "face_range_m", "hit_log_odds", "miss_log_odds",
+                    "max_log_odds", "blind_m"):
+            if not getattr(self, key) > 0:
+                p.append(f"{key}: must be > 0, got {getattr(self, key)}")
+        if not self.face_depth_m >= 0:
+            p.append(f"face_depth_m: must be >= 0, got {self.face_depth_m}")
+        for key in ("edge_px", "stride_px"):
+            v = getattr(self, key)
+            if not isinstance(v, int) or v < (1 if key == "stride_px" else 0):
+                p.append(f"{key}: must be an integer >= {1 if key == 'stride_px' else 0}, got {v!r}")
+        if not self.min_log_odds < self.free_log_odds < self.occupied_log_odds < self.max_log_odds:
+            p.append("min_log_odds < free_log_odds < occupied_log_odds < max_log_odds must hold, got "
+                     f"{self.min_log_odds}, {self.free_log_odds}, {self.occupied_log_odds}, {self.max_log_odds}")
+        if self.cell_m > 0 and self.size_m / self.cell_m > 2000:
+            p.append(f"size_m: {self.size_m} m at cell_m {self.cell_m} m is more than 2000 cells a side")
+        return p
+
+
+class LocalMap:
+    def __init__(self, params: LocalMapParams = LocalMapParams()):
+        self.params = params
+        self.n = int(math.ceil(params.size_m / params.cell_m))
+        self.log_odds = np.zeros((self.n, self.n), np.float32)     # [i, j]: x, y
+        self.origin = None                  # world (x, y) of cell (0, 0)'s centre; None: not placed yet
+        self._dist = None
+        self.updates = 0
+
+    # --- placing the window ---
+    def _place(self, centre_xy) -> None:
+        c = np.asarray(centre_xy, float)
+        half = 0.5 * (self.n - 1) * self.params.cell_m
+        if self.origin is None:
+            self.origin = c - half
+            return
+        shift = np.rint((c - half - self.origin) / self.params.cell_m).astype(int)
+        if np.all(np.abs(shift) * self.params.cell_m <= 0.25 * self.params.size_m):
+            return
+        new = np.zeros_like(self.log_odds)
+        n = self.n
+        si, sj = int(shift[0]), int(shift[1])
+        src_i, dst_i = slice(max(0, si), min(n, n + si)), slice(max(0, -si), min(n, n - si))
+        src_j, dst_j = slice(max(0, sj), min(n, n + sj)), slice(max(0, -sj), min(n, n - sj))
+        new[dst_i, dst_j] = self.log_odds[src_i, src_j]
+        self.log_odds = new
+        self.origin = self.origin + shift * self.params.cell_m
+        self._dist = None
+
+    def cells(self, xy: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(M, 2) world points -> their cells (i, j) and whether they lie in the window."""
+        ij = np.rint((np.asarray(xy, float).reshape(-1, 2) - self.origin) / self.params.cell_m).astype(np.int64)
+        inside = (ij >= 0).all(axis=1) & (ij < self.n).all(axis=1)
+        return np.clip(ij[:, 0], 0, self.n - 1), np.clip(ij[:, 1], 0, self.n - 1), inside
+
+    def centres(self) -> Tuple[np.ndarray, np.ndarray]:
+        """The cells' centres' world x (n,) and y (n,)."""
+        a = np.arange(self.n) * self.params.cell_m
+        return self.origin[0] + a, self.origin[1] + a
+
+    # --- the update ---
+    def add_view(self, ground: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray) -> None:
+        """One traversability image (True = ground) seen from T_world_camera (the floor is z = 0)."""
+        p = self.params
+        T = np.asarray(T_world_camera, float)
+        self._place(T[:2, 3])
+        ground = np.asarray(ground, bool)
+        h, w = ground.shape
+        rows, cols = np.arange(h - 1, -1, -p.stride_px), np.arange(0, w, p.stride_px)
+        g = ground[np.ix_(rows, cols)]
+        # free: the sampled ground pixels on the floor within free_range_m
+        r_idx, c_idx = np.nonzero(g)
+        free_xy = self._on_floor(cols[c_idx], rows[r_idx], K, T, p.free_range_m)
+        # faces: per column, the top of the ground region that starts at the bottom row
+        gc = ground[:, cols]
+        run = np.where(gc.all(axis=0), h, np.argmin(gc[::-1], axis=0))      # ground rows from the bottom
+        has_face = run < h
+        face_row = np.minimum(h - run - 0.5 + p.edge_px, h - 0.5)[has_face]
+        rays, s, down = floor_rays(cols[has_face], face_row, K, T)
+        horiz = np.maximum(np.hypot(rays[:, 0], rays[:, 1]), 1e-9)
+        rng = s * horiz
+        keep = down & (rng <= p.face_range_m)
+        dirs = rays[keep, :2] / horiz[keep, None]
+        faces = T[:2, 3] + rng[keep, None] * dirs
+        steps = np.arange(0.0, p.face_depth_m + 1e-9, 0.5 * p.cell_m)
+        occ_xy = (faces[:, None, :] + steps[None, :, None] * dirs[:, None, :]).reshape(-1, 2)
+        occ = self._cell_set(occ_xy)
+        free = self._cell_set(free_xy) - occ
+        lo = self.log_odds
+        if free:
+            i, j = np.array(list(free)).T
+            lo[i, j] = np.maximum(lo[i, j] - p.miss_log_odds, p.min_log_odds)
+        if occ:
+            i, j = np.array(list(occ)).T
+            lo[i, j] = np.minimum(lo[i, j] + p.hit_log_odds, p.max_log_odds)
+        self._dist = None
+        self.updates += 1
+
+    def _cell_set(self, xy: np.ndarray) -> set:
+        if not len(xy):
+            return set()
+        i, j, inside = self.cells(xy)
+        return set(zip(i[inside].tolist(), j[inside].tolist()))
+
+    @staticmethod
+    def _on_floor(cols, rows, K, T, max_range_m) -> np.ndarray:
+        rays, s, down = floor_rays(cols, rows, K, T)
+        horiz = np.maximum(np.hypot(rays[:, 0], rays[:, 1]), 1e-9)
+        ok = down & (s * horiz <= max_range_m)
+        return T[:2, 3] + (s[ok] * horiz[ok])[:, None] * (rays[ok, :2] / horiz[ok, None])
+
+    # --- queries ---
+    def occupied(self) -> np.ndarray:
+        return self.log_odds > self.params.occupied_log_odds
+
+    def free(self) -> np.ndarray:
+        return self.log_odds < self.params.free_log_odds
+
+    def distance_field(self) -> np.ndarray:
+        """(n, n) each cell's distance (m) to the nearest occupied cell (inf: none in the window)."""
+        if self._dist is None:
+            occ = self.occupied()
+            if occ.any():
+                self._dist = distance_transform_edt(~occ) * self.params.cell_m
+            else:
+                self._dist = np.full(occ.shape, np.inf)
+        return self._dist
+
+    def distance(self, xy: np.ndarray) -> np.ndarray:
+        """(M, 2) world points -> (M,) distance to the nearest occupied cell (inf off the window or with
+        no map yet); the cell's centre stands for the point, less half a cell."""
+        xy = np.asarray(xy, float).reshape(-1, 2)
+        if self.origin is None:
+            return np.full(len(xy), np.inf)
+        i, j, inside = self.cells(xy)
+        d = self.distance_field()[i, j] - 0.5 * self.params.cell_m
+        return np.where(inside, np.maximum(d, 0.0), np.inf)
+
+    def seen_free(self, xy: np.ndarray) -> np.ndarray:
+        """(M, 2) world points -> (M,) whether a view showed their cell as floor."""
+        xy = np.asarray(xy, float).reshape(-1, 2)
+        if self.origin is None:
+            return np.zeros(len(xy), bool)
+        i, j, inside = self.cells(xy)
+        return inside & self.free()[i, j]
+
+    def grid(self) -> np.ndarray:
+        """(n, n) int8 OCCUPIED / FREE / UNKNOWN, [i, j] = x, y (nav_msgs/OccupancyGrid's values)."""
+        out = np.full(self.log_odds.shape, UNKNOWN, np.int8)
+        out[self.free()] = FREE
+        out[self.occupied()] = OCCUPIED
+        return out

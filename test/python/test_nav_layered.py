@@ -1,0 +1,200 @@
+"""The layered local planner's layers by behaviour: local map, route, body sweep, critics, recovery,
+and a replan through all of them."""
+import dataclasses
+
+import numpy as np
+import pytest
+
+from nav_scenes import CFG, COBRA, K, T_GC, WALL, drawn_mask
+from snake_autonomy.planning.rectilinear.body_sweep import BodySweep, SweepParams, sweep_bounds
+from snake_autonomy.planning.rectilinear.config import NavConfig, NavConfigError
+from snake_autonomy.planning.rectilinear.critics import Candidate, CriticParams, score
+from snake_autonomy.planning.rectilinear.follower import BACK_OFF, FOLLOW, RecedingHorizonFollower
+from snake_autonomy.planning.rectilinear.grid_route import GridRoute
+from snake_autonomy.planning.rectilinear.layered_planner import LayeredPlanner
+from snake_autonomy.planning.rectilinear.local_map import FREE, OCCUPIED, UNKNOWN, LocalMap, LocalMapParams
+from snake_autonomy.planning.rectilinear.recovery import BACK_OFF as R_BACK, TURN, WAIT, ProgressChecker, Recovery, \
+    RecoveryParams
+
+LAYERED = dataclasses.replace(CFG, planner=dataclasses.replace(CFG.planner, kind="layered"),
+                              sampler=dataclasses.replace(CFG.sampler, num_arcs=9))
+
+
+def camera_at(x=0.0, y=0.0):
+    T = np.eye(4)
+    T[:2, 3] = (x, y)
+    return T @ T_GC
+
+
+@pytest.fixture
+def disc_map():
+    """A local map after one view of a disc of radius 0.08 m at (0.5, 0) in front of the camera."""
+    m = LocalMap()
+    m.add_view(drawn_mask(discs=[(0.5, 0.0, 0.08)]), K.K(), camera_at())
+    return m
+
+
+def test_local_map_marks_the_face_of_what_stands_ahead_and_frees_the_floor(disc_map):
+    g = disc_map
+    assert g.distance(np.array([[0.42, 0.0]]))[0] < 0.04            # the disc's near side
+    assert g.distance(np.array([[0.25, 0.0]]))[0] > 0.08              # (faces sit edge_px rows nearer)
+    assert g.seen_free(np.array([[0.3, 0.0], [0.6, 0.2]])).all()   # floor before and beside it
+    assert not g.seen_free(np.array([[0.7, 0.0]]))[0]               # hidden behind it: unknown
+    grid = g.grid()
+    assert (grid == OCCUPIED).any() and (grid == FREE).any() and (grid == UNKNOWN).any()
+
+
+def test_local_map_clears_a_mark_that_later_views_show_as_floor(disc_map):
+    m = disc_map
+    face = np.array([[0.42, 0.0]])
+    assert m.distance(face)[0] < 0.04
+    for _ in range(3):
+        m.add_view(drawn_mask(), K.K(), camera_at())                # the same place: floor now
+    assert not np.isfinite(m.distance(face)[0]) or m.distance(face)[0] > 0.3
+    assert m.seen_free(face)[0]
+
+
+def test_local_map_rolls_with_the_robot_and_keeps_what_it_saw(disc_map):
+    m = disc_map
+    before = m.origin.copy()
+    m.add_view(np.zeros((K.height, K.width), bool), K.K(), camera_at(x=-3.0))   # a blind view 3 m back
+    assert not np.allclose(m.origin, before)
+    assert m.distance(np.array([[0.42, 0.0]]))[0] < 0.04
+
+
+def test_local_map_refuses_inconsistent_thresholds():
+    p = LocalMapParams(free_log_odds=1.0)
+    assert any("free_log_odds" in e for e in p.validate())
+
+
+def test_route_goes_through_the_gap_of_a_wall():
+    m = LocalMap(LocalMapParams(size_m=4.0))
+    m._place((0.0, 0.0))
+    i, j, _ = m.cells(np.array([[1.0, y] for y in np.arange(-2.0, 2.0, 0.02) if abs(y - 0.8) > 0.3]))
+    m.log_odds[i, j] = 3.0                                           # a wall at x 1 with a gap at y 0.8
+    r = GridRoute(0.08, 0.12, 0.045)
+    r.update(m, (0.0, 0.0), (2.0, 0.0))
+    crossing = r.path[np.argmin(np.abs(r.path[:, 0] - 1.0))]
+    assert abs(crossing[1] - 0.8) < 0.2
+    c = r.cost_to_go(np.array([[0.0, 0.0], [1.0, 0.8], [2.0, 0.0]]))
+    assert c[0] > c[1] > c[2] and c[0] > 2.5                       # the way round, not the straight 2 m
+
+
+def test_route_reaches_a_goal_outside_the_window_through_its_edge():
+    m = LocalMap(LocalMapParams(size_m=2.0))
+    m._place((0.0, 0.0))
+    r = GridRoute(0.08, 0.12, 0.045)
+    r.update(m, (0.0, 0.0), (5.0, 0.0))
+    assert r.cost_to_go(np.array([[0.0, 0.0]]))[0] == pytest.approx(5.0, abs=0.1)
+
+
+def _map_with(points):
+    m = LocalMap(LocalMapParams(size_m=4.0))
+    m._place((0.0, 0.0))
+    i, j, _ = m.cells(np.asarray(points, float))
+    m.log_odds[i, j] = 3.0
+    return m
+
+
+def test_body_sweep_reshape_swings_into_an_obstacle_inside_the_bend():
+    sweep = BodySweep(COBRA, CFG.follower, SweepParams(reshape_keeps_centroid=False))
+    # bending left swings head and tail to the left; an obstacle 0.25 m left of the tail
+    m = _map_with([[-1.51, 0.25]])
+    left = sweep.check(sweep.sweep(0.0, 2.0, 0.3), m, np.eye(4))
+    right = sweep.check(sweep.sweep(0.0, -2.0, 0.3), m, np.eye(4))
+    assert left.free_m < 0 and right.free_m == pytest.approx(0.3)
+
+
+def test_body_sweep_crawl_stops_before_an_obstacle_ahead():
+    sweep = BodySweep(COBRA, CFG.follower, SweepParams())
+    m = _map_with([[0.5, 0.0]])
+    chk = sweep.check(sweep.sweep(0.0, 0.0, 1.0), m, np.eye(4))
+    assert 0.3 < chk.free_m < 0.5                  # the head's half width + margin short of it
+
+
+def test_body_sweep_lets_a_body_beside_an_obstacle_move_away():
+    sweep = BodySweep(COBRA, CFG.follower, SweepParams())
+    m = _map_with([[-0.7, 0.08]])                  # 8 cm beside the body's middle: nearer than need
+    chk = sweep.check(sweep.sweep(0.0, 0.0, 0.3), m, np.eye(4))
+    assert chk.free_m == pytest.approx(0.3)        # straight on: it keeps its distance, not nearer
+    assert sweep_bounds(np.array([-1.0, 0.0, 1.0]), np.array([True, True, False]), 1) == (-1.0, 0.0)
+
+
+def _cand(c, free, clearance=1.0, kappa=None):
+    s = np.linspace(0, 1.2, 61)
+    return Candidate(c, c / 1.5 if kappa is None else kappa, np.zeros((61, 3)), s, free, clearance)
+
+
+def test_critics_prefer_longer_free_arcs_then_the_route():
+    p = CriticParams()
+    cands = [_cand(-1.5, 1.2), _cand(0.0, 0.4), _cand(1.5, 1.1)]
+    assert np.argmin(score(cands, p, 1.2, 0.0, 2.0, 3.0)) == 0        # no goal: the longest
+    route = np.array([1.0, 0.5, 0.6])
+    totals = score(cands, p, 1.2, 0.0, 2.0, 3.0, route)
+    assert np.argmin(totals) == 2                  # nearly as long and 0.4 m nearer on the route
+    assert cands[2].scores["route"] == pytest.approx(0.1 / 1.2)
+
+
+def test_critics_clearance_and_curvature_change_break_ties():
+    p = CriticParams()
+    cands = [_cand(0.0, 1.2, clearance=0.02), _cand(0.0, 1.2, clearance=0.5)]
+    assert np.argmin(score(cands, p, 1.2, 0.0, 2.0, 3.0)) == 1
+    cands = [_cand(1.5, 1.2, kappa=1.0), _cand(-1.5, 1.2, kappa=-1.0)]
+    assert np.argmin(score(cands, p, 1.2, 1.0, 2.0, 3.0)) == 0       # no reshape
+
+
+def test_recovery_runs_its_sequence_skipping_what_is_not_possible():
+    r = Recovery(RecoveryParams(sequence=(R_BACK, R_BACK, TURN)))
+    can = {R_BACK: True, TURN: True}
+    assert [r.next(can) for _ in range(4)] == [R_BACK, R_BACK, TURN, R_BACK]
+    r.reset()
+    assert r.next({R_BACK: False, TURN: True}) == TURN
+    assert r.next({R_BACK: False, TURN: False}) == WAIT
+    assert r.count[WAIT] == 1
+
+
+def test_progress_checker_finds_a_robot_that_does_not_move():
+    pc = ProgressChecker(0.05, 100.0)
+    assert not any(pc.stuck(t, (0.001 * t, 0.0)) for t in range(0, 200, 10))     # 1 mm/s: 0.1 m per window
+    pc.reset()
+    flags = [pc.stuck(t, (0.0, 0.0)) for t in range(0, 200, 10)]
+    assert not flags[0] and flags[-1]
+
+
+def layered(kappa=0.0):
+    fp = dataclasses.replace(LAYERED.follower, kappa_rate_per_m_s=0.0)
+    f = RecedingHorizonFollower(fp)
+    f._kappa = kappa
+    return LayeredPlanner(K, 0.09, LAYERED, f, COBRA)
+
+
+def test_layered_planner_goes_round_an_obstacle_ahead():
+    pl = layered()
+    r = pl.replan(0.0, drawn_mask(discs=[(0.9, 0.05, 0.08)]), T_GC, (0.0, 0.0, 0.0), (1.5, 0.0), 0.2)
+    assert r.path_world is not None and pl.follower.mode == FOLLOW
+    assert r.selection.arc.curvature_per_m != 0.0
+    assert "body sweep" in r.reason
+
+
+def test_layered_planner_backs_off_from_a_wall():
+    pl = layered()
+    r = pl.replan(0.0, drawn_mask(**WALL), T_GC, (0.0, 0.0, 0.0), (1.5, 0.0), 0.2)
+    assert r.path_world is None and pl.follower.mode == BACK_OFF
+    assert "back off" in r.reason
+
+
+def test_nav_config_validates_the_layered_sections():
+    with pytest.raises(NavConfigError) as e:
+        NavConfig.from_dict({"planner": {"kind": "dwa"}, "critics": {"route": -1.0},
+                             "recovery": {"sequence": ["fly"]}, "local_map": {"cell_m": 0}})
+    msg = str(e.value)
+    for key in ("planner.kind", "critics.route", "recovery.sequence", "local_map.cell_m"):
+        assert key in msg
+
+
+
+def test_critics_take_an_arc_into_the_goal_disc_however_short():
+    cands = [_cand(-1.5, 1.2), _cand(0.0, 0.3)]
+    route = np.array([0.2, -0.02])                 # the short one enters the disc 2 cm deep
+    assert np.argmin(score(cands, CriticParams(), 1.2, 0.0, 2.0, 3.0, route)) == 1
+    assert cands[1].scores["free_length"] == 0.0
