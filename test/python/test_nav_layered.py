@@ -198,3 +198,13 @@ def test_critics_take_an_arc_into_the_goal_disc_however_short():
     route = np.array([0.2, -0.02])                 # the short one enters the disc 2 cm deep
     assert np.argmin(score(cands, CriticParams(), 1.2, 0.0, 2.0, 3.0, route)) == 1
     assert cands[1].scores["free_length"] == 0.0
+
+
+def test_body_sweep_lets_a_modelled_station_inside_an_obstacle_move_but_not_deeper():
+    # the uniform-arc model puts the body's middle on a mapped cell the real body is clear of
+    sweep = BodySweep(COBRA, CFG.follower, SweepParams(reshape_keeps_centroid=False))
+    m = _map_with([[-0.75, 0.0]])
+    assert sweep.check(sweep.sweep(0.0, 0.0, 0.3), m, np.eye(4)).free_m == pytest.approx(0.3)
+    # bending swings the middle off it (allowed); a second obstacle beside the head still counts
+    m2 = _map_with([[-0.75, 0.0], [0.2, 0.09]])
+    assert sweep.check(sweep.sweep(0.0, 0.0, 0.3), m2, np.eye(4)).free_m < 0.3

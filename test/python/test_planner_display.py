@@ -9,8 +9,9 @@ from shapely.geometry import Point, box
 pytest.importorskip("nav_msgs.msg")
 pytest.importorskip("visualization_msgs.msg")
 
-from snake_autonomy.nodes.planner_display import (FREE, OCCUPIED, grid_window, occupancy, rasterise,  # noqa: E402
-                                                  traversability_mask, world_markers)
+from snake_autonomy.nodes.planner_display import (FREE, OCCUPIED, grid_window, local_grid, occupancy,  # noqa: E402
+                                                  rasterise, traversability_mask, world_markers)
+from snake_autonomy.planning.rectilinear.local_map import LocalMap, LocalMapParams  # noqa: E402
 from snake_autonomy.sim.world_file import World  # noqa: E402
 from visualization_msgs.msg import Marker  # noqa: E402
 
@@ -71,6 +72,22 @@ def test_the_occupancy_grid_message_places_the_obstacle_in_the_world_frame():
     assert np.all((x > 0.52) & (x < 0.68) & (y > 0.12) & (y < 0.28))
     empty = occupancy(None, (0.0, 0.0), None, CELL, 0.5, 0, "map")
     assert set(empty.data) == {FREE} and empty.info.width == 26
+
+
+def test_the_local_map_message_places_its_cells_in_the_world_frame_with_unknown_ones():
+    m = LocalMap(LocalMapParams(size_m=2.0))
+    m._place((1.0, 0.5))
+    i, j, _ = m.cells(np.array([[1.3, 0.7]]))
+    m.log_odds[i, j] = 3.0                                         # occupied
+    m.log_odds[i - 5, j] = -1.0                                    # seen as floor 0.2 m nearer in x
+    msg = local_grid(m, 0, "map")
+    grid = np.array(msg.data, np.int8).reshape(msg.info.height, msg.info.width)
+    jj, ii = np.nonzero(grid == OCCUPIED)
+    x = msg.info.origin.position.x + (ii + 0.5) * msg.info.resolution
+    y = msg.info.origin.position.y + (jj + 0.5) * msg.info.resolution
+    assert len(x) == 1 and abs(x[0] - 1.3) <= 0.021 and abs(y[0] - 0.7) <= 0.021   # within half a cell
+    assert (grid == FREE).sum() == 1 and (grid == -1).sum() == grid.size - 2
+    assert local_grid(LocalMap(), 0, "map").info.width == 0           # no view yet: an empty grid
 
 
 def test_the_mask_is_mono8_255_on_ground():

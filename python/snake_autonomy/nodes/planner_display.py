@@ -3,6 +3,8 @@ builders: no node, no master (planner_node and sim_node publish them).
 
 - occupancy(): the planner's obstacle map (planning/rectilinear/obstacle_map.py ObstacleMap.geometry())
   rasterised on a grid of map.cell_m cells -> nav_msgs/OccupancyGrid (nav/map).
+- local_grid(): the layered planner's local map (planning/rectilinear/local_map.py LocalMap: occupied,
+  free as the views showed it, unknown) -> nav_msgs/OccupancyGrid (nav/map).
 - traversability_mask(): a replan's traversability image -> sensor_msgs/Image mono8
   (nav/traversability_mask: 255 ground, 0 not).
 - world_markers(): a world file's obstacles and goal disc (sim/world_file.py World) ->
@@ -91,6 +93,25 @@ def occupancy(geometry, robot_xy, goal_xy, cell_m: float, pad_m: float, stamp, f
     m.info.origin.position.x, m.info.origin.position.y = float(origin[0]), float(origin[1])
     m.info.origin.orientation.w = 1.0
     m.data = grid.ravel().tolist()
+    return m
+
+
+def local_grid(local_map, stamp, frame_id: str) -> OccupancyGrid:
+    """The layered planner's rolling grid as nav_msgs/OccupancyGrid in frame_id: 100 occupied, 0 seen
+    as floor, -1 unknown (LocalMap.grid(), [i, j] = x, y, transposed to the message's rows of y)."""
+    m = OccupancyGrid()
+    m.header.stamp, m.header.frame_id = stamp, frame_id
+    m.info.map_load_time = stamp
+    m.info.resolution = float(local_map.params.cell_m)
+    m.info.origin.orientation.w = 1.0
+    if local_map.origin is None:
+        return m
+    grid = local_map.grid()
+    half = 0.5 * local_map.params.cell_m                   # origin: the corner of cell (0, 0), not its centre
+    m.info.width, m.info.height = grid.shape
+    m.info.origin.position.x = float(local_map.origin[0] - half)
+    m.info.origin.position.y = float(local_map.origin[1] - half)
+    m.data = grid.T.ravel().tolist()
     return m
 
 

@@ -17,7 +17,8 @@ Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with cur
             blocked red), nav/traversability (sensor_msgs/Image rgb8: the frame with non-ground tinted
             red and the arcs drawn), nav/traversability_mask (sensor_msgs/Image mono8, same stamp and frame:
             255 ground, 0 not), nav/map (nav_msgs/OccupancyGrid, latched, after each replan when map.source
-            is not none: the obstacle map on map.cell_m cells; planner_display.occupancy),
+            is not none: the obstacle map on map.cell_m cells, planner_display.occupancy; with planner.kind
+            layered its local map with unknown cells, planner_display.local_grid),
             /diagnostics ("planner: navigation": WARN with no free arc, OK otherwise; replans, stops,
             distance to the goal, the follower's mode, the goal and its source, goals refused),
             nav/goal (visualization_msgs/Marker, latched: the goal's disc; planner_goals.py).
@@ -62,7 +63,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 from snake_autonomy import _core
 from snake_autonomy.msg import GaitCommand
 from snake_autonomy.nodes.image_msgs import from_camera_info, from_image, to_image
-from snake_autonomy.nodes.planner_display import occupancy, traversability_mask
+from snake_autonomy.nodes.planner_display import local_grid, occupancy, traversability_mask
 from snake_autonomy.nodes.planner_goals import PARAMETER, Goal, GoalServer
 from snake_autonomy.paths import config_path, resolve_world_path
 from snake_autonomy.perception.block_classifier import BlockClassifier
@@ -350,7 +351,9 @@ class PlannerNode:
         self.pub_trav.publish(to_image(self.overlay(tick), "rgb8", stamp, "camera_color_optical_frame"))
         self.pub_mask.publish(traversability_mask(tick.ground, stamp, "camera_color_optical_frame"))
         omap = self.loop.planner.obstacle_map
-        if omap is not None:
+        if hasattr(self.loop.planner, "map"):                 # the layered planner's local map
+            self.pub_map.publish(local_grid(self.loop.planner.map, stamp, self.world_frame))
+        elif omap is not None:
             mp = self.loop.cfg.map
             self.pub_map.publish(occupancy(omap.geometry(), r.pose[:2], self.loop.goal_xy, mp.cell_m, mp.pad_m,
                                            stamp, self.world_frame))

@@ -15,7 +15,8 @@ an occupied cell of the local map than half the body's width + `margin_m` -- or,
 lies nearer than that (beside an obstacle), more than SLACK_M nearer than its nearest station is now:
 it may move along the obstacle or away. The model places the body as a uniform arc through base_link;
 a body that has just changed its curvature lies elsewhere, and a modelled station can overlap an
-obstacle the real body is clear of: such a station is the model's error, and only may not go deeper.
+obstacle the real body is clear of: the occupied cells under the modelled body now are the model's (or
+the map's) error and do not count for this body (LocalMap.distance_clearing).
 A reshape that is not clear makes the whole motion invalid (free travel 0).
 One model for every motion the planner asks about: the candidate arcs, the follower's curvature
 bounds, backing off and turning in place (recovery.py).
@@ -104,10 +105,12 @@ class BodySweep:
         pts = sweep.rows.reshape(-1, 2) @ T_world_g[:2, :2].T + T_world_g[:2, 3]
         d = local_map.distance(pts).reshape(R, N)
         half = 0.5 * self.geometry.width_m
-        overlaps = d[0] < half                  # the model's error: the body cannot lie in an obstacle
-        nearest = float(d[0][~overlaps].min()) if (~overlaps).any() else self.need_m
-        allowed = np.where(overlaps, d[0] - SLACK_M, min(self.need_m, nearest - SLACK_M))
-        ok = (d >= allowed[None, :]).all(axis=1)
+        overlaps = d[0] < half                  # the body cannot lie in an obstacle: the model's or the map's error
+        if overlaps.any():
+            d = local_map.distance_clearing(pts, pts[:N][overlaps], half + SLACK_M).reshape(R, N)
+        nearest = float(d[0].min()) if N else self.need_m
+        allowed = min(self.need_m, nearest - SLACK_M)
+        ok = (d >= allowed).all(axis=1)
         margin = (d - 0.5 * self.geometry.width_m).min(axis=1)
         if not ok[:sweep.reshape_rows + 1].all():
             return SweepCheck(-1.0, float(margin[:sweep.reshape_rows + 1].min()))

@@ -187,6 +187,25 @@ class LocalMap:
         d = self.distance_field()[i, j] - 0.5 * self.params.cell_m
         return np.where(inside, np.maximum(d, 0.0), np.inf)
 
+    def distance_clearing(self, xy: np.ndarray, under_xy: np.ndarray, radius_m: float) -> np.ndarray:
+        """distance() on the map without the occupied cells within radius_m of the points under_xy (a
+        body the map puts inside an obstacle is a misplaced body or a misjudged cell: those cells do
+        not count for it). The field is kept for the same cells cleared."""
+        xy = np.asarray(xy, float).reshape(-1, 2)
+        i, j, inside = self.cells(np.asarray(under_xy, float).reshape(-1, 2))
+        key = (self.updates, radius_m, tuple(sorted(set(zip(i[inside].tolist(), j[inside].tolist())))))
+        if getattr(self, "_cleared_key", None) != key:
+            occ = self.occupied()
+            r = int(np.ceil(radius_m / self.params.cell_m))
+            for a, b in key[2]:
+                occ[max(0, a - r):a + r + 1, max(0, b - r):b + r + 1] = False
+            self._cleared = (distance_transform_edt(~occ) * self.params.cell_m if occ.any()
+                             else np.full(occ.shape, np.inf))
+            self._cleared_key = key
+        i, j, inside = self.cells(xy)
+        d = self._cleared[i, j] - 0.5 * self.params.cell_m
+        return np.where(inside, np.maximum(d, 0.0), np.inf)
+
     def seen_free(self, xy: np.ndarray) -> np.ndarray:
         """(M, 2) world points -> (M,) whether a view showed their cell as floor."""
         xy = np.asarray(xy, float).reshape(-1, 2)
