@@ -26,7 +26,7 @@ from typing import List, Tuple
 
 import numpy as np
 
-from .body_model import BodyGeometry, body_poses, middle_pose
+from .body_model import RESHAPE_FRACTIONS, BodyGeometry, middle_pose
 from .unicycle import arc_poses
 
 SLACK_M = 0.02              # the body may come this much nearer than it is now (half a station spacing)
@@ -78,25 +78,32 @@ class BodySweep:
         through the reshape to kappa_new and travel_m of crawl (negative: backwards)."""
         g, p = self.geometry, self.params
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
-        now = body_poses(middle, kappa_now, kappa_now, g.half_length_m, p.station_m,
-                         p.reshape_keeps_centroid)[-1]
-        shapes = body_poses(middle, kappa_now, kappa_new, g.half_length_m, p.station_m, p.reshape_keeps_centroid)
+        ks = kappa_now + np.array([0.0, *RESHAPE_FRACTIONS]) * (kappa_new - kappa_now)
+        shapes = _uniform_shapes(middle, ks, self._s(), p.reshape_keeps_centroid)      # (4, N, 3)
         final = shapes[-1]
         mid = final[len(final) // 2]
         c0, s0 = np.cos(mid[2]), np.sin(mid[2])
         d = final[:, :2] - mid[:2]
         rel = np.column_stack([c0 * d[:, 0] + s0 * d[:, 1], -s0 * d[:, 0] + c0 * d[:, 1]])
-        rows = [now[:, :2]] + [s[:, :2] for s in shapes]
-        travel = [0.0] * len(rows)
+        rows = [shapes[:, :, :2]]
+        travel = [np.zeros(len(shapes))]
         if abs(travel_m) > 0:
             path = arc_poses(self.turn_rate(kappa_new) / self.fp.speed_m_s, travel_m, p.step_m,
                              start=tuple(mid))[1:]
             c, s = np.cos(path[:, 2])[:, None], np.sin(path[:, 2])[:, None]
             xs = path[:, 0:1] + c * rel[None, :, 0] - s * rel[None, :, 1]
             ys = path[:, 1:2] + s * rel[None, :, 0] + c * rel[None, :, 1]
-            rows += list(np.stack([xs, ys], axis=-1))
-            travel += list(np.linspace(0.0, travel_m, len(path) + 1)[1:])
-        return Sweep(np.stack(rows), np.abs(np.array(travel)), len(shapes))
+            rows.append(np.stack([xs, ys], axis=-1))
+            travel.append(np.linspace(0.0, travel_m, len(path) + 1)[1:])
+        return Sweep(np.concatenate(rows), np.abs(np.concatenate(travel)), len(RESHAPE_FRACTIONS))
+
+    def _s(self) -> np.ndarray:
+        """The stations' arc lengths from the middle, tail to head (as body_model.body_poses places them)."""
+        if getattr(self, "_stations", None) is None:
+            h, sp = self.geometry.half_length_m, self.params.station_m
+            n = max(1, int(np.ceil(h / sp)))
+            self._stations = np.concatenate([np.linspace(-h, 0.0, n + 1), np.linspace(0.0, h, n + 1)[1:]])
+        return self._stations
 
     def check(self, sweep: Sweep, local_map, T_world_g: np.ndarray) -> SweepCheck:
         """How far the sweep is clear of the map's occupied cells (T_world_g: the ground frame in the
@@ -127,3 +134,22 @@ def sweep_bounds(kappas: np.ndarray, clear: np.ndarray, chosen: int) -> Tuple[fl
     while b < len(kappas) - 1 and clear[b + 1]:
         b += 1
     return float(kappas[a]), float(kappas[b])
+
+
+def _uniform_shapes(middle, ks: np.ndarray, s: np.ndarray, keep_centroid: bool) -> np.ndarray:
+    """(len(ks), N, 3) the body as uniform arcs of each curvature in ks through `middle` (its pose), the
+    stations at arc lengths s from it; keep_centroid: each moved so that its centroid is the first's
+    (body_model.body_poses, vectorised: the sweep asks for 4 shapes of 13 candidates every replan)."""
+    k = np.asarray(ks, float)[:, None]
+    ks_ = k * s[None, :]
+    small = np.abs(k) < 1e-9
+    kk = np.where(small, 1.0, k)
+    x = np.where(small, s[None, :], np.sin(ks_) / kk)
+    y = np.where(small, 0.0, (1.0 - np.cos(ks_)) / kk)
+    x0, y0, t0 = middle
+    c, sn = np.cos(t0), np.sin(t0)
+    out = np.stack([x0 + c * x - sn * y, y0 + sn * x + c * y, t0 + ks_], axis=-1)
+    if keep_centroid:
+        centre = out[:, :, :2].mean(axis=1, keepdims=True)
+        out[:, :, :2] += centre[0:1] - centre
+    return out

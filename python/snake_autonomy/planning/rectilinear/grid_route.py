@@ -9,28 +9,38 @@ exists, even from inside an obstacle's inflation); unknown cells cost 1 (optimis
 showed is seen before the robot gets there). A goal outside the window is reached through the window
 cell nearest to it, plus the straight line from there.
 """
+import functools
 import math
 from typing import Optional
 
 import numpy as np
-from scipy.sparse import coo_matrix
+from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 
 def grid_graph(cost: np.ndarray, cell_m: float):
     """8-connected grid, each edge its length times the mean cost of its two cells."""
-    nx, ny = cost.shape
-    ids = np.arange(nx * ny).reshape(nx, ny)
+    a, b, length, template, order = _edges(cost.shape, cell_m)
     flat = cost.ravel()
-    rows, cols, w = [], [], []
+    w = (length * 0.5 * (flat[a] + flat[b]))[order]
+    return csr_matrix((w, template.indices, template.indptr), shape=template.shape)
+
+
+@functools.lru_cache(maxsize=4)
+def _edges(shape, cell_m: float):
+    """The grid's edges (from, to, length) and their CSR structure (the template, and the order of
+    the edges in it), kept per grid shape: the route's grid keeps its shape."""
+    nx, ny = shape
+    ids = np.arange(nx * ny).reshape(nx, ny)
+    rows, cols, lengths = [], [], []
     for dx, dy in ((1, 0), (0, 1), (1, 1), (1, -1)):
         a = ids[0:nx - dx, max(0, -dy):ny - max(0, dy)].ravel()
-        b = ids[dx:nx, max(0, dy):ny + min(0, dy)].ravel()
         rows.append(a)
-        cols.append(b)
-        w.append(cell_m * math.hypot(dx, dy) * 0.5 * (flat[a] + flat[b]))
-    n = nx * ny
-    return coo_matrix((np.concatenate(w), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
+        cols.append(ids[dx:nx, max(0, dy):ny + min(0, dy)].ravel())
+        lengths.append(np.full(len(a), cell_m * math.hypot(dx, dy)))
+    a, b = np.concatenate(rows), np.concatenate(cols)
+    template = coo_matrix((np.arange(1.0, len(a) + 1.0), (a, b)), shape=(nx * ny, nx * ny)).tocsr()
+    return a, b, np.concatenate(lengths), template, template.data.astype(np.int64) - 1
 
 
 class GridRoute:

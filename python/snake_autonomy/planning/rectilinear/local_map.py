@@ -100,9 +100,12 @@ class LocalMap:
 
     def cells(self, xy: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(M, 2) world points -> their cells (i, j) and whether they lie in the window."""
-        ij = np.rint((np.asarray(xy, float).reshape(-1, 2) - self.origin) / self.params.cell_m).astype(np.int64)
-        inside = (ij >= 0).all(axis=1) & (ij < self.n).all(axis=1)
-        return np.clip(ij[:, 0], 0, self.n - 1), np.clip(ij[:, 1], 0, self.n - 1), inside
+        xy = np.asarray(xy, float).reshape(-1, 2)
+        n = self.n
+        i = np.rint((xy[:, 0] - self.origin[0]) / self.params.cell_m).astype(np.int64)
+        j = np.rint((xy[:, 1] - self.origin[1]) / self.params.cell_m).astype(np.int64)
+        inside = (i >= 0) & (i < n) & (j >= 0) & (j < n)
+        return np.minimum(np.maximum(i, 0), n - 1), np.minimum(np.maximum(j, 0), n - 1), inside
 
     def centres(self) -> Tuple[np.ndarray, np.ndarray]:
         """The cells' centres' world x (n,) and y (n,)."""
@@ -135,23 +138,20 @@ class LocalMap:
         faces = T[:2, 3] + rng[keep, None] * dirs
         steps = np.arange(0.0, p.face_depth_m + 1e-9, 0.5 * p.cell_m)
         occ_xy = (faces[:, None, :] + steps[None, :, None] * dirs[:, None, :]).reshape(-1, 2)
-        occ = self._cell_set(occ_xy)
-        free = self._cell_set(free_xy) - occ
-        lo = self.log_odds
-        if free:
-            i, j = np.array(list(free)).T
-            lo[i, j] = np.maximum(lo[i, j] - p.miss_log_odds, p.min_log_odds)
-        if occ:
-            i, j = np.array(list(occ)).T
-            lo[i, j] = np.minimum(lo[i, j] + p.hit_log_odds, p.max_log_odds)
+        occ = self._cell_ids(occ_xy)
+        free = np.setdiff1d(self._cell_ids(free_xy), occ, assume_unique=True)
+        lo = self.log_odds.ravel()                       # a view of the grid
+        lo[free] = np.maximum(lo[free] - p.miss_log_odds, p.min_log_odds)
+        lo[occ] = np.minimum(lo[occ] + p.hit_log_odds, p.max_log_odds)
         self._dist = None
         self.updates += 1
 
-    def _cell_set(self, xy: np.ndarray) -> set:
+    def _cell_ids(self, xy: np.ndarray) -> np.ndarray:
+        """The distinct flat indices of the window's cells the points fall in (points outside: none)."""
         if not len(xy):
-            return set()
+            return np.zeros(0, np.int64)
         i, j, inside = self.cells(xy)
-        return set(zip(i[inside].tolist(), j[inside].tolist()))
+        return np.unique(i[inside] * self.n + j[inside])
 
     @staticmethod
     def _on_floor(cols, rows, K, T, max_range_m) -> np.ndarray:
