@@ -215,7 +215,8 @@ def test_the_code_defaults_are_the_shipped_nav_yaml(root):
     shipped = NavConfig.from_yaml(root / "config" / "nav.yaml")
     assert NavConfig() == shipped
     assert NavConfig.from_dict({}) == shipped
-    for section in ("sampler", "map", "classifier", "gait", "plant", "gaits"):
+    for section in ("sampler", "map", "classifier", "gait", "plant", "gaits", "planner", "local_map", "body_sweep",
+                    "critics", "recovery"):
         assert type(getattr(shipped, section))() == getattr(shipped, section), section
 
 
