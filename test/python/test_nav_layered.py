@@ -208,3 +208,24 @@ def test_body_sweep_lets_a_modelled_station_inside_an_obstacle_move_but_not_deep
     # bending swings the middle off it (allowed); a second obstacle beside the head still counts
     m2 = _map_with([[-0.75, 0.0], [0.2, 0.09]])
     assert sweep.check(sweep.sweep(0.0, 0.0, 0.3), m2, np.eye(4)).free_m < 0.3
+
+
+@pytest.mark.parametrize("name", ["nav_layered.yaml", "nav_chang_layered.yaml"])
+def test_the_loop_runs_the_layered_planner_its_config_names(root, name):
+    from snake_autonomy.planning.rectilinear.nav_loop import FOLLOWING, NO_FREE_ARC, NavLoop
+    cfg = NavConfig.from_yaml(root / "config" / name)
+    assert cfg.planner.kind == "layered"
+    open_floor = drawn_mask()
+    loop = NavLoop(cfg, 0.09, lambda img: open_floor if img.any() else np.zeros_like(open_floor),
+                   goal_xy=(2.0, 0.0), on_no_free_arc="back_off", body=COBRA)
+    assert isinstance(loop.planner, LayeredPlanner)
+    frame = np.ones((cfg.intrinsics.height, cfg.intrinsics.width), np.float32)
+    base = np.eye(4)
+    base[2, 3] = 0.046                               # base_link 4.6 cm above the floor (drawn_mask's camera)
+    loop.on_pose(0.0, base)
+    loop.on_frame(0.0, frame)
+    assert loop.tick(0.0).state == FOLLOWING
+    loop.on_pose(10.0, base)
+    loop.on_frame(10.0, np.zeros_like(frame))       # a view with no floor: a wall right ahead
+    tick = loop.tick(10.0)
+    assert tick.state == NO_FREE_ARC and tick.backwards
