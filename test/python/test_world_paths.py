@@ -53,7 +53,7 @@ def _world_params(cwd: Path, world: str, **env_over):
                        cwd=cwd, env=env, capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stdout + r.stderr
     params = yaml.safe_load(r.stdout)
-    return params["/sim/world"], params.get("/planner/world")
+    return params.get("/sim/world"), params.get("/planner/world")
 
 
 def test_sim_launch_makes_a_relative_world_absolute_against_the_shell_directory(world):
@@ -61,4 +61,5 @@ def test_sim_launch_makes_a_relative_world_absolute_against_the_shell_directory(
     assert _world_params(cwd, "sub/w.yaml") == (str(world), str(world))
     assert _world_params(cwd, str(world)) == (str(world), str(world))
     assert _world_params(cwd, "~/w.yaml", HOME=str(world.parent)) == (str(world), str(world))
-    assert _world_params(cwd, "") == ("", None)                 # no world: the mission run, no planner
+    assert _world_params(cwd, "") == (None, None)               # no world: the mission run, no planner
+    assert _world_params(cwd, "none") == (None, None)
