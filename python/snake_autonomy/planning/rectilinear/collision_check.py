@@ -205,6 +205,15 @@ def floor_rays(u: np.ndarray, v: np.ndarray, K: np.ndarray, T_frame_camera: np.n
     return rays, s, down
 
 
+def floor_hits(u: np.ndarray, v: np.ndarray, K: np.ndarray, T_frame_camera: np.ndarray):
+    """Pixels (u, v) -> (each ray's horizontal range from the camera to the floor z = 0 of the frame, inf
+    where it does not go down; the rays' unit directions on the floor (N, 2); whether each goes down).
+    The floor point is the camera's (x, y) + range * direction."""
+    rays, s, down = floor_rays(u, v, K, T_frame_camera)
+    horiz = np.maximum(np.hypot(rays[:, 0], rays[:, 1]), 1e-9)
+    return s * horiz, rays[:, :2] / horiz[:, None], down
+
+
 def near_field(intrinsics, T_ground_camera: np.ndarray, fwd: np.ndarray, half_width_m: float) -> float:
     """Forward distance from the camera (along fwd on the floor) at which the image shows the floor
     at least half_width_m to both sides of the camera's heading, and below which it shows none:

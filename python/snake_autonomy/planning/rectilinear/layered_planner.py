@@ -31,8 +31,7 @@ from .local_map import LocalMap
 from .collision_check import prefix_length
 from .planner import Replan, T_world_ground, to_world, world_xy
 from .recovery import BACK_OFF, TURN, WAIT, ProgressChecker, Recovery
-from .sampler import Arc, Selection
-from .unicycle import arc_poses
+from .sampler import Arc, Selection, candidate_arcs
 
 
 class LayeredPlanner:
@@ -54,10 +53,12 @@ class LayeredPlanner:
         self.holding = False                 # the last replan chose to wait (the loop holds)
         self.obstacle_map = None             # the loop's diagnostic map (map.source truth): not used here
         p = self.sp
-        half = p.num_arcs // 2
-        self.curvatures = (np.linspace(-p.max_curvature_per_m, p.max_curvature_per_m, p.num_arcs)
-                           if half else np.zeros(1))
-        self._arcs = [(float(c), arc_poses(float(c), p.horizon_m, p.spacing_m)) for c in self.curvatures]
+        self._arcs = candidate_arcs(p)
+        # the head's footprint, growing from its own width to the body's reach over footprint_taper_m
+        s = self._arcs[0][2]
+        ramp = np.clip(s / p.footprint_taper_m, 0.0, 1.0) if p.footprint_taper_m > 0 else np.ones_like(s)
+        self._head_need = self.head_need_m + ramp * (max(self.head_need_m, p.body_clearance_m) - self.head_need_m)
+        self._unchecked = (s < cfg.local_map.blind_m) | (s > p.known_free_m)   # need not be seen as floor
 
     @property
     def footprint_width_m(self) -> float:
@@ -72,13 +73,13 @@ class LayeredPlanner:
             self.route.update(self.map, pose[:2], goal_xy)
             route_path = self.route.path
         kappa_now = self.follower.kappa_per_m
-        cands = [self._candidate(c, poses, kappa_now, T_world_g) for c, poses in self._arcs]
+        cands = [self._candidate(c, poses, s, kappa_now, T_world_g) for c, poses, s in self._arcs]
         need = max(self.sp.min_free_m, self.sp.resume_free_m) if self.recovery.active else self.sp.min_free_m
         valid = [i for i, c in enumerate(cands) if c.free_m >= need]
         sel = Selection([Arc(c.curvature_per_m, c.poses, c.s_m, c.free_m) for c in cands], None)
         stuck = bool(valid) and self.progress.stuck(t_s, pose[:2])
         if not valid or stuck:
-            return self._recover(t_s, pose, sel, cands, T_world_g, goal_xy, goal_radius_m, route_path,
+            return self._recover(t_s, pose, sel, cands, T_world_g, goal_xy, route_path,
                                  "no progress" if stuck else "no valid arc")
         fp = self.follower.params
         # the loop stops goal_margin_m inside the disc (the stop's own move): aim there
@@ -99,16 +100,13 @@ class LayeredPlanner:
                   f"{bounds[1]:+.2f} /m (body sweep)")
         return Replan(t_s, tuple(pose), sel, path, reason, route_path)
 
-    def _candidate(self, c: float, poses: np.ndarray, kappa_now: float, T_world_g) -> Candidate:
+    def _candidate(self, c: float, poses: np.ndarray, s: np.ndarray, kappa_now: float, T_world_g) -> Candidate:
         p, fp = self.sp, self.follower.params
         kappa = fp.kappa(fp.speed_m_s * c)
-        s = np.linspace(0.0, p.horizon_m, len(poses))
         head = world_xy(T_world_g, poses[:, :2])
         d = self.map.distance(head)
-        ramp = np.clip(s / p.footprint_taper_m, 0.0, 1.0) if p.footprint_taper_m > 0 else np.ones_like(s)
-        need = self.head_need_m + ramp * (max(self.head_need_m, p.body_clearance_m) - self.head_need_m)
-        ok = d >= np.minimum(need, d[0] - 1e-3)
-        seen = self.map.seen_free(head) | (s < self.cfg.local_map.blind_m) | (s > p.known_free_m)
+        ok = d >= np.minimum(self._head_need, d[0] - 1e-3)
+        seen = self.map.seen_free(head) | self._unchecked
         head_free = prefix_length(ok & seen, s)
         why = "head" if head_free < p.horizon_m else ""
         chk = self.sweep.check(self.sweep.sweep(kappa_now, kappa, p.horizon_m), self.map, T_world_g)
@@ -133,7 +131,7 @@ class LayeredPlanner:
                        else float(self.route.cost_to_go(xy[-1:])[0]))
         return np.array(out)
 
-    def _recover(self, t_s, pose, sel, cands, T_world_g, goal_xy, goal_radius_m, route_path, cause) -> Replan:
+    def _recover(self, t_s, pose, sel, cands, T_world_g, goal_xy, route_path, cause) -> Replan:
         rp = self.cfg.recovery
         kappa_now = self.follower.kappa_per_m
         self.progress.reset()

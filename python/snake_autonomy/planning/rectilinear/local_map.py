@@ -24,7 +24,7 @@ from typing import List, Tuple
 import numpy as np
 from scipy.ndimage import distance_transform_edt
 
-from .collision_check import floor_rays
+from .collision_check import floor_hits
 
 UNKNOWN, FREE, OCCUPIED = -1, 0, 100       # nav_msgs/OccupancyGrid values
 
@@ -76,6 +76,7 @@ class LocalMap:
         self.log_odds = np.zeros((self.n, self.n), np.float32)     # [i, j]: x, y
         self.origin = None                  # world (x, y) of cell (0, 0)'s centre; None: not placed yet
         self._dist = None
+        self._cleared_key, self._cleared = None, None     # distance_clearing's field and the cells it cleared
         self.updates = 0
 
     # --- placing the window ---
@@ -124,18 +125,13 @@ class LocalMap:
         g = ground[np.ix_(rows, cols)]
         # free: the sampled ground pixels on the floor within free_range_m
         r_idx, c_idx = np.nonzero(g)
-        free_xy = self._on_floor(cols[c_idx], rows[r_idx], K, T, p.free_range_m)
+        free_xy, _ = self._on_floor(cols[c_idx], rows[r_idx], K, T, p.free_range_m)
         # faces: per column, the top of the ground region that starts at the bottom row
         gc = ground[:, cols]
         run = np.where(gc.all(axis=0), h, np.argmin(gc[::-1], axis=0))      # ground rows from the bottom
         has_face = run < h
         face_row = np.minimum(h - run - 0.5 + p.edge_px, h - 0.5)[has_face]
-        rays, s, down = floor_rays(cols[has_face], face_row, K, T)
-        horiz = np.maximum(np.hypot(rays[:, 0], rays[:, 1]), 1e-9)
-        rng = s * horiz
-        keep = down & (rng <= p.face_range_m)
-        dirs = rays[keep, :2] / horiz[keep, None]
-        faces = T[:2, 3] + rng[keep, None] * dirs
+        faces, dirs = self._on_floor(cols[has_face], face_row, K, T, p.face_range_m)
         steps = np.arange(0.0, p.face_depth_m + 1e-9, 0.5 * p.cell_m)
         occ_xy = (faces[:, None, :] + steps[None, :, None] * dirs[:, None, :]).reshape(-1, 2)
         occ = self._cell_ids(occ_xy)
@@ -154,11 +150,12 @@ class LocalMap:
         return np.unique(i[inside] * self.n + j[inside])
 
     @staticmethod
-    def _on_floor(cols, rows, K, T, max_range_m) -> np.ndarray:
-        rays, s, down = floor_rays(cols, rows, K, T)
-        horiz = np.maximum(np.hypot(rays[:, 0], rays[:, 1]), 1e-9)
-        ok = down & (s * horiz <= max_range_m)
-        return T[:2, 3] + (s[ok] * horiz[ok])[:, None] * (rays[ok, :2] / horiz[ok, None])
+    def _on_floor(cols, rows, K, T, max_range_m):
+        """(floor points (M, 2), their rays' directions on the floor (M, 2)) of the pixels whose ray meets
+        the floor within max_range_m of the camera."""
+        reach, dirs, down = floor_hits(cols, rows, K, T)
+        keep = down & (reach <= max_range_m)
+        return T[:2, 3] + reach[keep, None] * dirs[keep], dirs[keep]
 
     # --- queries ---
     def occupied(self) -> np.ndarray:
@@ -194,7 +191,7 @@ class LocalMap:
         xy = np.asarray(xy, float).reshape(-1, 2)
         i, j, inside = self.cells(np.asarray(under_xy, float).reshape(-1, 2))
         key = (self.updates, radius_m, tuple(sorted(set(zip(i[inside].tolist(), j[inside].tolist())))))
-        if getattr(self, "_cleared_key", None) != key:
+        if self._cleared_key != key:
             occ = self.occupied()
             r = int(np.ceil(radius_m / self.params.cell_m))
             for a, b in key[2]:

@@ -26,7 +26,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Point, Polygon
 
-from .collision_check import floor_rays
+from .collision_check import floor_hits
 
 MAP_SOURCES = ("none", "faces", "truth")
 
@@ -113,11 +113,9 @@ def face_discs(faces_xy: np.ndarray, dirs: np.ndarray, radius_m: float):
 def _on_floor(cols, rows, K, T, max_range_m):
     """Pixels -> (floor points (N, 2) at most max_range_m from the camera along their rays, that range,
     the rays' unit directions on the floor, whether the ray meets the floor at all)."""
-    rays, s, down = floor_rays(cols, rows, K, T)
-    horiz = np.maximum(np.hypot(rays[:, 0], rays[:, 1]), 1e-9)
-    rng = np.minimum(s * horiz, max_range_m)
-    dirs = rays[:, :2] / horiz[:, None]
-    return T[:2, 3] + rng[:, None] * dirs, s * horiz, dirs, down
+    reach, dirs, down = floor_hits(cols, rows, K, T)
+    rng = np.minimum(reach, max_range_m)
+    return T[:2, 3] + rng[:, None] * dirs, reach, dirs, down
 
 
 class ObstacleMap:

@@ -146,6 +146,19 @@ class SamplerParams:
         return p
 
 
+def candidate_arcs(p: SamplerParams) -> List[Tuple[float, np.ndarray, np.ndarray]]:
+    """The head's candidate arcs of the sampler section: (path curvature, (N, 3) poses from the origin
+    heading +x, (N,) arc lengths); num_arcs curvatures evenly within +-max_curvature_per_m (one:
+    straight)."""
+    curvatures = (np.linspace(-p.max_curvature_per_m, p.max_curvature_per_m, p.num_arcs)
+                  if p.num_arcs // 2 else np.zeros(1))
+    arcs = []
+    for c in curvatures:
+        poses = arc_poses(float(c), p.horizon_m, p.spacing_m)
+        arcs.append((float(c), poses, np.linspace(0.0, p.horizon_m, len(poses))))
+    return arcs
+
+
 @dataclass
 class Arc:
     curvature_per_m: float
@@ -179,13 +192,8 @@ class TrajectorySampler:
         if problems:
             raise ValueError("sampler: " + "; ".join(problems))
         p = self.params
-        half = p.num_arcs // 2
-        self.curvatures = (np.linspace(-p.max_curvature_per_m, p.max_curvature_per_m, p.num_arcs)
-                           if half else np.zeros(1))
-        self._arcs = []
-        for c in self.curvatures:
-            poses = arc_poses(float(c), p.horizon_m, p.spacing_m)
-            self._arcs.append((float(c), poses, np.linspace(0.0, p.horizon_m, len(poses))))
+        self._arcs = candidate_arcs(p)
+        self.curvatures = np.array([c for c, _, _ in self._arcs])
         self._all = np.vstack([a[1] for a in self._arcs])
         self._all_s = np.concatenate([a[2] for a in self._arcs])
         self._splits = np.cumsum([len(a[1]) for a in self._arcs])[:-1]
