@@ -67,6 +67,9 @@ class BodySweep:
     def __init__(self, geometry: BodyGeometry, follower_params, params: SweepParams = SweepParams()):
         self.geometry, self.fp, self.params = geometry, follower_params, params
         self.need_m = 0.5 * geometry.width_m + params.margin_m
+        # the stations' arc lengths from the middle, tail to head (as body_model.body_poses places them)
+        h, n = geometry.half_length_m, max(1, int(np.ceil(geometry.half_length_m / params.station_m)))
+        self._s = np.concatenate([np.linspace(-h, 0.0, n + 1), np.linspace(0.0, h, n + 1)[1:]])
 
     def turn_rate(self, kappa: float) -> float:
         """The body's turn rate at kappa (rad/s): the gait map's omega beyond the dead band."""
@@ -79,7 +82,7 @@ class BodySweep:
         g, p = self.geometry, self.params
         middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
         ks = kappa_now + np.array([0.0, *RESHAPE_FRACTIONS]) * (kappa_new - kappa_now)
-        shapes = _uniform_shapes(middle, ks, self._s(), p.reshape_keeps_centroid)      # (4, N, 3)
+        shapes = _uniform_shapes(middle, ks, self._s, p.reshape_keeps_centroid)      # (4, N, 3)
         final = shapes[-1]
         mid = final[len(final) // 2]
         c0, s0 = np.cos(mid[2]), np.sin(mid[2])
@@ -96,14 +99,6 @@ class BodySweep:
             rows.append(np.stack([xs, ys], axis=-1))
             travel.append(np.linspace(0.0, travel_m, len(path) + 1)[1:])
         return Sweep(np.concatenate(rows), np.abs(np.concatenate(travel)), len(RESHAPE_FRACTIONS))
-
-    def _s(self) -> np.ndarray:
-        """The stations' arc lengths from the middle, tail to head (as body_model.body_poses places them)."""
-        if getattr(self, "_stations", None) is None:
-            h, sp = self.geometry.half_length_m, self.params.station_m
-            n = max(1, int(np.ceil(h / sp)))
-            self._stations = np.concatenate([np.linspace(-h, 0.0, n + 1), np.linspace(0.0, h, n + 1)[1:]])
-        return self._stations
 
     def check(self, sweep: Sweep, local_map, T_world_g: np.ndarray) -> SweepCheck:
         """How far the sweep is clear of the map's occupied cells (T_world_g: the ground frame in the

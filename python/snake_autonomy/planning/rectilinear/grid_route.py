@@ -11,8 +11,6 @@ cell nearest to it, plus the straight line from there.
 """
 import functools
 import math
-from typing import Optional
-
 import numpy as np
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import dijkstra
@@ -68,11 +66,11 @@ class GridRoute:
         self._cell, self._shape = cell, cost.shape
         g_idx = self._index(self._goal[None])[0]
         g_cell = self._lo + cell * np.array(g_idx)
-        self._goal_gap = float(np.hypot(*(self._goal - g_cell)))     # goal outside the window: the way there
+        goal_gap = float(np.hypot(*(self._goal - g_cell)))     # goal outside the window: the way there
         ny = cost.shape[1]
         field, pred = dijkstra(grid_graph(cost, cell), directed=False, indices=g_idx[0] * ny + g_idx[1],
                                return_predecessors=True)
-        self._field = field.reshape(cost.shape) + self._goal_gap
+        self._field = field.reshape(cost.shape) + goal_gap
         s_idx = self._index(start[None])[0]
         cells = [s_idx[0] * ny + s_idx[1]]
         while pred[cells[-1]] >= 0:
@@ -94,7 +92,3 @@ class GridRoute:
         ij = self._index(xy)
         snapped = self._lo + self._cell * ij
         return self._field[ij[:, 0], ij[:, 1]] + np.hypot(*(xy - snapped).T)
-
-    @property
-    def ready(self) -> Optional[bool]:
-        return self._field is not None

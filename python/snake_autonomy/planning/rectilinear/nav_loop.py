@@ -276,7 +276,7 @@ class NavLoop:
             self._next_replan = t_s + self.replan_period_s
             out = self._replan(t_s, pose)
         cmd = self.planner.command(t_s, pose)
-        if self.state == NO_FREE_ARC and (self.on_no_free_arc == "hold" or getattr(self.planner, "holding", False)):
+        if self.state == NO_FREE_ARC and (self.on_no_free_arc == "hold" or self.planner.holding):
             out.hold = True
         else:
             out.hold, out.kappa_per_m = False, float(cmd.kappa_per_m)

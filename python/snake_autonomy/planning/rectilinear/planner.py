@@ -97,6 +97,8 @@ def _from_head(stations_xy: np.ndarray) -> np.ndarray:
 
 
 class NavPlanner:
+    holding = False                        # the loop's on_no_free_arc decides how it stops (LayeredPlanner's may wait)
+
     def __init__(self, intrinsics, head_width_m: float, sampler_params, follower: RecedingHorizonFollower,
                  body: Optional[BodyGeometry] = None, map_params: Optional[MapParams] = None):
         """body: the robot's body (BodyGeometry.of_robot): the swing, crawl and back-off guards and

@@ -16,7 +16,6 @@ The grid covers the start-goal box grown by pad_m; its cells are bounded (map.ro
 a goal 150 m away once took 3.85 GB here. grid_shape refuses a larger grid, naming its extent,
 before anything is allocated; the simulator asks it before a run starts.
 """
-
 import numpy as np
 import shapely
 from scipy.sparse.csgraph import dijkstra
