@@ -31,7 +31,9 @@ of ~nav_config (config/nav.yaml plant:), and the head camera (nav.yaml camera: i
 mount) rendered in a child process (sim.camera_process) at ~camera_rate_hz (0.5: a colour + depth
 pair took 0.07-0.17 s, median 0.15 s, here: about 7 % of a core) and published as
             camera/color/image_raw (rgb8) + camera/color/camera_info, camera/depth/image_rect_raw
-            (32FC1, m along the optical axis, 0 = nothing; ~camera_depth true), frame
+            (32FC1, m along the optical axis, 0 = nothing; ~camera_depth true; ~depth_model d435i: the
+            D435i-like noise and holes of sim.yaml depth_noise: on its own seeded stream, as the batch
+            nav runs render it; perfect: exact), frame
             ~camera_optical_frame (camera_color_optical_frame), stamped with the snapshot's time.
             sim/world_markers (visualization_msgs/MarkerArray, latched, once at start, frame ~world_frame):
             the world's obstacles and goal disc as the simulation has them (ground truth, not what the
@@ -62,6 +64,7 @@ from snake_autonomy.paths import config_path, resolve_world_path
 from snake_autonomy.planning.rectilinear.config import NavConfig
 from snake_autonomy.sim.camera_process import CameraProcess
 from snake_autonomy.sim.collisions import CollisionMonitor
+from snake_autonomy.sim.depth_noise import named_depth_model
 from snake_autonomy.sim.realtime import RealTimeSim, SimSetup
 from snake_autonomy.sim.scene import world_plant_fields
 from snake_autonomy.sim.world_file import load_world
@@ -103,6 +106,11 @@ class SimNode:
         self.rate_hz = float(rospy.get_param("~rate_hz", 200.0))
         self.duration_s = float(rospy.get_param("~disturbance_duration_s", 0.1))
         self.sim = RealTimeSim(setup)
+        # the head camera's depth model (with a world), refused by name before the bus opens
+        self.depth_model = str(rospy.get_param("~depth_model", "d435i"))
+        self.depth_noise = (named_depth_model(self.depth_model, self.sim.params.config.depth_noise,
+                                              self.nav_cfg.intrinsics.fx, self.sim.params.rng("depth_noise"))
+                            if self.world_file else None)
         self.feedback = setup.feedback
         # /clock: the plant's time from the wall time of the start. With /use_sim_time this node's own
         # rospy clock comes back from /clock, so it stamps with the value it publishes instead.
@@ -166,11 +174,11 @@ class SimNode:
         self.pub_depth = rospy.Publisher("camera/depth/image_rect_raw", Image, queue_size=1) \
             if self.camera_depth else None
         self.camera = CameraProcess(self.sim.plant.mjcf, self.nav_cfg.intrinsics, self.nav_cfg.mount,
-                                    colour=True, depth=self.camera_depth)
+                                    colour=True, depth=self.camera_depth, depth_model=self.depth_noise)
         self._camera_thread = threading.Thread(target=self.camera_loop, name="camera", daemon=True)
         self._camera_thread.start()
         rospy.loginfo(f"head camera: {self.nav_cfg.intrinsics.width}x{self.nav_cfg.intrinsics.height} at "
-                      f"{self.camera_rate_hz:g} Hz, world {self.world_file}")
+                      f"{self.camera_rate_hz:g} Hz, {self.depth_model} depth, world {self.world_file}")
 
     def camera_loop(self):
         period = 1.0 / self.camera_rate_hz

@@ -4,11 +4,13 @@ the interpreter while the mocked servo bus must answer the driver within millise
 builds its own model from the plant's MJCF, takes a snapshot of the state (qpos and base_link's
 pose), runs the kinematics and renders colour and/or depth (sim.camera.HeadCamera, EGL).
 
-    cam = CameraProcess(plant.mjcf, intrinsics, mount, colour=True, depth=True)
+    cam = CameraProcess(plant.mjcf, intrinsics, mount, colour=True, depth=True, depth_model=None)
     cam.request(t_s, plant.data.qpos, plant.frame_transform("base_link"))   # when cam.idle
     frame = cam.poll()          # a RenderedFrame once the child answered, else None
     cam.close()
 
+depth_model: applied to every depth render in the child (sim.depth_noise.DepthNoise, whose random
+stream travels with it: the child draws the numbers the parent's generator would have); None: exact.
 One request at a time (request() while busy is refused: False); rendering statistics in `stats`.
 """
 import multiprocessing as mp
@@ -31,12 +33,13 @@ class RenderedFrame:
     render_s: float                      # the child's time for the render passes
 
 
-def _child(conn, mjcf: str, intrinsics: CameraIntrinsics, mount: CameraMount, colour: bool, depth: bool):
+def _child(conn, mjcf: str, intrinsics: CameraIntrinsics, mount: CameraMount, colour: bool, depth: bool,
+           depth_model):
     import mujoco  # lazy: MuJoCo is heavy and only this path needs it
 
     model = mujoco.MjModel.from_xml_string(mjcf)
     data = mujoco.MjData(model)
-    cam = HeadCamera(model, intrinsics, mount)
+    cam = HeadCamera(model, intrinsics, mount, depth_model=depth_model)
     conn.send("ready")
     try:
         while True:
@@ -58,10 +61,10 @@ def _child(conn, mjcf: str, intrinsics: CameraIntrinsics, mount: CameraMount, co
 
 class CameraProcess:
     def __init__(self, mjcf: str, intrinsics: CameraIntrinsics, mount: CameraMount, colour: bool = True,
-                 depth: bool = True, start_timeout_s: float = 120.0):
+                 depth: bool = True, start_timeout_s: float = 120.0, depth_model=None):
         ctx = mp.get_context("spawn")          # no fork of a process with threads (ROS, the bus)
         self._conn, child = ctx.Pipe()
-        self._proc = ctx.Process(target=_child, args=(child, mjcf, intrinsics, mount, colour, depth),
+        self._proc = ctx.Process(target=_child, args=(child, mjcf, intrinsics, mount, colour, depth, depth_model),
                                  name="head_camera", daemon=True)
         self._proc.start()
         child.close()

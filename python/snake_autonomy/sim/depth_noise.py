@@ -13,9 +13,11 @@ What it does to a render (config/sim.yaml depth_noise:, DepthNoiseConfig):
   depth differs by more than edge_jump_fraction of the nearer one: stereo matching fails on the
   occlusion boundary and on grazing surfaces, whose neighbouring pixels also differ steeply).
 Every random number comes from the generator given (the run's seed's stream).
+
+sim_node picks the model by name (~depth_model, sim.launch depth_model:=): named_depth_model.
 """
 from dataclasses import dataclass
-from typing import List
+from typing import List, Optional
 
 import numpy as np
 
@@ -113,3 +115,17 @@ class DepthNoise:
             invalid |= edge_mask(z, c.edge_jump_fraction, c.edge_band_px)
         out[invalid] = 0.0
         return out
+
+
+#: sim_node's ~depth_model: the D435i-like model of config/sim.yaml depth_noise:, or exact renders
+NAMED_DEPTH_MODELS = ("d435i", "perfect")
+
+
+def named_depth_model(name: str, config: DepthNoiseConfig, focal_px: float,
+                      rng: np.random.Generator) -> Optional[DepthNoise]:
+    """The depth model called `name` (NAMED_DEPTH_MODELS): a DepthNoise for "d435i", None (exact
+    depth) for "perfect". config.enabled is the batch nav runs' default and is not read: the name
+    decides. ValueError naming depth_model for any other name."""
+    if name not in NAMED_DEPTH_MODELS:
+        raise ValueError(f"depth_model: expected one of {', '.join(NAMED_DEPTH_MODELS)}, got {name!r}")
+    return DepthNoise(config, focal_px, rng) if name == "d435i" else None
