@@ -162,6 +162,16 @@ class WaypointTracker:
         self._delta = 0.0
         self._last = None
 
+    def skip(self) -> None:
+        """Counts the active waypoint as reached without a control step (another controller drove the
+        robot there: a mission's navigate_to leg). The next waypoint becomes active, sidewinding from
+        mode 1 with an unmodified amplitude, as at the start."""
+        if self._k < len(self.waypoints):
+            self._k += 1
+        self._mode, self._gait, self._delta = MODE_SIDEWIND, SIDEWIND, 0.0
+        if self.done:
+            self._gait = STOP
+
     @property
     def mode(self) -> int:
         return self._mode

@@ -12,7 +12,9 @@ Optional keys: ``name``, ``description``, ``frame`` (world frame id, information
 mappings checked by snake_autonomy.sim.disturbances; ignored on the robot).
 
 A waypoint may also be a mapping ``{pose: [x_m, y_m, heading_deg], scout: {height_m: 0.3, hold_s: 5}}``:
-a scout stop there once it is reached (missions/scout.py: keys, sequence).
+a scout stop there once it is reached (missions/scout.py: keys, sequence). A waypoint
+``{navigate_to: {x_m: 2.0, y_m: 0.5, radius_m: 0.2}}`` is a navigation leg: the obstacle-aware planner
+drives there through its move_base action, not the tracker (missions/nav_leg.py: keys, outcomes).
 
 A bad mission is refused whole, before anything moves, with every problem listed (MissionError);
 each problem names the key and the value.
@@ -26,6 +28,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 from ..control.waypoint_tracker import TRACKER_GAITS, TrackerParams
 from ..safe_yaml import MAX_FILE_BYTES, YamlFileError, load_yaml_file, load_yaml_text, short_repr
 from ..paths import NotANameError, config_path, named_yaml
+from .nav_leg import NavLegSpec, parse_nav_leg
 from .scout import ScoutSpec, parse_scout
 
 CONFIG_DIR = config_path()
@@ -51,8 +54,9 @@ TRACKER_BOUNDS = {"d_th_m": 100.0, "kp": 1000.0}
 MAX_TRACKER_DEG = 360.0
 #: Run keys of config/tracker.yaml: (largest value, unit).
 RUN_KEY_BOUNDS = {"rate_hz": (1000.0, "Hz"), "pose_timeout_s": (3600.0, "s"), "yaw_filter_window": (10000, "samples")}
-#: Keys of a waypoint written as a mapping (missions/scout.py: the scout stop).
-WAYPOINT_KEYS = ("pose", "scout")
+#: Keys of a waypoint written as a mapping (missions/scout.py: the scout stop; missions/nav_leg.py: a
+#: navigation leg, instead of pose).
+WAYPOINT_KEYS = ("pose", "scout", "navigate_to")
 MISSION_KEYS = ("name", "description", "frame", "waypoints", "time_limit_s", "tracker", "gaits", "disturbances")
 # Physical ranges of a mission (a value outside is refused with its key and value).
 MAX_WAYPOINTS = 1000
@@ -83,6 +87,7 @@ class Mission:
     tracker_params: Dict[str, Any]                     # TrackerParams fields, radians/metres
     gaits: Dict[str, str]                              # tracker gait -> gait library name
     scouts: Dict[int, ScoutSpec] = field(default_factory=dict)   # waypoint index -> scout stop there
+    legs: Dict[int, NavLegSpec] = field(default_factory=dict)    # waypoint index -> navigate_to leg
     time_limit_s: Optional[float] = None
     description: str = ""
     frame: str = ""
@@ -102,7 +107,9 @@ class Mission:
         lines = [f"mission {_short(self.name)}: {len(self.waypoints_deg)} waypoint(s)"
                  + (f", time limit {self.time_limit_s:g} s" if self.time_limit_s else ", no time limit")]
         for i, (x, y, h) in enumerate(self.waypoints_deg):
-            lines.append(f"  {i}: x {x:+.3f} m  y {y:+.3f} m  heading {h:+.1f} deg" + _scout_text(self.scouts.get(i)))
+            how = "navigate_to" if i in self.legs else "track"
+            lines.append(f"  {i}: {how} x {x:+.3f} m  y {y:+.3f} m  heading {h:+.1f} deg"
+                         + _leg_text(self.legs.get(i)) + _scout_text(self.scouts.get(i)))
         lines.append("  tracker: d_th {:.3f} m, psi_wp {:.1f} deg, psi_turn {:.1f} deg, delta0 {:.1f} deg, "
                      "delta_lim {:.1f} deg, kp {:g}".format(
                          p["d_th"], math.degrees(p["psi_wp"]), math.degrees(p["psi_turn"]),
@@ -123,9 +130,18 @@ def _scout_text(spec) -> str:
     return f"  then scout: {height}, hold {spec.hold_s:g} s"
 
 
-def _waypoint_entry(wp: dict, i: int, scouts: Dict[int, "ScoutSpec"], problems: List[str]):
-    """A waypoint written as a mapping {pose: [x_m, y_m, heading_deg], scout: {...}}: its pose
-    (None when missing), its scout stop recorded in `scouts`."""
+def _leg_text(spec) -> str:
+    if spec is None:
+        return ""
+    return ((f", radius {spec.radius_m:g} m" if spec.radius_m is not None else "")
+            + (f", time limit {spec.time_limit_s:g} s" if spec.time_limit_s is not None else ""))
+
+
+def _waypoint_entry(wp: dict, i: int, scouts: Dict[int, "ScoutSpec"], legs: Dict[int, NavLegSpec],
+                    problems: List[str]):
+    """A waypoint written as a mapping {pose: [x_m, y_m, heading_deg], scout: {...}} or {navigate_to:
+    {...}, scout: {...}}: its pose (None when missing or invalid), its scout stop recorded in `scouts`,
+    its navigation leg in `legs`."""
     for key in wp:
         if key not in WAYPOINT_KEYS:
             problems.append(f"waypoints[{i}].{key}: unknown key (value {_short(wp[key])}); "
@@ -134,8 +150,16 @@ def _waypoint_entry(wp: dict, i: int, scouts: Dict[int, "ScoutSpec"], problems: 
         spec = parse_scout(wp["scout"], f"waypoints[{i}].scout", problems)
         if spec is not None:
             scouts[i] = spec
+    if "navigate_to" in wp:
+        if "pose" in wp:
+            problems.append(f"waypoints[{i}].pose: give pose or navigate_to, not both (pose {_short(wp['pose'])})")
+        spec = parse_nav_leg(wp["navigate_to"], f"waypoints[{i}].navigate_to", problems)
+        if spec is None:
+            return None
+        legs[i] = spec
+        return [spec.x_m, spec.y_m, spec.heading_deg]
     if "pose" not in wp:
-        problems.append(f"waypoints[{i}].pose: missing ([x_m, y_m, heading_deg])")
+        problems.append(f"waypoints[{i}].pose: missing ([x_m, y_m, heading_deg], or navigate_to: {{x_m, y_m}})")
         return None
     return wp["pose"]
 
@@ -297,6 +321,7 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
 
     waypoints: List[Tuple[float, float, float]] = []
     scouts: Dict[int, ScoutSpec] = {}
+    legs: Dict[int, NavLegSpec] = {}
     raw_wps = data.get("waypoints")
     if "waypoints" not in data:
         problems.append("waypoints: missing (a list of [x_m, y_m, heading_deg])")
@@ -309,7 +334,7 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
     else:
         for i, wp in enumerate(raw_wps):
             if isinstance(wp, dict):
-                wp = _waypoint_entry(wp, i, scouts, problems)
+                wp = _waypoint_entry(wp, i, scouts, legs, problems)
                 if wp is None:
                     waypoints.append(None)
                     continue
@@ -378,7 +403,7 @@ def validate_mission(data: Any, source: str = "<mission>", defaults: Optional[Di
     if problems:
         raise MissionError(source, problems)
     return Mission(name=name, waypoints_deg=list(waypoints), tracker_params=tracker, gaits=gaits,
-                   scouts=scouts, time_limit_s=float(time_limit) if time_limit is not None else None,
+                   scouts=scouts, legs=legs, time_limit_s=float(time_limit) if time_limit is not None else None,
                    description=data.get("description", ""), frame=data.get("frame", ""),
                    source=source, raw=copy.deepcopy(data))
 

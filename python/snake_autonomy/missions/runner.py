@@ -12,7 +12,12 @@ The mission node wires it to topics; the simulator can drive it directly. Safety
   caller not to send gait commands (the trajectory owns the joints). A failed plan is recorded in
   `scout_log` and the mission resumes. The time limit is checked only between scout stops (a raised
   head is lowered first); a stop needs `scout_planner` and `executor`, without them it is recorded
-  as failed and skipped.
+  as failed and skipped;
+- a navigate_to leg (missions/nav_leg.py) is driven by a `Navigator` (the planner's move_base on the
+  ROS side): the tracker is not stepped and `Decision.navigating` tells the caller not to send gait
+  commands; the leg ends reached (the tracker goes on with the next waypoint) or aborts the mission
+  with the navigator's reason, naming the leg. Abort, pause, time limit and close cancel the leg's goal
+  (a leg paused is sent again on resume). Without a navigator a leg aborts the mission.
 
 Heading. The tracker's yaw is the direction the robot travels when it sidewinds. ``com_pose`` carries
 the virtual chassis (x axis along the body, eq. 3.11-3.14); ``heading_offset_rad`` (config/tracker.yaml
@@ -27,6 +32,7 @@ from typing import Any, Dict, List, Optional
 
 from ..control import TrackerCommand, WaypointTracker, YawMovingAverage
 from .mission import Mission
+from .nav_leg import FAILED as LEG_FAILED, NAVIGATE_TO, SUCCEEDED as LEG_SUCCEEDED, Navigator
 from .scout import ScoutPlanner, ScoutRecord, ScoutStop, TrajectoryExecutor
 
 IDLE, RUNNING, DONE, ABORTED, TIMEOUT = "idle", "running", "done", "aborted", "timeout"
@@ -45,6 +51,8 @@ class Decision:
     finished: bool = False         # the mission ended at this tick
     outcome: str = ""
     trajectory_active: bool = False  # a scout trajectory owns the joints: send no gait command
+    navigating: bool = False       # a navigate_to leg runs: the planner drives, send no gait command
+    leg_state: str = ""            # navigate_to: the leg's state or how it ended; "" on tracker waypoints
     command: Optional[TrackerCommand] = field(default=None, repr=False)
 
 
@@ -52,7 +60,7 @@ class MissionRunner:
     def __init__(self, mission: Mission, pose_timeout_s: float = 0.5, yaw_window: int = 10,
                  min_fresh_samples: Optional[int] = None, heading_offset_rad: float = 0.0,
                  scout_planner: Optional[ScoutPlanner] = None,
-                 executor: Optional[TrajectoryExecutor] = None):
+                 executor: Optional[TrajectoryExecutor] = None, navigator: Optional[Navigator] = None):
         if not (isinstance(pose_timeout_s, (int, float)) and math.isfinite(pose_timeout_s) and pose_timeout_s > 0):
             raise ValueError(f"pose_timeout_s: must be a positive number, got {pose_timeout_s!r}")
         self.mission = mission
@@ -77,6 +85,8 @@ class MissionRunner:
         self.scout_log: List[ScoutRecord] = []
         self._pool: Optional[ThreadPoolExecutor] = None
         self.paused: Optional[str] = None      # why the mission holds until resume() (a driver fault)
+        self.navigator = navigator
+        self._leg_t0: Optional[float] = None   # when the navigate_to leg under way was sent
 
     @property
     def hold_gait(self) -> str:
@@ -96,6 +106,7 @@ class MissionRunner:
         if self.state == RUNNING:
             self.state = ABORTED
             self.outcome = f"aborted: {reason}"
+            self._cancel_leg()
 
     def pause(self, reason: str) -> bool:
         """Hold until resume(), whatever the inputs do (a driver fault: the driver's recovery must not
@@ -104,6 +115,7 @@ class MissionRunner:
         if self.state != RUNNING or self.paused is not None:
             return False
         self.paused = reason
+        self._cancel_leg()
         return True
 
     def resume(self) -> bool:
@@ -174,9 +186,12 @@ class MissionRunner:
         limit = self.mission.time_limit_s
         if limit is not None and t_s - self.t_start > limit:
             self.state, self.outcome = TIMEOUT, f"timeout: time limit {limit:g} s reached"
+            self._cancel_leg()
             return self._hold(t_s, self.outcome, stale=False, finished=True)
         if self.paused is not None:
             return self._hold(t_s, f"paused: {self.paused} (resume to go on)", stale=False)
+        if self.tracker.waypoint_index in self.mission.legs:
+            return self._navigate(t_s, self.tracker.waypoint_index)
         problem = self.pose_problem(t_s)
         if problem:
             if not self._was_stale:
@@ -219,8 +234,60 @@ class MissionRunner:
         d.trajectory_active = self.scout.trajectory_active
         return d
 
+    # -- navigate_to legs (missions/nav_leg.py) --------------------------------------------------------
+    def _navigate(self, t_s: float, index: int) -> Decision:
+        """One tick of the leg at waypoint `index`: sent at its first tick, then polled."""
+        leg = self.mission.legs[index]
+        if self.navigator is None:
+            self.abort(f"{leg.describe(index)}: no navigator on this path (a leg needs the planner's move_base)")
+            return self._leg_decision(t_s, index, self.outcome, finished=True)
+        if self._leg_t0 is None:
+            self._leg_t0 = t_s
+            self.navigator.send(index, leg)
+        state, text = self.navigator.poll()
+        fresh = self._xy is not None and not self.pose_problem(t_s)
+        distance = math.hypot(leg.x_m - self._xy[0], leg.y_m - self._xy[1]) if fresh else NAN
+        if state != LEG_SUCCEEDED and leg.radius_m is not None and distance <= leg.radius_m:
+            self.navigator.cancel()
+            state, text = LEG_SUCCEEDED, f"centre of mass {distance:.2f} m from the goal (radius_m {leg.radius_m:g})"
+        if state == LEG_SUCCEEDED:
+            self._leg_t0 = None
+            self.tracker.skip()
+            self.filter.reset()     # the yaw while the planner drove says nothing of the tracker's heading
+            if self.tracker.done:
+                self.state, self.outcome = DONE, "done: every waypoint reached"
+            elif index in self.mission.scouts:
+                self._start_scout(t_s, index)
+            return self._leg_decision(t_s, index, f"reached: {text}", distance, reached=True)
+        if state == LEG_FAILED:
+            self._leg_t0 = None     # the goal has ended: nothing to cancel
+            self.abort(f"{leg.describe(index)}: {text}")
+            return self._leg_decision(t_s, index, text, distance, finished=True)
+        if leg.time_limit_s is not None and t_s - self._leg_t0 > leg.time_limit_s:
+            self.abort(f"{leg.describe(index)}: time limit {leg.time_limit_s:g} s reached")
+            return self._leg_decision(t_s, index, "time limit reached", distance, finished=True)
+        return self._leg_decision(t_s, index, text or state, distance)
+
+    def _leg_decision(self, t_s: float, index: int, leg_state: str, distance: float = NAN,
+                      reached: bool = False, finished: bool = False) -> Decision:
+        """The decision of a leg's tick: no gait command while it runs, the hold when the mission ended."""
+        tr, ended = self.tracker, finished or self.state != RUNNING
+        note = f"{self.mission.legs[index].describe(index)}: {leg_state}"
+        status = dict(waypoint_index=tr.waypoint_index, num_waypoints=len(self.mission.waypoints),
+                      waypoint_reached=reached, distance=distance, yaw_error_abs=NAN, yaw_error_rel=NAN,
+                      yaw_error=NAN, w=NAN, mode=tr.mode, delta=0.0,
+                      gait=self.hold_gait if ended else NAVIGATE_TO, done=tr.done, pose_stale=False, note=note)
+        return Decision(t_s, self.hold_gait, False, 0.0, status, hold=ended, finished=ended,
+                        outcome=self.outcome if ended else "", navigating=not ended, leg_state=leg_state)
+
+    def _cancel_leg(self) -> None:
+        if self._leg_t0 is not None:
+            self._leg_t0 = None
+            self.navigator.cancel()
+
     def close(self) -> None:
-        """Stop the planner's worker (a plan under way is finished and dropped)."""
+        """Stop the planner's worker (a plan under way is finished and dropped) and a leg's goal."""
+        self._cancel_leg()
         if self._pool is not None:
             self._pool.shutdown(wait=False, cancel_futures=True)
             self._pool = None

@@ -24,6 +24,9 @@ Configuration of the simulated robot: config/sim.yaml (physics, sensors, and its
 section merged over config/tracker.yaml). The start pose is the tracker's view: the centre of mass
 of a straight body at (x, y), heading (direction of travel) in degrees. A roll-over (SimWorld's
 monitor) ends the run.
+
+A mission with navigate_to legs (missions/nav_leg.py) is refused: the obstacle-aware planner drives
+those through its move_base action, on the ROS path only; the batch run has no second navigation loop.
 """
 import json
 import math
@@ -38,6 +41,7 @@ from tqdm import tqdm
 from snake_autonomy import _core
 from snake_autonomy.control.angles import wrap
 from snake_autonomy.evaluation import EvaluationOptions, evaluate, trajectory_from_arrays, write_outputs
+from snake_autonomy.missions import MissionError
 from snake_autonomy.missions.runner import MissionRunner
 from snake_autonomy.missions.scout import fbsr_scout_planner
 from snake_autonomy.runs.results import write_json_atomic, write_results
@@ -52,6 +56,7 @@ from snake_autonomy.sim.world import CONFIG, SimWorld, WorldSpec
 DRIVER_RATE_HZ = 100.0
 TRAJECTORY_RATE_HZ = 10.0
 SCOUT_PLAN_TIMEOUT_S = 600.0     # wall time a scout plan may take in a batch run
+NAV_LEG_REFUSAL = "navigate_to legs need the planner: run through ROS (sim.launch world:=...)"
 DEG = 180.0 / math.pi
 
 
@@ -188,6 +193,13 @@ class LockStepDriver:
             put(sid, *present(state(sid)))
 
 
+def refuse_navigation_legs(mission) -> None:
+    """MissionError naming every navigate_to leg of the mission, when it has any."""
+    if mission.legs:
+        raise MissionError(mission.source, [f"{leg.describe(i)}: {NAV_LEG_REFUSAL}"
+                                            for i, leg in sorted(mission.legs.items())])
+
+
 class BatchRun:
     def __init__(self, spec: RunSpec, robot=None, library=None):
         self.spec = spec
@@ -197,6 +209,7 @@ class BatchRun:
         w = self.world
         self.sim_config, self.defaults, self.mission, self.params = w.config, w.defaults, w.mission, w.params
         self.heading_offset_rad, self.plant = w.heading_offset_rad, w.plant
+        refuse_navigation_legs(self.mission)
         self.driver = LockStepDriver(self.robot, self.library, self.plant, load_driver_config(spec.driver_config))
         self.feedback = make_feedback(spec.feedback, self.params, self.robot)
         self.scout_executor, scout_planner = None, None
