@@ -4,8 +4,9 @@ goal -> Mission, tracker decision -> feedback, run metrics -> result. The node d
 Goal: exactly one of ``mission`` (a .yaml/.yml file, or a provided mission's name: only
 config/missions/NAME.yaml), ``mission_yaml`` (a whole mission as YAML text, read by the same bounded
 loader as the files: safe_yaml.load_yaml_text) or ``waypoints`` (geometry_msgs/Pose2D, theta in rad;
-the defaults for the rest). Result: the run's outcome and per-waypoint metrics, computed from the decisions of this run
-(experiments.results.compute_metrics, the same figures as metrics.json). Cancel: aborts the mission
+the defaults for the rest; in the world frame: nodes.mission_goal_frame brings those in ``frame_id`` there
+first). Result: the run's outcome and per-waypoint metrics, computed from the decisions of this run
+(runs.results.compute_metrics, the same figures as metrics.json). Cancel: aborts the mission
 (hold sent); the goal ends preempted with the metrics so far.
 """
 import math
@@ -60,7 +61,9 @@ def _num(v) -> float:
     return NAN if v is None else float(v)
 
 
-def fill_feedback(feedback, status: Dict[str, Any]):
+def fill_feedback(feedback, status: Dict[str, Any], leg_state: str = ""):
+    """A decision's feedback: leg_state non-empty on a navigate_to leg's ticks (Decision.leg_state)."""
+    feedback.leg, feedback.leg_state = ("navigate_to" if leg_state else "track"), leg_state
     feedback.waypoint_index = int(status["waypoint_index"])
     feedback.num_waypoints = int(status["num_waypoints"])
     feedback.distance = float(status["distance"])

@@ -1,26 +1,24 @@
-"""mission_node: runs missions with the 1 Hz waypoint tracker and logs every run. Wiring only: the
-logic is missions.runner.MissionRunner, the log experiments.RunLog.
+"""mission_node: runs missions with the 1 Hz waypoint tracker and the planner's move_base (navigate_to legs),
+logs every run. Wiring only: the logic is missions.runner.MissionRunner, the log runs.run_log.RunLog.
 
-Subscribes  com_pose (geometry_msgs/PoseStamped, the driver's CoM + virtual-chassis orientation),
-            /diagnostics: the pose remapper's status ~pose_status_name (default "<ns>/pose_remapper:
-            base pose", optional; not OK holds the robot),
-            and for the bag: base_pose, odom, bound_state, joint_states and the standard topics
-            (experiments.recorded_topics: /tf, /tf_static, /diagnostics; the static transforms seen
+Subscribes  com_pose (geometry_msgs/PoseStamped, the driver's CoM + virtual-chassis orientation), /diagnostics:
+            the pose remapper's status ~pose_status_name (default "<ns>/pose_remapper: base pose", optional;
+            not OK holds the robot), and for the bag: base_pose, odom, bound_state, joint_states and the
+            standard topics (runs.recorded_topics: /tf, /tf_static, /diagnostics; the static transforms seen
             before a run are written at its start, so each bag replays in rviz on its own).
 Publishes   gait_command (snake_autonomy/GaitCommand, every control step while a mission runs: the
-            repeat is the driver's heartbeat, its command_timeout_s holds the robot when it stops),
-            tracking_status (snake_autonomy/TrackingStatus),
-            mission/waypoints (geometry_msgs/PoseArray, latched), mission/state (std_msgs/String, latched:
-            a tool that joins late, and a run started by ~auto_start that no action client owns, still
-            show the node's state).
+            repeat is the driver's heartbeat, its command_timeout_s holds the robot when it stops; none
+            while a navigate_to leg runs: the planner drives), tracking_status (snake_autonomy/TrackingStatus),
+            mission/waypoints (geometry_msgs/PoseArray, latched), mission/state (std_msgs/String, latched: a
+            tool that joins late, and a run started by ~auto_start that no action client owns, see the state).
 Action      mission/run (snake_autonomy/RunMission): goal = a mission (name or file, YAML text, or inline
-            waypoints), feedback = every tracker decision, result = outcome and per-waypoint metrics,
-            cancel = abort (hold). A new goal while an action's mission runs preempts it; a goal while
-            a service- or auto-started mission runs is rejected.
+            waypoints in frame_id: nodes/mission_goal_frame.py), feedback = every decision (tracker or
+            leg), result = outcome and per-waypoint metrics, cancel = abort (hold). A new goal while an
+            action's mission runs preempts it; one while a service- or auto-started mission runs is rejected.
+Client      move_base (move_base_msgs/MoveBaseAction): a goal per navigate_to leg (nodes/mission_nav_leg.py).
 Services    mission/load (snake_autonomy/LoadMission), mission/start, mission/abort, mission/resume
             (std_srvs/Trigger; resume goes on after a pause for a driver fault), kept beside the action:
-            ~auto_start and `rosservice call` (the one-line stop of any run, whoever started it) need no
-            action client.
+            ~auto_start and `rosservice call` (the one-line stop of any run) need no action client.
 Diagnostics /diagnostics (diagnostic_updater): "mission" (state, mission, waypoint, distance, last
             scout stop; WARN while holding for a stale pose, ERROR when a run aborted) and
             "tracking_status topic status" (the tracker's rate against ~rate_hz).
@@ -29,13 +27,13 @@ Params      ~mission (file or provided name: loaded at start-up), ~auto_start (f
             (config/tracker.yaml), ~tracker_overrides (a YAML file whose `tracker:` section is merged
             over tracker_config, e.g. config/sim.yaml for the simulated robot; empty: none),
             ~gaits_config (config/gaits.yaml), ~rate_hz, ~pose_timeout_s, ~yaw_filter_window,
-            ~heading_offset_deg (defaults from tracker_config + overrides), ~results_dir, ~record
-            (true), ~world_frame (odom), ~pose_status_name, ~robot (cobra) and ~scout_config (empty:
-            config/scout.yaml) for the scout stops of a mission, ~driver_status_name (the driver's
-            locomotion status on /diagnostics, default "snake_driver: locomotion"), ~on_driver_fault:
-            abort (default: the mission ends, hold sent, results written, the action aborted with the
-            fault) or pause (hold until mission/resume; the driver's own recovery never restarts it).
-            A mission does not start while the driver reports a fault.
+            ~heading_offset_deg (defaults from tracker_config + overrides), ~results_dir, ~record (true),
+            ~world_frame (odom), ~nav_server_timeout_s (10: a leg's wait for move_base), ~pose_status_name,
+            ~robot (cobra) and ~scout_config (empty: config/scout.yaml) for the scout stops of a mission,
+            ~driver_status_name (the driver's locomotion status, default "snake_driver: locomotion"),
+            ~on_driver_fault: abort (default: the mission ends, hold sent, results written, the action
+            aborted with the fault) or pause (hold until mission/resume; the driver's own recovery never
+            restarts it). A mission does not start while the driver reports a fault.
 """
 import math
 import os
@@ -60,6 +58,8 @@ from snake_autonomy.missions.scout import fbsr_scout_planner
 from snake_autonomy.msg import (BoundState, GaitCommand, RunMissionAction, RunMissionFeedback, RunMissionResult,
                                 TrackingStatus, WaypointResult)
 from snake_autonomy.nodes.mission_action import DecisionSeries, fill_feedback, fill_result, mission_from_goal
+from snake_autonomy.nodes.mission_goal_frame import GoalFrames
+from snake_autonomy.nodes.mission_nav_leg import MoveBaseNavigator
 from snake_autonomy.nodes.scout_trajectory import TopicTrajectoryExecutor
 from snake_autonomy.paths import default_results_dir
 from snake_autonomy.runs.recorded_topics import STATIC_TF_TOPIC, StaticTransforms, standard_topic_types
@@ -109,6 +109,8 @@ class MissionNode:
         self.results_dir = Path(rospy.get_param("~results_dir", default_results_dir()))
         self.record = bool(rospy.get_param("~record", True))
         self.world_frame = rospy.get_param("~world_frame", "odom")
+        self.goal_frames = GoalFrames(self.world_frame)
+        self.navigator = MoveBaseNavigator(self.world_frame, float(rospy.get_param("~nav_server_timeout_s", 10.0)))
         # Scout stops (missions/scout.py): the FBSR planner for this robot, trajectories to the driver.
         self.robot = rospy.get_param("~robot", "cobra")
         self.scout_config = rospy.get_param("~scout_config", "") or None
@@ -197,7 +199,8 @@ class MissionNode:
         if mission.scouts:
             planner, executor = self.scout_parts()
         return MissionRunner(mission, self.pose_timeout_s, self.yaw_window,
-                             heading_offset_rad=self.heading_offset_rad, scout_planner=planner, executor=executor)
+                             heading_offset_rad=self.heading_offset_rad, scout_planner=planner, executor=executor,
+                             navigator=self.navigator)
 
     def scout_parts(self):
         """The scout planner (FBSR, ~robot) and the executor that publishes driver/joint_trajectory,
@@ -392,7 +395,8 @@ class MissionNode:
     # -- the action ---------------------------------------------------------------------------------
     def execute(self, goal):
         """One RunMission goal, in actionlib's thread: load, start, wait for the end or a cancel."""
-        ok, message = self.install(lambda: mission_from_goal(goal, self.defaults, self.gait_library),
+        ok, message = self.install(lambda: mission_from_goal(self.goal_frames.to_world(goal), self.defaults,
+                                                             self.gait_library),
                                    "RunMission goal")
         if ok:
             ok, message = self.start()
@@ -457,18 +461,19 @@ class MissionNode:
         status = TrackingStatus(**decision.status)
         status.header.stamp = now
         status.header.frame_id = self.world_frame
-        # While a scout trajectory owns the joints no gait command goes out: one would end it (the
-        # driver holds the trajectory's last point afterwards, the hold of a finished mission included).
-        if not decision.trajectory_active:
+        # While a scout trajectory owns the joints no gait command goes out: one would end it (the driver
+        # holds its last point afterwards, a finished mission's hold included); nor while the planner drives.
+        sends = not (decision.trajectory_active or decision.navigating)
+        if sends:
             self.pub_cmd.publish(cmd)
         self.pub_status.publish(status)
         self.status_freq.tick()
         self.last_status = decision.status
         self.decisions.add(decision.t_s, decision.status)
         if self.action.is_active():
-            self.action.publish_feedback(fill_feedback(RunMissionFeedback(), decision.status))
+            self.action.publish_feedback(fill_feedback(RunMissionFeedback(), decision.status, decision.leg_state))
         if self.log is not None:
-            if not decision.trajectory_active:
+            if sends:
                 self.log.write(self.resolved("gait_command"), cmd, decision.t_s)
             self.log.write(self.resolved("tracking_status"), status, decision.t_s)
             s = decision.status
