@@ -8,6 +8,10 @@ Publishes   base_pose (geometry_msgs/PoseWithCovarianceStamped, motion capture o
             covariance from sim.yaml's mocap noise; feedback mocap)
             odom (nav_msgs/Odometry, the simulated RTAB-Map: camera pose, 30 Hz, null pose with
             covariance 9999 while lost; feedback vio: pose_remap_node turns it into base_pose)
+            camera/imu (sensor_msgs/Imu, the head camera's IMU: MuJoCo's gyro and accelerometer at
+            camera_link with the BMI055-like errors of sim.yaml imu: (sim/imu.py), at imu.rate_hz (200),
+            frame ~imu_frame (camera_link; REP 145: rad/s, m/s^2 with gravity; no orientation:
+            orientation_covariance[0] = -1; the white noise's variances on the diagonals)),
             ground_truth/base_pose (PoseStamped, 100 Hz), ground_truth/camera_pose (PoseStamped, with
             every odom message, same stamp), ground_truth/com_pose (PoseStamped, 10 Hz: centre of mass
             and heading from the true base pose),
@@ -23,7 +27,8 @@ Subscribes  sim/disturbance (geometry_msgs/WrenchStamped: header.frame_id = the 
             tracking_status (the mission's active waypoint: arms the mission's mid-leg disturbances).
 Params      ~feedback (mocap|vio), ~seed, ~start ("x,y,heading_deg" of the centre of mass), ~port,
             ~sim_config, ~robot_config, ~tracker_config, ~mission (for its disturbances), ~world_frame
-            (odom), ~camera_frame (camera), ~rate_hz (physics and sensor poll, 200), ~disturbance_duration_s.
+            (odom), ~camera_frame (camera), ~imu_frame (camera_link), ~rate_hz (physics and sensor poll,
+            200), ~disturbance_duration_s.
 With a world (~world, a nav world file, a relative path taken against the node's working directory,
 paths.resolve_world_path; empty: none, everything above unchanged): the
 world's obstacles and floor in the plant, base_link at its start (~start ignored), the plant option
@@ -54,7 +59,7 @@ from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import CameraInfo, Image
+from sensor_msgs.msg import CameraInfo, Image, Imu
 from visualization_msgs.msg import Marker, MarkerArray
 
 from snake_autonomy.msg import GaitCommand, TrackingStatus, TrajectoryStatus
@@ -76,6 +81,18 @@ def _pose(msg_pose, position, quat):
     o.x, o.y, o.z, o.w = (float(v) for v in quat)
 
 
+def _imu(sample, stamp, frame):
+    m = Imu()
+    m.header.stamp, m.header.frame_id = stamp, frame
+    m.orientation_covariance[0] = -1.0                 # no orientation estimate
+    v, a = m.angular_velocity, m.linear_acceleration
+    v.x, v.y, v.z = (float(x) for x in sample.angular_velocity_rad_s)
+    a.x, a.y, a.z = (float(x) for x in sample.linear_acceleration_m_s2)
+    m.angular_velocity_covariance = [sample.gyro_std_rad_s ** 2 if i % 4 == 0 else 0.0 for i in range(9)]
+    m.linear_acceleration_covariance = [sample.accel_std_m_s2 ** 2 if i % 4 == 0 else 0.0 for i in range(9)]
+    return m
+
+
 class SimNode:
     def __init__(self):
         start = str(rospy.get_param("~start", "0,0,0"))
@@ -95,7 +112,9 @@ class SimNode:
             self.nav_cfg = NavConfig.from_yaml(rospy.get_param("~nav_config", str(config / "nav.yaml")))
             self.world = load_world(self.world_file)
             extra = world_plant_fields(self.world, self.nav_cfg.plant.flat_belly_fraction)
-        setup = SimSetup(feedback=rospy.get_param("~feedback", "mocap"), seed=int(rospy.get_param("~seed", 0)),
+        feedback = rospy.get_param("~feedback", "mocap")
+        setup = SimSetup(feedback=feedback, seed=int(rospy.get_param("~seed", 0)),
+                         sensors=("mocap", feedback, "imu"),
                          start=start_t, port=rospy.get_param("~port", "/tmp/snake_sim_bus"),
                          sim_config=rospy.get_param("~sim_config", str(config / "sim.yaml")),
                          robot=rospy.get_param("~robot_config", str(config / "robots" / "cobra.yaml")),
@@ -125,6 +144,8 @@ class SimNode:
             std = p.mocap_position_noise_m if i < 3 else p.mocap_rotation_noise_rad
             self.mocap_covariance[7 * i] = std * std
         self.pub_odom = rospy.Publisher("odom", Odometry, queue_size=20) if self.feedback == "vio" else None
+        self.imu_frame = rospy.get_param("~imu_frame", "camera_link")
+        self.pub_imu = rospy.Publisher("camera/imu", Imu, queue_size=50)
         self.pub_gt_base = rospy.Publisher("ground_truth/base_pose", PoseStamped, queue_size=20)
         self.pub_gt_cam = rospy.Publisher("ground_truth/camera_pose", PoseStamped, queue_size=20)
         self.pub_gt_com = rospy.Publisher("ground_truth/com_pose", PoseStamped, queue_size=10)
@@ -293,6 +314,8 @@ class SimNode:
                 m.pose.covariance = self.mocap_covariance
                 self.pub_base.publish(m)
                 self.source_freq.tick()
+        if out.imu is not None:
+            self.pub_imu.publish(_imu(out.imu, stamp, self.imu_frame))
         if out.vio is not None and self.pub_odom is not None:
             o = Odometry()
             o.header.stamp, o.header.frame_id, o.child_frame_id = stamp, self.world_frame, self.camera_frame

@@ -22,6 +22,7 @@ from ..missions.mission import MissionError, load_defaults
 from ..paths import config_path
 from ..safe_yaml import load_yaml_file
 from .depth_noise import DepthNoiseConfig
+from .imu import ImuConfig
 
 
 @dataclass(frozen=True)
@@ -116,7 +117,8 @@ class DisturbanceConfig:
 
 
 _SECTIONS = {"physics": PhysicsConfig, "servo": ServoConfig, "mocap": MocapConfig,
-             "vio": VioConfig, "monitor": MonitorConfig, "scales": ScalesConfig, "depth_noise": DepthNoiseConfig}
+             "vio": VioConfig, "monitor": MonitorConfig, "scales": ScalesConfig, "depth_noise": DepthNoiseConfig,
+             "imu": ImuConfig}
 
 
 @dataclass
@@ -128,6 +130,7 @@ class SimConfig:
     monitor: MonitorConfig = field(default_factory=MonitorConfig)
     scales: ScalesConfig = field(default_factory=ScalesConfig)
     depth_noise: DepthNoiseConfig = field(default_factory=DepthNoiseConfig)
+    imu: ImuConfig = field(default_factory=ImuConfig)
     disturbances: List[DisturbanceConfig] = field(default_factory=list)
     # config/tracker.yaml keys overridden for the simulated robot (snake_autonomy.missions.load_defaults)
     tracker: dict = field(default_factory=dict)
@@ -219,6 +222,7 @@ class SimConfig:
                 errs.append(f"vio.loss_episodes[{i}]: expected [start_s, duration_s > 0], "
                             f"got {ep!r}")
         errs += self.depth_noise.problems("depth_noise")
+        errs += self.imu.problems("imu")
         for i, d in enumerate(self.disturbances):
             if (d.force_n is None) == (d.torque_nm is None):
                 errs.append(f"disturbances[{i}]: give exactly one of force_n, torque_nm")

@@ -19,15 +19,24 @@ Bodies and sites:
   end, twisted by twist_i) is the kinematic frame link_i of eq. 3.4.
 - physics.self_collision: links collide with each other too (contype 1, conaffinity 3), except
   neighbours (a `<contact><exclude>` per joint).
+- with imu_in_head (a 4x4 pose in head_link: config/camera.yaml's camera_in_head, the URDF's
+  camera_link): site `camera_link` on base_link there, and sensors `imu_gyro` (angular velocity,
+  rad/s) and `imu_accel` (specific force, m/s^2, gravity included) at it, in the site's frame
+  (sim/imu.py adds the BMI055's errors). Without it the model has no sensors.
 - actuator `servo_i`: the position servo of joint i. Its internal state (act) is the setpoint,
   integrated from a velocity command bounded by the joint speed limit and clamped to the joint's
   limits; force = kp (setpoint - q) - kv q', saturated at the torque limit.
 """
+from typing import Optional
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from ..transforms import make_transform, matrix_to_quat, rot_x
 from .config import SimParams
+
+IMU_SITE = "camera_link"
+IMU_SENSORS = ("imu_gyro", "imu_accel")
 
 
 def twists_rad(axes) -> list:
@@ -67,14 +76,28 @@ def _f(x: float) -> str:
     return f"{float(x):.17g}"
 
 
-def build_mjcf(robot, params: SimParams, scene_xml: str = "", assets_xml: str = "") -> str:
+def _imu(head_length_m: float, imu_in_head) -> tuple:
+    """The IMU's site on base_link (head_link . imu_in_head) and its sensors."""
+    T = make_transform(rot_x(np.pi / 2), (-head_length_m, 0.0, 0.0)) @ np.asarray(imu_in_head, float)
+    x, y, z, w = matrix_to_quat(T[:3, :3])
+    site = (f'      <site name="{IMU_SITE}" pos="{_f(T[0, 3])} {_f(T[1, 3])} {_f(T[2, 3])}" '
+            f'quat="{_f(w)} {_f(x)} {_f(y)} {_f(z)}"/>')
+    sensors = ['  <sensor>', f'    <gyro name="{IMU_SENSORS[0]}" site="{IMU_SITE}"/>',
+               f'    <accelerometer name="{IMU_SENSORS[1]}" site="{IMU_SITE}"/>', '  </sensor>']
+    return [site], sensors
+
+
+def build_mjcf(robot, params: SimParams, scene_xml: str = "", assets_xml: str = "",
+               imu_in_head: Optional[np.ndarray] = None) -> str:
     """MJCF text of `robot` (a _core.RobotModel) with the physics of `params`.
 
     assets_xml: children of an <asset> element (textures, materials) that scene_xml refers to.
 
     scene_xml: MJCF elements (bodies, geoms, cameras) placed in the worldbody beside the floor:
     obstacles, pipes, the things a planner's world holds. Their geoms should set contype and
-    conaffinity so that the links touch them (links: contype 1, conaffinity 2 or 3)."""
+    conaffinity so that the links touch them (links: contype 1, conaffinity 2 or 3).
+
+    imu_in_head: the IMU's 4x4 pose in head_link (the module's docstring); None: no IMU."""
     cfg = params.config
     phys, servo = cfg.physics, cfg.servo
     n = robot.num_joints
@@ -83,6 +106,7 @@ def build_mjcf(robot, params: SimParams, scene_xml: str = "", assets_xml: str = 
     H, L, r = robot.head_length_m, robot.link_length_m, robot.link_radius_m
     masses = list(robot.masses_kg)
     lower, upper = list(robot.joint_lower_rad), list(robot.joint_upper_rad)
+    imu_site, imu_sensors = _imu(H, imu_in_head) if imu_in_head is not None else ([], [])
     mu = params.floor_friction
     condim = 6 if phys.rolling_friction_m > 0 else (4 if phys.torsional_friction > 0 else 3)
     friction = f"{_f(mu)} {_f(phys.torsional_friction)} {_f(phys.rolling_friction_m)}"
@@ -116,6 +140,7 @@ def build_mjcf(robot, params: SimParams, scene_xml: str = "", assets_xml: str = 
         '      <site name="base_link"/>',
         f'      <site name="head_link" pos="{_f(-H)} 0 0" quat="{_quat_rx(np.pi / 2)}"/>',
         f'      <geom name="head" fromto="0 0 0 {_f(-H)} 0 0" mass="{_f(masses[0] + masses[1])}"/>',
+        *imu_site,
         *_flat_belly(H, r, phys.flat_belly_fraction, 0.0, "      "),
     ]
     roll = np.pi / 2
@@ -157,5 +182,5 @@ def build_mjcf(robot, params: SimParams, scene_xml: str = "", assets_xml: str = 
             f'ctrlrange="{_f(-servo.speed_limit_rad_s)} {_f(servo.speed_limit_rad_s)}" '
             f'actlimited="true" actrange="{_f(lower[i])} {_f(upper[i])}" '
             f'forcerange="{_f(-servo.torque_limit_nm)} {_f(servo.torque_limit_nm)}"/>')
-    lines += ['  </actuator>', '</mujoco>']
+    lines += ['  </actuator>', *imu_sensors, '</mujoco>']
     return "\n".join(lines) + "\n"

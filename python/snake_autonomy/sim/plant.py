@@ -24,7 +24,7 @@ import numpy as np
 
 from .config import SimParams
 from .disturbances import Disturbance, DisturbanceSchedule
-from .mjcf import build_mjcf
+from .mjcf import IMU_SENSORS, build_mjcf
 from ..transforms import matrix_to_quat, make_transform
 
 
@@ -36,17 +36,18 @@ LIMIT_TOLERANCE_RAD = 0.002
 class Plant:
     def __init__(self, robot, params: SimParams, start=(0.0, 0.0, 0.0),
                  q0_rad: Optional[Sequence[float]] = None, disturbances=None, scene_xml: str = "",
-                 assets_xml: str = ""):
+                 assets_xml: str = "", imu_in_head: Optional[np.ndarray] = None):
         """robot: a _core.RobotModel; start: (x_m, y_m, heading_rad) of base_link on the floor.
 
         disturbances: Disturbance items (or None for those of params.config).
         scene_xml: MJCF elements added to the world (obstacles, pipes; see build_mjcf);
-        assets_xml: the textures and materials they use."""
+        assets_xml: the textures and materials they use;
+        imu_in_head: the head camera's IMU, its 4x4 pose in head_link (build_mjcf; imu_truth())."""
         self.robot = robot
         self.params = params
         self.num_joints = robot.num_joints
         self.frame_names = list(robot.frame_names)
-        self.mjcf = build_mjcf(robot, params, scene_xml, assets_xml)
+        self.mjcf = build_mjcf(robot, params, scene_xml, assets_xml, imu_in_head)
         self.model = mujoco.MjModel.from_xml_string(self.mjcf)
         self.data = mujoco.MjData(self.model)
         self.dt_s = float(self.model.opt.timestep)
@@ -65,6 +66,8 @@ class Plant:
         self._dadr = np.array([self.model.jnt_dofadr[j] for j in joint_ids])
         self._site_ids = {f: mujoco.mj_name2id(self.model, site, f) for f in self.frame_names}
         self._body_ids = {self.model.body(i).name: i for i in range(1, self.model.nbody)}
+        self._imu_adr = ([int(self.model.sensor_adr[mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SENSOR, n)])
+                          for n in IMU_SENSORS] if imu_in_head is not None else None)
 
         self._steps = 0
         self.limit_violations = 0          # goals received beyond a joint limit (then clamped)
@@ -195,6 +198,14 @@ class Plant:
     def frame_positions(self) -> np.ndarray:
         """(num_frames, 3) world positions of every kinematic frame, in frame_names order."""
         return np.array([self.data.site_xpos[self._site_ids[f]] for f in self.frame_names])
+
+    def imu_truth(self):
+        """The IMU's true (angular velocity rad/s, specific force m/s^2) in its site's frame, as MuJoCo
+        computed them in the last step's forward pass (the state one physics step back)."""
+        if self._imu_adr is None:
+            raise ValueError("imu_truth: this plant has no IMU (Plant(imu_in_head=...))")
+        g, a = self._imu_adr
+        return self.data.sensordata[g:g + 3].copy(), self.data.sensordata[a:a + 3].copy()
 
     def center_of_mass(self) -> np.ndarray:
         return self.data.subtree_com[self._body_ids["base_link"]].copy()

@@ -7,7 +7,8 @@ transport differ.
     out.mocap, out.vio             # PoseSamples that fell due, with out.truth_base / out.truth_camera
     world.true_com_pose()          # CoM and heading (direction of travel) from the true state
 
-Sensors (motion capture 100 Hz, simulated RTAB-Map 30 Hz) sample on their grids of simulated time.
+Sensors (motion capture 100 Hz, simulated RTAB-Map 30 Hz, with "imu" in spec.sensors the head
+camera's IMU at sim.yaml imu.rate_hz) sample on their grids of simulated time.
 A mission's triggers are checked at 10 Hz once it started (start_mission / set_target) and, like
 pushes on command (disturb()), act from the next physics step; each fired trigger keeps the true
 CoM pose then and 2 s later. The monitor: roll-over (monitor.rollover_tilt_deg), largest tilt,
@@ -30,6 +31,7 @@ from ..paths import config_path
 from ..transforms import matrix_to_quat
 from .config import SimConfig
 from .disturbances import Disturbance, parse_triggers
+from .imu import ImuSample, ImuSensor
 from .mocap import MocapSensor
 from .mujoco_servo_backend import MujocoServoBackend
 from .plant import Plant
@@ -39,6 +41,7 @@ from .vio import SimulatedVio
 
 CONFIG = config_path()
 FEEDBACKS = ("mocap", "vio")
+SENSORS = FEEDBACKS + ("imu",)
 TRIGGER_CHECK_HZ = 10.0          # mission triggers checked on this grid of simulated time
 RECOVERY_WINDOW_S = 2.0          # a fired trigger's CoM pose is recorded again this much later
 
@@ -58,7 +61,8 @@ class WorldSpec:
     start_base: Optional[Tuple[float, float, float]] = None   # base_link x_m, y_m, heading_rad on the
                                                # floor (a nav world file's start); None: from start
     flat_belly_fraction: Optional[float] = None   # plant option over sim_config's (nav runs: nav.yaml)
-    sensors: Optional[Sequence[str]] = None    # sampled sensors; None: motion capture and the feedback's
+    sensors: Optional[Sequence[str]] = None    # sampled sensors (SENSORS); None: motion capture and the
+                                               # feedback's; "imu" adds the IMU to the plant's model
 
 
 @dataclass
@@ -68,6 +72,7 @@ class WorldStep:
     vio: Optional[PoseSample] = None                               # camera odometry
     truth_base: Optional[Tuple[np.ndarray, np.ndarray]] = None     # with every mocap sample
     truth_camera: Optional[Tuple[np.ndarray, np.ndarray]] = None   # with every vio sample
+    imu: Optional[ImuSample] = None                                # the head camera's IMU (camera_link)
     fired: List[str] = field(default_factory=list)                 # disturbances applied now
     tilt_deg: float = 0.0                                          # base_link from the vertical
 
@@ -100,9 +105,9 @@ class SimWorld:
         if spec.feedback not in FEEDBACKS:
             raise ValueError(f"feedback: expected one of {', '.join(FEEDBACKS)}, got {spec.feedback!r}")
         sensors = tuple(spec.sensors) if spec.sensors is not None else tuple({"mocap", spec.feedback})
-        unknown = sorted(set(sensors) - set(FEEDBACKS))
+        unknown = sorted(set(sensors) - set(SENSORS))
         if unknown:
-            raise ValueError(f"sensors: unknown {unknown}; known: {', '.join(FEEDBACKS)}")
+            raise ValueError(f"sensors: unknown {unknown}; known: {', '.join(SENSORS)}")
         self.spec = spec
         self.config = SimConfig.from_yaml(spec.sim_config)
         if spec.flat_belly_fraction is not None:
@@ -119,12 +124,15 @@ class SimWorld:
                          if self.mission else [])         # all of the mission's (fired or not)
         start = (tuple(spec.start_base) if spec.start_base is not None else
                  start_base_pose(self.robot, self.kinematics, spec.start, self.heading_offset_rad))
+        camera_in_head = (load_camera_calibration(self.config.calibration_path()).camera_in_head
+                          if {"vio", "imu"} & set(sensors) else None)
         self.plant = Plant(self.robot, self.params, start=start, scene_xml=spec.scene_xml,
-                           assets_xml=spec.assets_xml)
+                           assets_xml=spec.assets_xml, imu_in_head=camera_in_head if "imu" in sensors else None)
         self.backend = MujocoServoBackend(self.plant)
         self.mocap = MocapSensor(self.params) if "mocap" in sensors else None
-        self.vio = (SimulatedVio(self.params, load_camera_calibration(self.config.calibration_path()).camera_in_head)
-                    if "vio" in sensors else None)
+        self.vio = SimulatedVio(self.params, camera_in_head) if "vio" in sensors else None
+        self.imu = (ImuSensor(self.config.imu, self.params.rng("imu"), step_s=self.plant.dt_s)
+                    if "imu" in sensors else None)
         self.rollover_tilt_deg = self.config.monitor.rollover_tilt_deg
         self.rolled_over = False
         self._tilt_ref = None          # (frame, its world rotation) while the head is raised on purpose
@@ -194,6 +202,8 @@ class SimWorld:
             out.vio = self.vio.measure(t, world_t_head)
             cam = world_t_head @ self.vio.head_t_camera
             out.truth_camera = (cam[:3, 3].copy(), matrix_to_quat(cam[:3, :3]))
+        if self.imu is not None and self.imu.due(t):
+            out.imu = self.imu.measure(t, *plant.imu_truth())
         out.tilt_deg = plant.base_tilt_deg() if self._tilt_ref is None else self._reference_tilt_deg()
         self.max_tilt_deg = max(self.max_tilt_deg, out.tilt_deg)
         if out.tilt_deg > self.rollover_tilt_deg:
