@@ -20,9 +20,10 @@ reports SUCCEEDED (or inside radius_m); a FAILED navigator (goal aborted, preemp
 server) or the leg's time limit aborts the mission with the reason, naming the leg. While a leg runs
 the mission node sends no gait command: the planner owns locomotion.
 """
-import math
 from dataclasses import dataclass
 from typing import List, Optional, Protocol, Tuple
+
+from .fields import is_number, keyed_mapping
 
 NAV_LEG_KEYS = ("x_m", "y_m", "heading_deg", "radius_m", "time_limit_s")
 MAX_COORDINATE_M = 1000.0
@@ -58,31 +59,23 @@ class Navigator(Protocol):
         """Stop the leg's goal (the mission ended or holds); nothing when none is under way."""
 
 
-def _number(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
 def parse_nav_leg(raw, where: str, problems: List[str]) -> Optional[NavLegSpec]:
     """A NavLegSpec from a waypoint's `navigate_to:` mapping; every problem appended, naming key and value."""
-    if not isinstance(raw, dict):
-        problems.append(f"{where}: expected a mapping with keys {', '.join(NAV_LEG_KEYS)}, got {raw!r}")
-        return None
     before = len(problems)
-    for key in raw:
-        if key not in NAV_LEG_KEYS:
-            problems.append(f"{where}.{key}: unknown key (value {raw[key]!r}); known: {', '.join(NAV_LEG_KEYS)}")
+    if not keyed_mapping(raw, where, NAV_LEG_KEYS, problems):
+        return None
     for key in ("x_m", "y_m"):
         v = raw.get(key)
         if key not in raw:
             problems.append(f"{where}.{key}: missing (the goal in the world frame, m)")
-        elif not (_number(v) and abs(v) <= MAX_COORDINATE_M):
+        elif not (is_number(v) and abs(v) <= MAX_COORDINATE_M):
             problems.append(f"{where}.{key}: must be a number within +-{MAX_COORDINATE_M:g} m, got {v!r}")
     heading = raw.get("heading_deg", 0.0)
-    if not (_number(heading) and abs(heading) <= 360.0):
+    if not (is_number(heading) and abs(heading) <= 360.0):
         problems.append(f"{where}.heading_deg: must be a number within +-360, got {heading!r}")
     for key, bound, unit in (("radius_m", MAX_RADIUS_M, "m"), ("time_limit_s", MAX_LEG_TIME_S, "s")):
         v = raw.get(key)
-        if v is not None and not (_number(v) and 0 < v <= bound):
+        if v is not None and not (is_number(v) and 0 < v <= bound):
             problems.append(f"{where}.{key}: must be a number in (0, {bound:g}] {unit}, got {v!r}")
     if len(problems) > before:
         return None

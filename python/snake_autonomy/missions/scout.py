@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, List, Optional, Protocol
 
 from ..planning.fbsr import plan_io
+from .fields import is_number, keyed_mapping
 from ..planning.fbsr.build import build_planner
 from ..planning.fbsr.planner import lowering
 from ..planning.fbsr.trajectory import driver_velocity_limit, lead_in_s, plan_points, velocity_problems
@@ -75,24 +76,16 @@ class TrajectoryExecutor(Protocol):
 ScoutPlanner = Callable[[ScoutSpec], ScoutPlan]
 
 
-def _number(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
 def parse_scout(raw, where: str, problems: List[str]) -> Optional[ScoutSpec]:
     """A ScoutSpec from a waypoint's `scout:` mapping; every problem appended, naming key and value."""
-    if not isinstance(raw, dict):
-        problems.append(f"{where}: expected a mapping with keys {', '.join(SCOUT_KEYS)}, got {raw!r}")
-        return None
     before = len(problems)
-    for key in raw:
-        if key not in SCOUT_KEYS:
-            problems.append(f"{where}.{key}: unknown key (value {raw[key]!r}); known: {', '.join(SCOUT_KEYS)}")
+    if not keyed_mapping(raw, where, SCOUT_KEYS, problems):
+        return None
     h = raw.get("height_m")
-    if h is not None and not (_number(h) and 0 < h <= MAX_HEIGHT_M):
+    if h is not None and not (is_number(h) and 0 < h <= MAX_HEIGHT_M):
         problems.append(f"{where}.height_m: must be a number in (0, {MAX_HEIGHT_M:g}] m, got {h!r}")
     hold = raw.get("hold_s", 0.0)
-    if not (_number(hold) and 0 <= hold <= MAX_HOLD_S):
+    if not (is_number(hold) and 0 <= hold <= MAX_HOLD_S):
         problems.append(f"{where}.hold_s: must be a number in [0, {MAX_HOLD_S:g}] s, got {hold!r}")
     for key, low in (("max_active", 1), ("seed", 0)):
         v = raw.get(key)
