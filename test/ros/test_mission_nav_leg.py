@@ -2,12 +2,14 @@
 """rostest: mission_node's navigate_to legs and RunMission goals with a frame (mission_nav_leg.test).
 
 The test is the fake driver (mission_test_helpers) and a fake move_base server (actionlib, made after the
-first test: a goal with x < 0 is ABORTED, any other teleports the fake driver into it and SUCCEEDS).
+first test: a goal with x < 0 is ABORTED, one with x > 10 runs until cancelled, any other teleports the
+fake driver into it and SUCCEEDS).
 Checks: with no move_base server a leg aborts the mission naming the leg and the action; a mission
 tracker waypoint -> leg -> tracker waypoint ends done, the move_base goal in the world frame, feedback
 carrying the leg, no gait command from the mission node while the leg runs; an ABORTED leg aborts the
 mission with the server's reason; inline waypoints in frame_id are transformed with tf2 (a static
-transform), and a frame tf does not know refuses the goal naming the frame.
+transform), and a frame tf does not know refuses the goal naming the frame; cancelling the RunMission
+goal while a leg runs cancels the move_base goal.
 """
 import math
 import threading
@@ -35,6 +37,11 @@ waypoints:
   - {navigate_to: {x_m: 1.5, y_m: 1.0}}
   - [2.1, 1.0, 0.0]
 """
+FAR_LEG = """
+name: nav_leg_far
+waypoints:
+  - {navigate_to: {x_m: 50.0, y_m: 0.0}}
+"""
 FAILING_LEG = """
 name: nav_leg_aborted
 waypoints:
@@ -44,8 +51,9 @@ waypoints:
 
 
 class FakeMoveBase:
-    """move_base as the planner serves it, reduced to its outcome: x < 0 ABORTED, else the driver is put
-    into the goal and the goal SUCCEEDED. Records each goal with its accept and end times."""
+    """move_base as the planner serves it, reduced to its outcome: x < 0 ABORTED, x > 10 driving until
+    cancelled (PREEMPTED), else the driver is put into the goal and the goal SUCCEEDED. Records each goal
+    with its accept and end times."""
 
     def __init__(self, driver):
         self.driver, self.goals, self.lock = driver, [], threading.Lock()
@@ -59,6 +67,12 @@ class FakeMoveBase:
             self.goals.append(record)
         time.sleep(0.6)                  # a few of the mission's ticks while the "planner" drives
         p = goal.target_pose.pose.position
+        while p.x > 10 and not rospy.is_shutdown():
+            if self.server.is_preempt_requested():
+                record["preempted"] = rospy.Time.now()
+                self.server.set_preempted(text="cancelled")
+                return
+            time.sleep(0.05)
         if p.x < 0:
             record["ended"] = rospy.Time.now()
             self.server.set_aborted(text="no free arc (test)")
@@ -158,6 +172,21 @@ class MissionNavLegTest(unittest.TestCase):
         self.assertEqual(state, GoalStatus.ABORTED)
         self.assertEqual(result.state, "refused")
         self.assertIn("frame_id 'no_such_frame': no transform to the world frame 'odom'", result.outcome)
+
+    def test_6_cancelling_the_mission_cancels_the_leg_goal(self):
+        server = self.fake_move_base()
+        feedbacks = []
+        self.client.send_goal(RunMissionGoal(mission_yaml=FAR_LEG), feedback_cb=feedbacks.append)
+        wait_for(lambda: any(fb.leg_state == "move_base goal active" for fb in feedbacks), 10, "the leg active")
+        self.client.cancel_goal()
+        self.assertTrue(self.client.wait_for_result(rospy.Duration(10)), "no result after cancel")
+        self.assertEqual(self.client.get_state(), GoalStatus.PREEMPTED)
+        self.assertEqual(self.client.get_result().state, "aborted")
+        with server.lock:
+            leg = server.goals[-1]
+        self.assertEqual(leg["goal"].target_pose.pose.position.x, 50.0)
+        wait_for(lambda: "preempted" in leg, 5, "the move_base goal cancelled")
+        wait_for(lambda: self.driver.gait == "hold", 5, "hold after the cancel")
 
 
 if __name__ == "__main__":

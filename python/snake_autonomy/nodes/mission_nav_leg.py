@@ -71,7 +71,10 @@ class MoveBaseNavigator:
             self.generation += 1
             sent, self.goal_sent = self.goal_sent, False
         if sent:
-            self.client.cancel_goal()
+            try:
+                self.client.cancel_goal()
+            except rospy.ROSException as exc:   # shutting down: the cancel topic is closed
+                rospy.logerr(f"navigate_to leg: cancelling the move_base goal failed: {exc}")
 
     # -- the worker and the client's callbacks ------------------------------------------------------
     def _send(self, generation: int, leg: NavLegSpec) -> None:
