@@ -175,3 +175,17 @@ def test_the_batch_simulator_refuses_a_mission_with_legs():
         refuse_navigation_legs(mission([1, 0, 0], LEG))
     assert err.value.problems == ["waypoints[1] navigate_to (2, 0.5): navigate_to legs need the planner: "
                                   "run through ROS (sim.launch world:=...)"]
+
+
+def test_a_scout_stop_on_a_leg_comes_once_the_leg_is_reached():
+    nav = FakeNavigator()
+    runner = started(mission({**LEG, "scout": {"height_m": 0.3, "hold_s": 2}}, [3, 0.5, 0]), nav)
+    assert set(runner.mission.scouts) == set(runner.mission.legs) == {0}
+    tick(runner, 0.1)
+    assert runner.scout_log == []
+    nav.state = (SUCCEEDED, "move_base goal succeeded")
+    tick(runner, 0.2)
+    # no scout planner on this path: the stop is recorded as failed and the mission goes on
+    assert [r.waypoint_index for r in runner.scout_log] == [0]
+    assert runner.scout_log[0].outcome.startswith("failed: no scout planner")
+    assert runner.state == RUNNING and runner.tracker.waypoint_index == 1
