@@ -34,6 +34,10 @@ def test_at_rest_the_accelerometer_reads_gravity_up_and_the_gyro_nothing():
     world.step_to(1.0)                       # dropped from 1 mm: settled
     samples = [s for s in (world.step_to(1.0 + k * world.plant.dt_s).imu for k in range(1, 1001)) if s]
     assert len(samples) == pytest.approx(2.0 * world.config.imu.rate_hz, abs=1)   # 200 Hz over 2 s
+    assert world.plant.imu_truth()[0] == pytest.approx(world.plant.time_s - world.plant.dt_s)   # read before the step
+    gaps = np.diff([s.t_s for s in samples])                 # each at the physics step nearest its grid point
+    assert gaps.mean() == pytest.approx(1.0 / world.config.imu.rate_hz, rel=0.01)
+    assert gaps.min() >= 1.0 / world.config.imu.rate_hz - world.plant.dt_s - 1e-9
     gyro = np.array([s.angular_velocity_rad_s for s in samples])
     accel = np.array([s.linear_acceleration_m_s2 for s in samples])
     up_in_sensor = _world_R_sensor(world).T @ np.array([0.0, 0.0, 1.0])
@@ -53,7 +57,8 @@ def test_a_yawing_body_reads_the_yaw_rate_with_its_sign_about_the_sensors_up_axi
     data.qvel[:] = 0.0
     data.qvel[3:6] = (0.0, 0.0, yaw_rate)    # free joint: base_link's angular velocity in its own frame
     mujoco.mj_forward(world.plant.model, data)
-    gyro, accel = world.plant.imu_truth()
+    t_s, gyro, accel = world.plant.imu_truth()
+    assert t_s == world.plant.time_s == 0.0                  # a forward pass at the present state
     R = _world_R_sensor(world)
     base_z = world.plant.frame_transform("base_link")[:3, 2]
     np.testing.assert_allclose(R @ gyro, yaw_rate * base_z, atol=1e-9)   # the body's rate, in the world

@@ -315,7 +315,7 @@ class SimNode:
                 self.pub_base.publish(m)
                 self.source_freq.tick()
         if out.imu is not None:
-            self.pub_imu.publish(_imu(out.imu, stamp, self.imu_frame))
+            self.pub_imu.publish(_imu(out.imu, self.stamp(out.imu.t_s), self.imu_frame))
         if out.vio is not None and self.pub_odom is not None:
             o = Odometry()
             o.header.stamp, o.header.frame_id, o.child_frame_id = stamp, self.world_frame, self.camera_frame

@@ -2,12 +2,13 @@
 camera_link site of the plant (sim/mjcf.py, Plant(imu_in_head=...)) plus a BMI055-like error model.
 
     imu = ImuSensor(config.imu, params.rng("imu"), step_s=plant.dt_s)
-    if imu.due(plant.time_s):
-        sample = imu.measure(plant.time_s, *plant.imu_truth())   # true gyro (rad/s), specific force (m/s^2)
+    sample = imu.poll(plant)        # an ImuSample when one fell due at plant.time_s, else None
+    sample = imu.measure(t_s, gyro_rad_s, accel_m_s2)    # the error model alone, on true readings
 
 Samples fall on the rate's grid of simulated time, each taken at the physics step nearest its grid
 point: the plant's time moves in whole steps (2 ms), and a 200 Hz grid is not a whole number of
-them, so the spacing alternates (4 and 6 ms at 200 Hz) around the rate's period.
+them, so the spacing alternates (4 and 6 ms at 200 Hz) around the rate's period. A sample's time
+is that of the state MuJoCo's sensors read (Plant.imu_truth: one physics step back).
 
 What it does to the true readings (config/sim.yaml imu:, ImuConfig), per axis and sample:
 - white noise of the datasheet's noise density over the sample's bandwidth: std = density x
@@ -20,7 +21,7 @@ the frame's up). Every random number comes from the generator given (the seed's 
 """
 import math
 from dataclasses import dataclass
-from typing import List
+from typing import List, Optional
 
 import numpy as np
 
@@ -90,12 +91,16 @@ class ImuSensor:
             [config.gyro_bias_walk_rad_s_per_sqrt_s] * 3 + [config.accel_bias_walk_m_s2_per_sqrt_s] * 3)
         self.bias = np.zeros(6)                 # gyro (rad/s), accelerometer (m/s^2)
 
-    def due(self, t_s: float) -> bool:
-        return self.clock.due(t_s + self.half_step_s)
+    def poll(self, plant) -> Optional[ImuSample]:
+        """The plant's IMU sample when one fell due at its present time (the grid point within half a
+        physics step), else None."""
+        if not self.clock.due(plant.time_s + self.half_step_s):
+            return None
+        self.clock.tick(plant.time_s + self.half_step_s)
+        return self.measure(*plant.imu_truth())
 
     def measure(self, t_s: float, gyro_rad_s, accel_m_s2) -> ImuSample:
         """A sample at t_s of the true angular velocity and specific force (sensor frame)."""
-        self.clock.tick(t_s + self.half_step_s)
         draws = self.rng.standard_normal(12)    # white noise, then the bias's step: a fixed stream
         self.bias += self._walk_step * draws[6:]
         white = draws[:6] * np.array([self.gyro_std] * 3 + [self.accel_std] * 3)

@@ -70,6 +70,7 @@ class Plant:
                           for n in IMU_SENSORS] if imu_in_head is not None else None)
 
         self._steps = 0
+        self._sensed_step = 0              # the step whose state MuJoCo's sensors last read
         self.limit_violations = 0          # goals received beyond a joint limit (then clamped)
         self._goal = np.zeros(self.num_joints)
         self._torque_on = np.ones(self.num_joints, dtype=bool)
@@ -108,6 +109,7 @@ class Plant:
             self._apply_disturbances()
             mujoco.mj_step(self.model, self.data, nstep=end - self._steps)
             self._steps = end
+            self._sensed_step = end - 1    # mj_step reads the sensors before it integrates
 
     def step(self, duration_s: float) -> None:
         self.step_to(self.time_s + duration_s)
@@ -200,12 +202,14 @@ class Plant:
         return np.array([self.data.site_xpos[self._site_ids[f]] for f in self.frame_names])
 
     def imu_truth(self):
-        """The IMU's true (angular velocity rad/s, specific force m/s^2) in its site's frame, as MuJoCo
-        computed them in the last step's forward pass (the state one physics step back)."""
+        """(t_s, angular velocity rad/s, specific force m/s^2): the IMU's true readings in its site's
+        frame, as MuJoCo computed them in the last forward pass, and the time of that state (one
+        physics step before time_s after a step: mj_step reads its sensors before integrating)."""
         if self._imu_adr is None:
             raise ValueError("imu_truth: this plant has no IMU (Plant(imu_in_head=...))")
         g, a = self._imu_adr
-        return self.data.sensordata[g:g + 3].copy(), self.data.sensordata[a:a + 3].copy()
+        return (self._sensed_step * self.dt_s, self.data.sensordata[g:g + 3].copy(),
+                self.data.sensordata[a:a + 3].copy())
 
     def center_of_mass(self) -> np.ndarray:
         return self.data.subtree_com[self._body_ids["base_link"]].copy()
@@ -231,6 +235,7 @@ class Plant:
             self.data.qpos[3:7] = np.roll(matrix_to_quat(base[:3, :3]), 1)
         self.data.qvel[:] = 0
         mujoco.mj_forward(self.model, self.data)
+        self._sensed_step = self._steps
 
     # ---- internals -----------------------------------------------------------------------------
     def _aim_setpoints(self, horizon_s: float) -> None:

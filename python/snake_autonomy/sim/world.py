@@ -202,8 +202,8 @@ class SimWorld:
             out.vio = self.vio.measure(t, world_t_head)
             cam = world_t_head @ self.vio.head_t_camera
             out.truth_camera = (cam[:3, 3].copy(), matrix_to_quat(cam[:3, :3]))
-        if self.imu is not None and self.imu.due(t):
-            out.imu = self.imu.measure(t, *plant.imu_truth())
+        if self.imu is not None:
+            out.imu = self.imu.poll(plant)
         out.tilt_deg = plant.base_tilt_deg() if self._tilt_ref is None else self._reference_tilt_deg()
         self.max_tilt_deg = max(self.max_tilt_deg, out.tilt_deg)
         if out.tilt_deg > self.rollover_tilt_deg:
