@@ -39,7 +39,12 @@ Params      ~world or ~goal (above), ~goal_radius_m (0.2: ~goal's and every goal
             follower.back_off, else hold), ~world_frame (frame of
             the path and markers; default base_pose's frame_id), ~pose_timeout_s (1.0),
             ~frame_timeout_s (5.0: the oldest camera frame the robot moves on; give it at least
-            two camera periods).
+            two camera periods), ~command_without_goal (hold|none, below).
+Commands    with a goal being driven to, gait_command goes out every tick. Without one (none yet, reached,
+            cancelled, aborted): ~command_without_goal hold (default) keeps sending the hold, the driver's
+            heartbeat (a navigation-only run); none sends the stop gait on the tick the goal ends and then
+            nothing, so another node (the mission node's tracker, between its navigate_to legs) is the
+            only one commanding the driver.
 Inputs      every message is checked before it is used: camera_info (size, fx, fy > 0, finite),
             images (encoding, size equal to camera_info's, bytes), poses (finite, unit quaternion,
             stamps in order). A bad one is dropped, counted and named on /diagnostics (a throttled
@@ -114,6 +119,11 @@ class PlannerNode:
                        ("~abort_after_s", self.abort_after_s)):
             checked_positive(key, v)
         self.world_frame = rospy.get_param("~world_frame", "")
+        self.command_without_goal = rospy.get_param("~command_without_goal", "hold")
+        if self.command_without_goal not in ("hold", "none"):
+            raise ValueError(f"~command_without_goal: expected hold or none, got {self.command_without_goal!r}")
+        self.commanding = False           # the last tick drove to a goal (the next one without sends the stop)
+        self.send_now = self.command_without_goal == "hold"   # this tick's command goes out (gate())
         self.loop = None
         self.applied = None               # (loop, goal seq) the loop's goal was last set for
         self.base_pose = None             # the latest base pose taken (PoseStamped: the action's feedback)
@@ -284,6 +294,7 @@ class PlannerNode:
         goal, seq = self.goals.poll()            # what arrived since the last tick: the goal now
         loop = self.loop
         if loop is None:
+            self.gate(goal is not None)
             self.publish_command(True, 0.0, straight=True)
             self.goals.report(now.to_sec(), WAITING, "waiting for camera_info", self.base_pose)
             return
@@ -297,6 +308,7 @@ class PlannerNode:
         previous, self.last_tick = self.last_tick, tick
         if tick.state != (previous.state if previous else None) and tick.state in (STALE, ERROR):
             rospy.logwarn(f"planner: {tick.message}")
+        self.gate(goal is not None and tick.state != GOAL_REACHED)
         self.publish_command(tick.hold, tick.kappa_per_m, tick.backwards)
         if tick.replan is not None:
             try:
@@ -312,9 +324,17 @@ class PlannerNode:
             rospy.loginfo(f"planner: {tick.message}")
         self.goals.report(now.to_sec(), tick.state, tick.message, self.base_pose)
 
+    def gate(self, driving: bool) -> None:
+        """Whether this tick's command goes out (~command_without_goal none: only while a goal is driven
+        to, and on the tick it ends, whose command is the stop gait)."""
+        was, self.commanding = self.commanding, driving
+        self.send_now = driving or was or self.command_without_goal == "hold"
+
     def publish_command(self, hold: bool, kappa_per_m: float, backwards: bool = False, straight: bool = False):
         """hold: the stop gait keeping kappa_per_m (the body as it is); straight: the driver's hold posture
-        (before the loop has started: nothing commanded yet)."""
+        (before the loop has started: nothing commanded yet). Nothing when gate() said so."""
+        if not self.send_now:
+            return
         c = GaitCommand()
         c.header.stamp = rospy.Time.now()
         if straight:
@@ -389,6 +409,8 @@ class PlannerNode:
         stat.add("last_refusal", self.last_refusal or "none")
         stat.add("tick_errors", str(loop.errors if loop is not None else 0))
         stat.add("node_errors", str(self.node_errors))
+        stat.add("command_without_goal", self.command_without_goal)
+        stat.add("commanding", "true" if self.send_now else "false")
         stat.add("last_error", (loop.last_error if loop is not None and loop.last_error else "")
                  or self.last_node_error or "none")
         self.goals.diagnose(stat)
