@@ -28,7 +28,7 @@ Params      ~mission (file or provided name: loaded at start-up), ~auto_start (f
             over tracker_config, e.g. config/sim.yaml for the simulated robot; empty: none),
             ~gaits_config (config/gaits.yaml), ~rate_hz, ~pose_timeout_s, ~yaw_filter_window,
             ~heading_offset_deg (defaults from tracker_config + overrides), ~results_dir, ~record (true),
-            ~world_frame (odom), ~nav_server_timeout_s (10: a leg's wait for move_base), ~pose_status_name,
+            ~world_frame (odom), ~nav_server_timeout_s, ~nav_settle_s (nodes/mission_nav_leg.py), ~pose_status_name,
             ~robot (cobra) and ~scout_config (empty: config/scout.yaml) for the scout stops of a mission,
             ~driver_status_name (the driver's locomotion status, default "snake_driver: locomotion"),
             ~on_driver_fault: abort (default: the mission ends, hold sent, results written, the action
@@ -110,7 +110,7 @@ class MissionNode:
         self.record = bool(rospy.get_param("~record", True))
         self.world_frame = rospy.get_param("~world_frame", "odom")
         self.goal_frames = GoalFrames(self.world_frame)
-        self.navigator = MoveBaseNavigator(self.world_frame, float(rospy.get_param("~nav_server_timeout_s", 10.0)))
+        self.navigator = MoveBaseNavigator.from_params(self.world_frame, self.send_hold)
         # Scout stops (missions/scout.py): the FBSR planner for this robot, trajectories to the driver.
         self.robot = rospy.get_param("~robot", "cobra")
         self.scout_config = rospy.get_param("~scout_config", "") or None
@@ -495,7 +495,7 @@ class MissionNode:
         cmd = GaitCommand(gait=hold, steer=False, delta=0.0)
         cmd.header.stamp = rospy.Time.now()
         self.pub_cmd.publish(cmd)
-        rospy.loginfo(f"hold sent ({why})")
+        (rospy.loginfo if why else rospy.logdebug)(f"hold sent ({why or 'repeated'})")
 
     def finish(self, decision):
         """The mission ended: hold, report per waypoint, close the log."""
