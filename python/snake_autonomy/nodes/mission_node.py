@@ -8,7 +8,7 @@ Subscribes  com_pose (geometry_msgs/PoseStamped, the driver's CoM + virtual-chas
             before a run are written at its start, so each bag replays in rviz on its own).
 Publishes   gait_command (snake_autonomy/GaitCommand, every control step while a mission runs: the
             repeat is the driver's heartbeat, its command_timeout_s holds the robot when it stops; none
-            while a navigate_to leg runs: the planner drives), tracking_status (snake_autonomy/TrackingStatus),
+            during a leg's move_base goal: the planner drives; the hold around it), tracking_status,
             mission/waypoints (geometry_msgs/PoseArray, latched), mission/state (std_msgs/String, latched: a
             tool that joins late, and a run started by ~auto_start that no action client owns, see the state).
 Action      mission/run (snake_autonomy/RunMission): goal = a mission (name or file, YAML text, or inline
