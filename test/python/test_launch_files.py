@@ -2,6 +2,7 @@
 bus and the results folder under the clone or $ROS_HOME, never a shared /tmp path); the URDF and
 /use_sim_time parameters. Parameters are resolved by roslaunch itself (--dump-params: no master,
 nothing started, but robot_description's command runs)."""
+import json
 import os
 import subprocess
 import xml.etree.ElementTree as ET
@@ -77,7 +78,8 @@ def test_sim_launch_robot_reaches_every_node_and_a_world_is_recorded(root):
     assert params["/nav_record/robot"] == "chang_rectilinear"
     assert params["/nav_record/results_dir"] == str(root / "results")
     assert params["/nav_record/world"] == params["/planner/world"] == str(root / "config/worlds/one_obstacle.yaml")
-    assert "/mission/mission" not in params
+    assert "/mission/mission" not in params and params["/sim/mission"] == ""
+    assert params["/planner/command_without_goal"] == "hold"     # navigation only: the heartbeat stays
     # without a world: the mission, no planner and no nav recorder; the default robot is COBRA
     params = _dump(env, "sim.launch")
     assert "/nav_record/robot" not in params and "/planner/world" not in params and "/sim/world" not in params
@@ -107,7 +109,6 @@ print(json.dumps({(n.namespace.rstrip('/') + '/' + n.name): dict(n.remap_args) f
 
 
 def _bringup_nodes(env, *args):
-    import json
     r = subprocess.run(["python3", "-c", NODES_SCRIPT, os.path.join(env["SNAKE_LAUNCH_DIR"], "bringup.launch"),
                         *args], env=env, capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stdout + r.stderr
@@ -163,3 +164,37 @@ def test_bringup_lists_no_required_arg_and_its_stand_ins_parse(root):
     assert params["/sim/feedback"] == "vio" and params["/sim/world"] == world
     assert params["/driver/port"] == params["/sim/port"] == str(root / ".ws" / "snake_sim_bus")
     assert params["/nav_record/pose_source"] == "vio" and params["/planner/world"] == world
+
+
+def test_sim_launch_world_and_mission_run_both_the_planner_commanding_only_its_legs(root):
+    """world:= and mission:= together: the mission node and planner_node; the planner takes goals only
+    from the mission's navigate_to legs (no world goal) and is silent without one; the mission node
+    records the run (no nav recorder)."""
+    env = dict(os.environ, SNAKE_AUTONOMY_ROOT=str(root))
+    params = _dump(env, "sim.launch", "world:=config/worlds/one_obstacle.yaml", "mission:=round_the_obstacle")
+    assert params["/mission/mission"] == params["/sim/mission"] == "round_the_obstacle"
+    assert params["/planner/command_without_goal"] == "none"
+    assert "/planner/world" not in params and "/nav_record/robot" not in params
+    assert params["/sim/world"] == str(root / "config/worlds/one_obstacle.yaml")
+    assert params["/mission/world_frame"] == params["/planner/world_frame"] == "map"
+    # rviz:=true: one viz_node (mission.launch's; rviz.launch's too would be a second /snake_viz)
+    r = subprocess.run(["python3", "-c", NODES_SCRIPT, str(root / "launch" / "sim.launch"), "rviz:=true",
+                        "world:=config/worlds/one_obstacle.yaml", "mission:=round_the_obstacle"],
+                       env=env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    nodes = set(json.loads(r.stdout.strip().splitlines()[-1]))
+    assert {"/mission", "/planner", "/snake_viz", "/rviz"} <= nodes and "/nav_record" not in nodes, nodes
+
+
+def test_bringup_both_runs_the_mission_node_and_a_silent_planner(root):
+    world = str(root / "test" / "ros" / "worlds" / "nav_record.yaml")
+    env = dict(os.environ, SNAKE_AUTONOMY_ROOT=str(root), SNAKE_LAUNCH_DIR=str(root / "launch"))
+    args = ("bus:=sim", "camera:=sim", "odometry:=sim", f"world:={world}", "autonomy:=both", "mission:=star")
+    nodes = _bringup_nodes(env, *args)
+    assert set(nodes) == {"/sim", "/driver", "/robot_state_publisher", "/pose_remapper", "/planner", "/mission",
+                          "/snake_viz"}
+    params = _dump(env, "bringup.launch", *args)
+    assert params["/planner/command_without_goal"] == "none" and "/planner/world" not in params
+    assert params["/mission/mission"] == "star" and params["/sim/world"] == world
+    params = _dump(env, "bringup.launch", "bus:=sim", "camera:=sim", "odometry:=sim", f"world:={world}")
+    assert params["/planner/command_without_goal"] == "hold" and params["/planner/world"] == world
