@@ -1,0 +1,354 @@
+"""Frame-to-keyframe visual odometry from colour (or grey) and depth images, ROS-free.
+
+    vo = VisualOdometry(K, load_vo_params("config/estimation.yaml"))
+    result = vo.process(image, depth_m, stamp_s)
+    result.T_odom_camera (4x4), result.covariance (6x6), result.inliers, result.state ("ok" | "lost"),
+    result.reason (why it is lost), result.keyframe (True when this frame became the keyframe)
+
+The design of RTAB-Map's frame-to-keyframe odometry: ORB features of the keyframe carry a 3D point
+each (its depth pixel back-projected; features on a depth hole, 0 or NaN, or outside the depth range
+are dropped); every new frame's ORB features are matched to them (Hamming distance, Lowe's ratio
+test) and the camera's pose relative to the keyframe is PnP-RANSAC (OpenCV) on those 3D-2D matches,
+EPnP in the RANSAC loop, refined by Levenberg-Marquardt on the inliers. The current frame replaces the keyframe when the
+inliers fall below keyframe_min_inliers or below keyframe_min_overlap of the keyframe's 3D points.
+
+Frames: the camera frame is OpenCV's optical frame (x right, y down, z forward); the odometry frame
+is the first keyframe's camera frame unless an initial pose is given.
+
+Tracking is lost (state "lost", the pose held at the last good one, covariance LOST_COVARIANCE on
+the diagonal: RTAB-Map's null-pose convention, which the pose remapper refuses) when a frame has too
+few features, matches or inliers, or the pose moved from the last good one by more than
+max_step_m / max_step_deg (a gross PnP error). While lost, every frame is tried against the
+keyframe again: tracking resumes when the camera sees the keyframe's scene again.
+
+Covariance (x, y, z, then small rotations about the odometry frame's fixed x, y, z axes, as in
+geometry_msgs/PoseWithCovariance): the Gauss-Newton covariance of the PnP fit,
+sigma^2 (J^T J)^-1, J the inliers' reprojection Jacobian with respect to the camera's pose and
+sigma^2 the inliers' residual variance (sum r^2 / (2N - 6), at least min_pixel_sigma_px^2), added to
+the keyframe's covariance carried over the lever arm from the keyframe to the camera. The keyframe's
+3D points count as exact (their depth noise is not propagated), so covariance grows with each
+keyframe change, as odometry drift does. The first keyframe's pose is the odometry frame's origin,
+with zero covariance.
+"""
+import math
+from dataclasses import dataclass, field, fields
+from typing import List, Optional
+
+import cv2
+import numpy as np
+
+from ..safe_yaml import load_yaml_file
+from .pose_remap import skew
+
+OK = "ok"
+LOST = "lost"
+#: the diagonal of a lost pose's covariance (RTAB-Map's null pose)
+LOST_COVARIANCE = 9999.0
+
+
+@dataclass
+class VoParams:
+    """The vo: section of config/estimation.yaml."""
+    n_features: int = 600              # ORB features per frame
+    scale_factor: float = 1.2          # ORB pyramid scale between levels
+    n_levels: int = 4                  # ORB pyramid levels
+    fast_threshold: int = 12           # FAST corner threshold (grey levels)
+    edge_threshold_px: int = 19        # border without features (also ORB's patch size)
+    ratio_test: float = 0.8            # a match's Hamming distance below this x the second best's
+    max_hamming: int = 64              # and at most this many bits
+    min_depth_m: float = 0.1           # keyframe features with depth outside this range have no 3D point
+    max_depth_m: float = 4.0
+    ransac_reprojection_px: float = 2.0   # PnP-RANSAC inlier threshold
+    ransac_iterations: int = 100
+    ransac_confidence: float = 0.99
+    min_inliers: int = 20              # fewer: lost
+    # every keyframe change adds the relative pose's error: switching late keeps drift down (on
+    # simulator renders, switching below 0.3 overlap, i.e. nearly every frame, drifted several times more)
+    keyframe_min_inliers: int = 50     # fewer: the frame becomes the keyframe
+    keyframe_min_overlap: float = 0.1  # inliers over the keyframe's 3D points below this: new keyframe
+    max_step_m: float = 0.3            # a pose further than this from the last good one: lost (gross error)
+    max_step_deg: float = 45.0
+    min_pixel_sigma_px: float = 1.0    # the covariance's reprojection std is at least this
+
+    def problems(self, prefix: str = "vo") -> List[str]:
+        """Every invalid value, each naming its key and value."""
+        out = []
+        for f in fields(self):
+            v, (kind, low, high) = getattr(self, f.name), _LIMITS[f.name]
+            integer = isinstance(v, int) and not isinstance(v, bool)
+            number = integer or (isinstance(v, float) and math.isfinite(v))
+            if (kind is int and not integer) or not number or not low <= v <= high:
+                what = "an integer" if kind is int else "a finite number"
+                out.append(f"{prefix}.{f.name}: must be {what} in [{low:g}, {high:g}], got {v!r}")
+        if not out and self.min_depth_m >= self.max_depth_m:
+            out.append(f"{prefix}.min_depth_m: must be below max_depth_m ({self.max_depth_m:g}), "
+                       f"got {self.min_depth_m!r}")
+        if not out and self.keyframe_min_inliers < self.min_inliers:
+            out.append(f"{prefix}.keyframe_min_inliers: must be at least min_inliers ({self.min_inliers}), "
+                       f"got {self.keyframe_min_inliers!r}")
+        return out
+
+
+#: (type, lowest, highest) of every VoParams field
+_LIMITS = {
+    "n_features": (int, 50, 20000), "scale_factor": (float, 1.01, 2.0), "n_levels": (int, 1, 16),
+    "fast_threshold": (int, 1, 255), "edge_threshold_px": (int, 3, 64), "ratio_test": (float, 0.1, 1.0),
+    "max_hamming": (int, 1, 256), "min_depth_m": (float, 0.0, 100.0), "max_depth_m": (float, 0.01, 100.0),
+    "ransac_reprojection_px": (float, 0.1, 50.0), "ransac_iterations": (int, 10, 10000),
+    "ransac_confidence": (float, 0.5, 0.99999), "min_inliers": (int, 6, 10000),
+    "keyframe_min_inliers": (int, 6, 10000), "keyframe_min_overlap": (float, 0.0, 1.0),
+    "max_step_m": (float, 1e-3, 100.0), "max_step_deg": (float, 0.1, 180.0),
+    "min_pixel_sigma_px": (float, 0.0, 100.0),
+}
+assert set(_LIMITS) == {f.name for f in fields(VoParams)}
+
+
+def load_vo_params(path) -> VoParams:
+    """The vo: section of an estimation config (absent: defaults). ValueError naming the file, the
+    field and the value for an unknown key or an invalid value."""
+    data = load_yaml_file(path) or {}
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: expected a mapping at the top, got {type(data).__name__}")
+    section = data.get("vo") or {}
+    if not isinstance(section, dict):
+        raise ValueError(f"{path}: vo: expected a mapping, got {section!r}")
+    known = {f.name for f in fields(VoParams)}
+    problems = [f"vo.{k}: unknown key (value {v!r})" for k, v in section.items() if k not in known]
+    if not problems:
+        # a YAML integer is a valid float field (1 for 1.0)
+        values = {k: float(v) if _LIMITS[k][0] is float and type(v) is int else v for k, v in section.items()}
+        params = VoParams(**values)
+        problems = params.problems()
+    if problems:
+        raise ValueError(f"{path}: " + "; ".join(problems))
+    return params
+
+
+@dataclass
+class VoResult:
+    stamp: float
+    T_odom_camera: np.ndarray          # 4x4, the camera's optical frame in the odometry frame
+    covariance: np.ndarray             # 6x6 (x, y, z, rx, ry, rz); LOST_COVARIANCE diagonal when lost
+    state: str                         # OK or LOST
+    reason: str = ""                   # why it is lost ("" when ok)
+    inliers: int = 0                   # PnP inliers (a new first keyframe: its 3D points)
+    matches: int = 0                   # ratio-test matches to the keyframe
+    features: int = 0                  # ORB features in the frame
+    keyframe: bool = False             # the frame became the keyframe
+
+    @property
+    def ok(self) -> bool:
+        return self.state == OK
+
+
+@dataclass
+class _Keyframe:
+    T_odom_camera: np.ndarray
+    covariance: np.ndarray
+    points: np.ndarray                 # (N, 3) in the keyframe's camera frame
+    descriptors: np.ndarray            # (N, 32) uint8
+    stamp: float
+
+
+@dataclass
+class _Features:
+    uv: np.ndarray                     # (N, 2) pixel coordinates of every feature
+    descriptors: Optional[np.ndarray]  # (N, 32) uint8 or None
+    depth: np.ndarray = field(default_factory=lambda: np.zeros(0))   # (N,) m; 0 where none usable
+
+
+def rotation_angle_deg(R: np.ndarray) -> float:
+    c = (float(np.trace(R)) - 1.0) / 2.0
+    return math.degrees(math.acos(max(-1.0, min(1.0, c))))
+
+
+class VisualOdometry:
+    """ORB + depth + PnP-RANSAC against a keyframe (see the module's docstring)."""
+
+    def __init__(self, K, params: Optional[VoParams] = None, initial_pose: Optional[np.ndarray] = None):
+        K = np.asarray(K, float)
+        if K.shape != (3, 3) or not np.all(np.isfinite(K)) or K[0, 0] <= 0 or K[1, 1] <= 0:
+            raise ValueError(f"K: expected a 3x3 camera matrix with fx, fy > 0, got {K.tolist()}")
+        self.K = K
+        self.params = params or VoParams()
+        problems = self.params.problems()
+        if problems:
+            raise ValueError("visual odometry: " + "; ".join(problems))
+        p = self.params
+        self._orb = cv2.ORB_create(nfeatures=p.n_features, scaleFactor=p.scale_factor, nlevels=p.n_levels,
+                                   edgeThreshold=p.edge_threshold_px, patchSize=p.edge_threshold_px,
+                                   fastThreshold=p.fast_threshold)
+        self._matcher = cv2.BFMatcher(cv2.NORM_HAMMING)
+        self.reset(initial_pose)
+
+    def reset(self, T_odom_camera: Optional[np.ndarray] = None, covariance: Optional[np.ndarray] = None) -> None:
+        """Forget the keyframe: the next frame with enough 3D features becomes the keyframe, at
+        T_odom_camera (default: the identity) with this covariance (default: zero)."""
+        self._pose = np.eye(4) if T_odom_camera is None else np.array(T_odom_camera, float)
+        self._covariance = np.zeros((6, 6)) if covariance is None else np.array(covariance, float)
+        self._keyframe: Optional[_Keyframe] = None
+        self.keyframes = 0             # keyframes taken since the reset
+
+    @property
+    def pose(self) -> np.ndarray:
+        """The last good camera pose in the odometry frame."""
+        return self._pose.copy()
+
+    # ---------------------------------------------------------------------------------------------
+    def process(self, image, depth_m, stamp: float) -> VoResult:
+        """One frame: image (H, W) grey or (H, W, 3) RGB uint8, depth_m (H, W) metres along the
+        optical axis (0 or NaN: no depth), stamp in seconds."""
+        feats = self._features(image, depth_m)
+        kf = self._keyframe
+        if kf is None:
+            return self._first_keyframe(feats, stamp)
+        p = self.params
+        n_feat = len(feats.uv)
+        if feats.descriptors is None or n_feat < p.min_inliers:
+            return self._lost(stamp, f"too few features: {n_feat} (min_inliers {p.min_inliers})", features=n_feat)
+        kf_idx, cur_idx = self._match(kf.descriptors, feats.descriptors)
+        if len(kf_idx) < p.min_inliers:
+            return self._lost(stamp, f"too few matches to the keyframe: {len(kf_idx)} (min_inliers "
+                                     f"{p.min_inliers})", features=n_feat, matches=len(kf_idx))
+        obj = kf.points[kf_idx]
+        img = feats.uv[cur_idx]
+        solved = self._solve_pnp(obj, img)
+        if solved is None:
+            return self._lost(stamp, "PnP-RANSAC found no pose", features=n_feat, matches=len(kf_idx))
+        rvec, tvec, inl = solved
+        if len(inl) < p.min_inliers:
+            return self._lost(stamp, f"too few inliers: {len(inl)} (min_inliers {p.min_inliers})",
+                              features=n_feat, matches=len(kf_idx), inliers=len(inl))
+        R_cam_kf, _ = cv2.Rodrigues(rvec)
+        T_kf_cam = np.eye(4)
+        T_kf_cam[:3, :3] = R_cam_kf.T
+        T_kf_cam[:3, 3] = -R_cam_kf.T @ tvec.ravel()
+        T = kf.T_odom_camera @ T_kf_cam
+        step_m = float(np.linalg.norm(T[:3, 3] - self._pose[:3, 3]))
+        step_deg = rotation_angle_deg(self._pose[:3, :3].T @ T[:3, :3])
+        if step_m > p.max_step_m or step_deg > p.max_step_deg:
+            return self._lost(stamp, f"pose jumped {step_m:.3f} m, {step_deg:.1f} deg from the last good one "
+                                     f"(max_step_m {p.max_step_m:g}, max_step_deg {p.max_step_deg:g})",
+                              features=n_feat, matches=len(kf_idx), inliers=len(inl))
+        cov = self._covariance_of(T, kf, obj[inl], img[inl], rvec, tvec)
+        self._pose, self._covariance = T, cov
+        new_kf = len(inl) < p.keyframe_min_inliers or len(inl) < p.keyframe_min_overlap * len(kf.points)
+        if new_kf:
+            new_kf = self._set_keyframe(feats, stamp)
+        return VoResult(stamp, T.copy(), cov.copy(), OK, "", len(inl), len(kf_idx), n_feat, new_kf)
+
+    # ---------------------------------------------------------------------------------------------
+    def _features(self, image, depth_m) -> _Features:
+        img = np.asarray(image)
+        grey = cv2.cvtColor(img, cv2.COLOR_RGB2GRAY) if img.ndim == 3 else img
+        if grey.dtype != np.uint8:
+            raise ValueError(f"image: expected uint8, got {grey.dtype}")
+        depth = np.asarray(depth_m, np.float32)
+        if depth.shape != grey.shape:
+            raise ValueError(f"depth_m: shape {depth.shape} differs from the image's {grey.shape}")
+        kps, desc = self._orb.detectAndCompute(grey, None)
+        uv = np.array([k.pt for k in kps], np.float64).reshape(-1, 2)
+        if len(uv) == 0:
+            return _Features(uv, None)
+        col = np.clip(np.rint(uv[:, 0]).astype(int), 0, depth.shape[1] - 1)
+        row = np.clip(np.rint(uv[:, 1]).astype(int), 0, depth.shape[0] - 1)
+        z = depth[row, col].astype(np.float64)
+        usable = np.isfinite(z) & (z >= self.params.min_depth_m) & (z <= self.params.max_depth_m)
+        return _Features(uv, desc, np.where(usable, z, 0.0))
+
+    def _first_keyframe(self, feats: _Features, stamp: float) -> VoResult:
+        n_3d = int(np.count_nonzero(feats.depth > 0))
+        if n_3d < self.params.min_inliers:
+            return self._lost(stamp, f"no keyframe yet: {n_3d} features with depth (min_inliers "
+                                     f"{self.params.min_inliers})", features=len(feats.uv))
+        self._set_keyframe(feats, stamp)
+        return VoResult(stamp, self._pose.copy(), self._covariance.copy(), OK, "", n_3d, 0, len(feats.uv), True)
+
+    def _set_keyframe(self, feats: _Features, stamp: float) -> bool:
+        """The frame becomes the keyframe at the present pose when it has enough 3D features."""
+        has = feats.depth > 0
+        if int(np.count_nonzero(has)) < self.params.min_inliers:
+            return False
+        K, z = self.K, feats.depth[has]
+        uv = feats.uv[has]
+        pts = np.column_stack([(uv[:, 0] - K[0, 2]) * z / K[0, 0], (uv[:, 1] - K[1, 2]) * z / K[1, 1], z])
+        self._keyframe = _Keyframe(self._pose.copy(), self._covariance.copy(), pts,
+                                   feats.descriptors[has], stamp)
+        self.keyframes += 1
+        return True
+
+    def _match(self, kf_desc: np.ndarray, desc: np.ndarray):
+        """Indices (keyframe, frame) of the matches passing the ratio test and max_hamming."""
+        p = self.params
+        pairs = self._matcher.knnMatch(kf_desc, desc, k=2)
+        kf_idx, cur_idx, used = [], [], set()
+        for pair in pairs:
+            if not pair:
+                continue
+            best = pair[0]
+            if best.distance > p.max_hamming or (len(pair) > 1 and best.distance >= p.ratio_test * pair[1].distance):
+                continue
+            if best.trainIdx in used:      # one keyframe point per image feature
+                continue
+            used.add(best.trainIdx)
+            kf_idx.append(best.queryIdx)
+            cur_idx.append(best.trainIdx)
+        return np.array(kf_idx, int), np.array(cur_idx, int)
+
+    def _solve_pnp(self, obj: np.ndarray, img: np.ndarray):
+        """(rvec, tvec, inlier indices) of the keyframe in the camera, or None."""
+        p = self.params
+        ok, rvec, tvec, inliers = cv2.solvePnPRansac(
+            obj, img, self.K, None, iterationsCount=p.ransac_iterations,
+            reprojectionError=p.ransac_reprojection_px, confidence=p.ransac_confidence,
+            flags=cv2.SOLVEPNP_EPNP)
+        if not ok or inliers is None or len(inliers) < 6:
+            return None
+        inl = inliers.ravel()
+        rvec, tvec = cv2.solvePnPRefineLM(obj[inl], img[inl], self.K, None, rvec, tvec)
+        # the refined pose's inliers (the refinement can move points across the threshold)
+        residual = self._residuals(obj, img, rvec, tvec)
+        inl = np.nonzero(np.hypot(residual[:, 0], residual[:, 1]) <= p.ransac_reprojection_px)[0]
+        return rvec, tvec, inl
+
+    def _residuals(self, obj, img, rvec, tvec) -> np.ndarray:
+        proj, _ = cv2.projectPoints(obj, rvec, tvec, self.K, None)
+        return proj.reshape(-1, 2) - img
+
+    def _covariance_of(self, T: np.ndarray, kf: _Keyframe, obj, img, rvec, tvec) -> np.ndarray:
+        """The pose's covariance (see the module's docstring)."""
+        K, R, p_cam = self.K, T[:3, :3], T[:3, 3]
+        r = self._residuals(obj, img, rvec, tvec)
+        n = len(obj)
+        sigma2 = max(float(np.sum(r * r)) / max(2 * n - 6, 1), self.params.min_pixel_sigma_px ** 2)
+        X_w = obj @ kf.T_odom_camera[:3, :3].T + kf.T_odom_camera[:3, 3]
+        d = X_w - p_cam
+        x_c = d @ R                                     # R^T d, the points in the camera
+        z = x_c[:, 2]
+        # d(u, v)/d(x_c): (N, 2, 3)
+        Ju = np.zeros((n, 2, 3))
+        Ju[:, 0, 0] = K[0, 0] / z
+        Ju[:, 0, 2] = -K[0, 0] * x_c[:, 0] / z ** 2
+        Ju[:, 1, 1] = K[1, 1] / z
+        Ju[:, 1, 2] = -K[1, 1] * x_c[:, 1] / z ** 2
+        # x_c = R^T (X_w - p): d x_c / d p = -R^T; for R = Exp(phi) R_hat, d x_c / d phi = R^T [d]x
+        J_pose = np.zeros((n, 3, 6))
+        J_pose[:, :, :3] = -R.T
+        skews = np.zeros((n, 3, 3))
+        skews[:, 0, 1], skews[:, 0, 2], skews[:, 1, 2] = -d[:, 2], d[:, 1], -d[:, 0]
+        skews[:, 1, 0], skews[:, 2, 0], skews[:, 2, 1] = d[:, 2], -d[:, 1], d[:, 0]
+        J_pose[:, :, 3:] = R.T @ skews
+        J = (Ju @ J_pose).reshape(2 * n, 6)
+        info = J.T @ J
+        try:
+            rel = sigma2 * np.linalg.inv(info)
+        except np.linalg.LinAlgError:
+            rel = np.eye(6) * LOST_COVARIANCE
+        A = np.eye(6)
+        A[:3, 3:] = -skew(p_cam - kf.T_odom_camera[:3, 3])
+        cov = A @ kf.covariance @ A.T + rel
+        return 0.5 * (cov + cov.T)
+
+    def _lost(self, stamp: float, reason: str, features: int = 0, matches: int = 0, inliers: int = 0) -> VoResult:
+        return VoResult(stamp, self._pose.copy(), np.eye(6) * LOST_COVARIANCE, LOST, reason, inliers, matches,
+                        features, False)
