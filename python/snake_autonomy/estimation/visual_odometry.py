@@ -37,7 +37,7 @@ from typing import List, Optional
 import cv2
 import numpy as np
 
-from ..safe_yaml import load_yaml_file
+from .config_section import load_section
 from .pose_remap import skew
 
 OK = "ok"
@@ -106,22 +106,7 @@ assert set(_LIMITS) == {f.name for f in fields(VoParams)}
 def load_vo_params(path) -> VoParams:
     """The vo: section of an estimation config (absent: defaults). ValueError naming the file, the
     field and the value for an unknown key or an invalid value."""
-    data = load_yaml_file(path) or {}
-    if not isinstance(data, dict):
-        raise ValueError(f"{path}: expected a mapping at the top, got {type(data).__name__}")
-    section = data.get("vo") or {}
-    if not isinstance(section, dict):
-        raise ValueError(f"{path}: vo: expected a mapping, got {section!r}")
-    known = {f.name for f in fields(VoParams)}
-    problems = [f"vo.{k}: unknown key (value {v!r})" for k, v in section.items() if k not in known]
-    if not problems:
-        # a YAML integer is a valid float field (1 for 1.0)
-        values = {k: float(v) if _LIMITS[k][0] is float and type(v) is int else v for k, v in section.items()}
-        params = VoParams(**values)
-        problems = params.problems()
-    if problems:
-        raise ValueError(f"{path}: " + "; ".join(problems))
-    return params
+    return load_section(path, "vo", VoParams)
 
 
 @dataclass
