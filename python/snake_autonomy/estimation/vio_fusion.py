@@ -1,0 +1,262 @@
+"""Visual-inertial odometry: the visual odometry's poses fused with IMU preintegration in a
+fixed-lag smoother (GTSAM), ROS-free.
+
+    vio = VioFusion(K, T_imu_camera, vo_params, load_fusion_params(path), initial_imu_pose=T_world_imu)
+    vio.add_imu(t_s, gyro_rad_s, accel_m_s2)          # every IMU sample, in time order
+    result = vio.add_frame(image, depth_m, stamp_s)    # every camera frame (after its IMU samples)
+    result.T_world_camera, result.covariance (what to publish: LOST_COVARIANCE when lost),
+    result.marginal_covariance (the smoother's, always), result.state, result.reason, result.vo
+
+One state per camera frame: the IMU's pose X(k) in a gravity-aligned world frame (z up), its
+velocity V(k) and the IMU biases B(k). Consecutive states are tied by a CombinedImuFactor (the
+preintegrated gyro and accelerometer samples between the frames, with the bias random walk); a
+frame the visual odometry tracked adds a pose prior on X(k): the odometry's camera pose (its frame
+is set to the world frame: its initial pose is the first camera pose in the world) moved to the
+IMU, with the odometry's covariance. The odometry's poses are treated as independent measurements
+(a loosely coupled fusion; their errors are in fact correlated over a keyframe's lifetime).
+
+The IMU gate: the visual pose is refused when it is further than gate_m / gate_deg from the pose
+the IMU predicts from the last estimate. Tracking is lost when the visual odometry is lost or the
+gate refuses it: the state is then dead-reckoned on the IMU alone, its marginal covariance grows,
+and the published covariance is LOST_COVARIANCE. After vo_reset_after_lost consecutive lost frames
+the visual odometry restarts from the fused pose (a new keyframe), so that tracking resumes where
+the keyframe's scene is out of view.
+
+Frames: the IMU frame is the body of the preintegration (sim/imu.py: camera_link, x forward,
+y left, z up); T_imu_camera is the camera's optical frame in it. Covariances are 6x6 in
+geometry_msgs order: x, y, z, then small rotations about the world's x, y, z axes.
+"""
+import math
+from dataclasses import dataclass, fields
+from typing import List, Optional
+
+import gtsam
+import numpy as np
+from gtsam.symbol_shorthand import B, V, X
+
+from .config_section import load_section
+from .pose_remap import base_covariance
+from .visual_odometry import LOST, LOST_COVARIANCE, OK, VisualOdometry, VoParams, VoResult, rotation_angle_deg
+
+GRAVITY_M_S2 = 9.80665
+
+
+@dataclass
+class FusionParams:
+    """The fusion: section of config/estimation.yaml. The IMU's noise figures are sim/imu.py's
+    BMI055-like model (ImuConfig's defaults), in GTSAM's continuous-time units."""
+    gyro_noise_density_rad_s_per_sqrt_hz: float = 2.443e-4     # 0.014 deg/s/sqrt(Hz)
+    accel_noise_density_m_s2_per_sqrt_hz: float = 1.471e-3     # 150 ug/sqrt(Hz)
+    gyro_bias_walk_rad_s_per_sqrt_s: float = 2.0e-5
+    accel_bias_walk_m_s2_per_sqrt_s: float = 4.0e-4
+    integration_sigma: float = 1e-4            # preintegration's integration error (GTSAM's default order)
+    lag_s: float = 2.0                         # the smoother's window
+    prior_position_sigma_m: float = 1e-3       # the first state's prior: pose given ...
+    prior_angle_sigma_deg: float = 0.5
+    prior_velocity_sigma_m_s: float = 0.5      # ... velocity unknown (zero, loosely)
+    prior_gyro_bias_sigma_rad_s: float = 5e-3  # biases: zero, within a few datasheet offsets
+    prior_accel_bias_sigma_m_s2: float = 0.1
+    vo_min_sigma_m: float = 1e-3               # the visual pose's std is at least this ...
+    vo_min_sigma_deg: float = 0.5              # ... and this (lower: the fused tilt follows the visual one
+                                               # and gravity leaks into the dead-reckoning when tracking is lost)
+    gate_m: float = 0.1                        # visual pose this far from the IMU's prediction: refused
+    gate_deg: float = 10.0
+    vo_reset_after_lost: int = 5               # restart the visual odometry after this many lost frames (0: never)
+
+    def problems(self, prefix: str = "fusion") -> List[str]:
+        out = []
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.name == "vo_reset_after_lost":
+                if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+                    out.append(f"{prefix}.{f.name}: must be an integer >= 0, got {v!r}")
+            elif isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+                out.append(f"{prefix}.{f.name}: must be a finite number > 0, got {v!r}")
+        return out
+
+
+def load_fusion_params(path) -> FusionParams:
+    """The fusion: section of an estimation config (absent: defaults); ValueError naming the file,
+    the field and the value."""
+    return load_section(path, "fusion", FusionParams)
+
+
+@dataclass
+class FusedResult:
+    stamp: float
+    T_world_camera: np.ndarray         # 4x4, the camera's optical frame in the world
+    T_world_imu: np.ndarray
+    velocity_m_s: np.ndarray           # (3,) the IMU's, in the world
+    covariance: np.ndarray             # 6x6 to publish: the marginal one, LOST_COVARIANCE diagonal when lost
+    marginal_covariance: np.ndarray    # 6x6 of the camera pose, from the smoother (also while lost)
+    state: str                         # OK or LOST
+    reason: str
+    vo: VoResult
+
+    @property
+    def ok(self) -> bool:
+        return self.state == OK
+
+
+def level_pose(accel_m_s2) -> np.ndarray:
+    """The IMU's pose at rest from one specific-force reading: roll and pitch that put it along the
+    world's +z, zero yaw and position."""
+    a = np.asarray(accel_m_s2, float)
+    up = a / np.linalg.norm(a)                      # the world's z in the IMU frame
+    x = np.array([1.0, 0.0, 0.0]) - up[0] * up      # the IMU's x projected on the level plane
+    if np.linalg.norm(x) < 1e-6:
+        x = np.array([0.0, 1.0, 0.0]) - up[1] * up
+    x /= np.linalg.norm(x)
+    T = np.eye(4)
+    T[:3, :3] = np.vstack([x, np.cross(up, x), up])   # rows: world axes in the IMU frame
+    return T
+
+
+def ros_to_local(cov: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """6x6 covariance in geometry_msgs order (world position, world rotations) -> GTSAM Pose3's
+    tangent (body rotation, body translation): T = T_hat . Exp(xi)."""
+    J = np.zeros((6, 6))
+    J[:3, 3:] = R.T                                  # body rotation from the world's
+    J[3:, :3] = R.T                                  # body translation from the world position
+    return J @ cov @ J.T
+
+
+def local_to_ros(cov: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """The inverse of ros_to_local."""
+    J = np.zeros((6, 6))
+    J[:3, 3:] = R
+    J[3:, :3] = R
+    return J @ cov @ J.T
+
+
+class VioFusion:
+    """Visual odometry + IMU preintegration in an incremental fixed-lag smoother (see the module's
+    docstring)."""
+
+    def __init__(self, K, T_imu_camera, vo_params: Optional[VoParams] = None,
+                 params: Optional[FusionParams] = None, initial_imu_pose: Optional[np.ndarray] = None):
+        self.params = params or FusionParams()
+        problems = self.params.problems()
+        if problems:
+            raise ValueError("fusion: " + "; ".join(problems))
+        self.T_imu_camera = np.asarray(T_imu_camera, float)
+        self.T_camera_imu = np.linalg.inv(self.T_imu_camera)
+        self.vo = VisualOdometry(K, vo_params)
+        p = self.params
+        pim = gtsam.PreintegrationCombinedParams.MakeSharedU(GRAVITY_M_S2)
+        pim.setGyroscopeCovariance(np.eye(3) * p.gyro_noise_density_rad_s_per_sqrt_hz ** 2)
+        pim.setAccelerometerCovariance(np.eye(3) * p.accel_noise_density_m_s2_per_sqrt_hz ** 2)
+        pim.setBiasOmegaCovariance(np.eye(3) * p.gyro_bias_walk_rad_s_per_sqrt_s ** 2)
+        pim.setBiasAccCovariance(np.eye(3) * p.accel_bias_walk_m_s2_per_sqrt_s ** 2)
+        pim.setIntegrationCovariance(np.eye(3) * p.integration_sigma ** 2)
+        self._pim_params = pim
+        self._initial = None if initial_imu_pose is None else np.asarray(initial_imu_pose, float)
+        self._smoother = gtsam.IncrementalFixedLagSmoother(p.lag_s)
+        self._k = -1                                 # the last state's index
+        self._imu: List[tuple] = []                  # samples since the last frame: (t, gyro, accel)
+        self._last_imu_t = None
+        self._lost_frames = 0
+
+    def add_imu(self, t_s: float, gyro_rad_s, accel_m_s2) -> None:
+        self._imu.append((float(t_s), np.asarray(gyro_rad_s, float), np.asarray(accel_m_s2, float)))
+
+    # ---------------------------------------------------------------------------------------------
+    def add_frame(self, image, depth_m, stamp: float) -> FusedResult:
+        if self._k < 0:
+            return self._first_frame(image, depth_m, stamp)
+        p, k = self.params, self._k + 1
+        pim = gtsam.PreintegratedCombinedMeasurements(self._pim_params, self._bias)
+        t = self._t
+        for t_s, gyro, accel in self._imu:
+            if t_s > stamp:
+                break
+            if t_s > t:
+                pim.integrateMeasurement(accel, gyro, t_s - t)
+                t = t_s
+        if stamp > t and self._imu:                  # hold the last sample up to the frame
+            pim.integrateMeasurement(self._imu[-1][2], self._imu[-1][1], stamp - t)
+        self._imu = [s for s in self._imu if s[0] > stamp]
+        predicted = pim.predict(self._state, self._bias)
+        graph, values = gtsam.NonlinearFactorGraph(), gtsam.Values()
+        graph.add(gtsam.CombinedImuFactor(X(k - 1), V(k - 1), X(k), V(k), B(k - 1), B(k), pim))
+        values.insert(X(k), predicted.pose())
+        values.insert(V(k), predicted.velocity())
+        values.insert(B(k), self._bias)
+        vo = self.vo.process(image, depth_m, stamp)
+        state, reason = OK, ""
+        if not vo.ok:
+            state, reason = LOST, f"visual odometry lost: {vo.reason}"
+        else:
+            T_world_imu = vo.T_odom_camera @ self.T_camera_imu
+            T_pred = predicted.pose().matrix()
+            off_m = float(np.linalg.norm(T_world_imu[:3, 3] - T_pred[:3, 3]))
+            off_deg = rotation_angle_deg(T_pred[:3, :3].T @ T_world_imu[:3, :3])
+            if off_m > p.gate_m or off_deg > p.gate_deg:
+                state, reason = LOST, (f"IMU gate: the visual pose is {off_m:.3f} m, {off_deg:.1f} deg from the IMU's "
+                                       f"prediction (gate_m {p.gate_m:g}, gate_deg {p.gate_deg:g})")
+            else:
+                graph.add(gtsam.PriorFactorPose3(X(k), gtsam.Pose3(T_world_imu), self._vo_noise(vo, T_world_imu)))
+        stamps = gtsam.FixedLagSmootherKeyTimestampMap()
+        for key in (X(k), V(k), B(k)):
+            stamps.insert((key, stamp))
+        self._smoother.update(graph, values, stamps)
+        self._k, self._t = k, stamp
+        result = self._estimate(stamp, state, reason, vo)
+        self._lost_frames = 0 if state == OK else self._lost_frames + 1
+        if p.vo_reset_after_lost and self._lost_frames >= p.vo_reset_after_lost:
+            self.vo.reset(result.T_world_camera, result.marginal_covariance)
+            self._lost_frames = 0
+        return result
+
+    # ---------------------------------------------------------------------------------------------
+    def _first_frame(self, image, depth_m, stamp: float) -> FusedResult:
+        """The first state: the given pose (or levelled on the mean specific force so far), velocity
+        and biases loosely zero; the visual odometry's frame is set to the world."""
+        p = self.params
+        if self._initial is None:
+            if not self._imu:
+                raise ValueError("the first frame needs an initial IMU pose or IMU samples before it (levelling)")
+            self._initial = level_pose(np.mean([s[2] for s in self._imu], axis=0))
+        pose = gtsam.Pose3(self._initial)
+        self._bias = gtsam.imuBias.ConstantBias()
+        graph, values = gtsam.NonlinearFactorGraph(), gtsam.Values()
+        sigmas = np.r_[[math.radians(p.prior_angle_sigma_deg)] * 3, [p.prior_position_sigma_m] * 3]
+        graph.add(gtsam.PriorFactorPose3(X(0), pose, gtsam.noiseModel.Diagonal.Sigmas(sigmas)))
+        graph.add(gtsam.PriorFactorVector(V(0), np.zeros(3),
+                                          gtsam.noiseModel.Isotropic.Sigma(3, p.prior_velocity_sigma_m_s)))
+        bias_sigmas = np.r_[[p.prior_accel_bias_sigma_m_s2] * 3, [p.prior_gyro_bias_sigma_rad_s] * 3]
+        graph.add(gtsam.PriorFactorConstantBias(B(0), self._bias, gtsam.noiseModel.Diagonal.Sigmas(bias_sigmas)))
+        values.insert(X(0), pose)
+        values.insert(V(0), np.zeros(3))
+        values.insert(B(0), self._bias)
+        stamps = gtsam.FixedLagSmootherKeyTimestampMap()
+        for key in (X(0), V(0), B(0)):
+            stamps.insert((key, stamp))
+        self._smoother.update(graph, values, stamps)
+        self._k, self._t = 0, stamp
+        self._imu = [s for s in self._imu if s[0] > stamp]
+        T_world_camera = self._initial @ self.T_imu_camera
+        self.vo.reset(T_world_camera)
+        vo = self.vo.process(image, depth_m, stamp)
+        state, reason = (OK, "") if vo.ok else (LOST, f"visual odometry lost: {vo.reason}")
+        return self._estimate(stamp, state, reason, vo)
+
+    def _vo_noise(self, vo: VoResult, T_world_imu: np.ndarray):
+        p = self.params
+        floor = np.diag([p.vo_min_sigma_m ** 2] * 3 + [math.radians(p.vo_min_sigma_deg) ** 2] * 3)
+        cov_imu = base_covariance(vo.covariance, vo.T_odom_camera, self.T_camera_imu) + floor
+        return gtsam.noiseModel.Gaussian.Covariance(ros_to_local(cov_imu, T_world_imu[:3, :3]))
+
+    def _estimate(self, stamp, state, reason, vo) -> FusedResult:
+        k = self._k
+        est = self._smoother.calculateEstimate()
+        pose = est.atPose3(X(k))
+        self._bias = est.atConstantBias(B(k))
+        velocity = np.asarray(est.atVector(V(k)), float)
+        self._state = gtsam.NavState(pose, velocity)
+        T_world_imu = pose.matrix()
+        cov_imu = local_to_ros(np.asarray(self._smoother.marginalCovariance(X(k))), T_world_imu[:3, :3])
+        T_world_camera = T_world_imu @ self.T_imu_camera
+        marginal = base_covariance(cov_imu, T_world_imu, self.T_imu_camera)
+        published = marginal if state == OK else np.eye(6) * LOST_COVARIANCE
+        return FusedResult(stamp, T_world_camera, T_world_imu, velocity, published, marginal, state, reason, vo)
