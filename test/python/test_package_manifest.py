@@ -40,6 +40,7 @@ THIRD_PARTY = {
     "threadpoolctl": ("pypi", "threadpoolctl"),
     "distributed": ("pypi", "distributed"),
     "importlinter": ("pypi", "import-linter"),
+    "gtsam": ("pypi", "gtsam"),
 }
 # PyPI-pinned modules the package itself (python/snake_autonomy) imports at run time also need their rosdep key in
 # package.xml, for ROS users who install with rosdep rather than the venv (official keys: rosdistro rosdep/python.yaml).
@@ -52,6 +53,7 @@ NO_ROSDEP = {
     "evo": "no key", "dynamixel_sdk": "no Debian package (a ROS package of ROBOTIS)",
     "threadpoolctl": "no key (Debian has python3-threadpoolctl, rosdistro no entry)",
     "distributed": "no key (Debian has python3-distributed, rosdistro no entry)",
+    "gtsam": "no Debian package (Debian 12 ships no GTSAM): the PyPI wheel",
 }
 # Pinned before their first import, for work under way (none now: shapely is imported by planning/fbsr).
 PLANNED = set()
