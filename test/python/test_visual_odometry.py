@@ -223,3 +223,19 @@ def test_config_file_and_its_errors(root, tmp_path):
         VisualOdometry(np.eye(2))
     with pytest.raises(ValueError, match="depth_m: shape"):
         VisualOdometry(K()).process(np.zeros((HEIGHT, WIDTH), np.uint8), np.zeros((10, 10)), 0.0)
+
+
+def test_a_lost_keyframe_view_falls_back_to_the_last_tracked_frame(straight):
+    """Keyframes never switched by inliers or overlap (keyframe_min_inliers = min_inliers, overlap 0):
+    when the keyframe's view is gone the last tracked frame becomes the keyframe, so tracking goes on
+    (frame 19 alone against frame 0 finds too few matches)."""
+    vo = VisualOdometry(K(), VoParams(keyframe_min_inliers=20, keyframe_min_overlap=0.0))
+    for f in straight:
+        r = vo.process(f.rgb, f.depth_m, f.t_s)
+        assert r.ok, r.reason
+        e_m, e_deg = errors(r, f, straight[0])
+        assert e_m < MAX_POSITION_ERROR_M and e_deg < MAX_ANGLE_ERROR_DEG
+    assert vo.keyframes >= 2
+    alone = VisualOdometry(K())
+    alone.process(straight[0].rgb, straight[0].depth_m, 0.0)
+    assert not alone.process(straight[-1].rgb, straight[-1].depth_m, 1.9).ok

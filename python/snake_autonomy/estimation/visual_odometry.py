@@ -9,8 +9,10 @@ The design of RTAB-Map's frame-to-keyframe odometry: ORB features of the keyfram
 each (its depth pixel back-projected; features on a depth hole, 0 or NaN, or outside the depth range
 are dropped); every new frame's ORB features are matched to them (Hamming distance, Lowe's ratio
 test) and the camera's pose relative to the keyframe is PnP-RANSAC (OpenCV) on those 3D-2D matches,
-EPnP in the RANSAC loop, refined by Levenberg-Marquardt on the inliers. The current frame replaces the keyframe when the
-inliers fall below keyframe_min_inliers or below keyframe_min_overlap of the keyframe's 3D points.
+EPnP in the RANSAC loop, refined by Levenberg-Marquardt on the inliers. The current frame replaces
+the keyframe when the inliers fall below keyframe_min_inliers or below keyframe_min_overlap of the
+keyframe's 3D points; when a frame cannot be placed against the keyframe (its view is gone at once:
+a fast turn), the last tracked frame becomes the keyframe and the frame is tried against it.
 
 Frames: the camera frame is OpenCV's optical frame (x right, y down, z forward); the odometry frame
 is the first keyframe's camera frame unless an initial pose is given.
@@ -172,6 +174,7 @@ class VisualOdometry:
         self._pose = np.eye(4) if T_odom_camera is None else np.array(T_odom_camera, float)
         self._covariance = np.zeros((6, 6)) if covariance is None else np.array(covariance, float)
         self._keyframe: Optional[_Keyframe] = None
+        self._previous: Optional[_Features] = None   # the last tracked frame's features, unless the keyframe
         self.keyframes = 0             # keyframes taken since the reset
 
     @property
@@ -184,9 +187,23 @@ class VisualOdometry:
         """One frame: image (H, W) grey or (H, W, 3) RGB uint8, depth_m (H, W) metres along the
         optical axis (0 or NaN: no depth), stamp in seconds."""
         feats = self._features(image, depth_m)
-        kf = self._keyframe
-        if kf is None:
+        if self._keyframe is None:
             return self._first_keyframe(feats, stamp)
+        result = self._track(feats, stamp)
+        previous, self._previous = self._previous, None
+        if not result.ok and previous is not None and result.features >= self.params.min_inliers:
+            # the keyframe's view is gone: the last tracked frame (at the last good pose) becomes
+            # the keyframe and the frame is tried against it
+            if self._set_keyframe(previous, stamp):
+                retry = self._track(feats, stamp)
+                result = retry if retry.ok else result
+        if result.ok and not result.keyframe:
+            self._previous = feats
+        return result
+
+    def _track(self, feats: "_Features", stamp: float) -> VoResult:
+        """The frame's pose against the keyframe (a new keyframe when the inliers drop), or lost."""
+        kf = self._keyframe
         p = self.params
         n_feat = len(feats.uv)
         if feats.descriptors is None or n_feat < p.min_inliers:
