@@ -181,6 +181,15 @@ def test_depth_holes_give_no_3d_points(straight):
         r = vo.process(f.rgb, f.depth_m, f.t_s)
         assert r.ok, r.reason
         assert errors(r, f, first)[0] < MAX_POSITION_ERROR_M
+    # a mask: features only where it is set
+    mask = np.zeros(first.depth_m.shape, bool)
+    mask[:, WIDTH // 3:] = True
+    masked = VisualOdometry(K())
+    assert masked.process(first.rgb, first.depth_m, 0.0, mask=mask).ok
+    pts = masked._keyframe.points
+    assert (pts[:, 0] / pts[:, 2] * FOCAL_PX + WIDTH / 2).min() >= WIDTH // 3 - 0.5
+    with pytest.raises(ValueError, match="mask: shape"):
+        masked.process(first.rgb, first.depth_m, 0.1, mask=mask[:10])
     # no depth at all: no keyframe, lost
     vo = VisualOdometry(K())
     r = vo.process(first.rgb, np.full_like(first.depth_m, np.nan), 0.0)

@@ -169,9 +169,10 @@ class VioFusion:
         self._imu.append((float(t_s), np.asarray(gyro_rad_s, float), np.asarray(accel_m_s2, float)))
 
     # ---------------------------------------------------------------------------------------------
-    def add_frame(self, image, depth_m, stamp: float) -> FusedResult:
+    def add_frame(self, image, depth_m, stamp: float, mask=None) -> FusedResult:
+        """One camera frame (VisualOdometry.process's arguments), after the IMU samples up to it."""
         if self._k < 0:
-            return self._first_frame(image, depth_m, stamp)
+            return self._first_frame(image, depth_m, stamp, mask)
         p, k = self.params, self._k + 1
         pim = self._preintegrate(stamp)
         predicted = pim.predict(self._state, self._bias)
@@ -180,7 +181,7 @@ class VioFusion:
         values.insert(X(k), predicted.pose())
         values.insert(V(k), predicted.velocity())
         values.insert(B(k), self._bias)
-        vo = self.vo.process(image, depth_m, stamp)
+        vo = self.vo.process(image, depth_m, stamp, mask)
         state, reason, T_world_imu = OK, "", None
         if not vo.ok:
             state, reason = LOST, f"visual odometry lost: {vo.reason}"
@@ -243,7 +244,7 @@ class VioFusion:
                     f"(allowed {allowed_m:.3f} m, {allowed_deg:.1f} deg)")
         return ""
 
-    def _first_frame(self, image, depth_m, stamp: float) -> FusedResult:
+    def _first_frame(self, image, depth_m, stamp: float, mask) -> FusedResult:
         """The first state: the given pose (or levelled on the mean specific force so far), velocity
         and biases loosely zero; the visual odometry's frame is set to the world."""
         if self._initial is None:
@@ -253,7 +254,7 @@ class VioFusion:
         self._start(self._initial, np.zeros(3), gtsam.imuBias.ConstantBias(), stamp)
         self._imu = [s for s in self._imu if s[0] > stamp]
         self.vo.reset(self._initial @ self.T_imu_camera)
-        vo = self.vo.process(image, depth_m, stamp)
+        vo = self.vo.process(image, depth_m, stamp, mask)
         state, reason = (OK, "") if vo.ok else (LOST, f"visual odometry lost: {vo.reason}")
         return self._estimate(stamp, state, reason, vo)
 

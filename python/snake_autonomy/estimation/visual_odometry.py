@@ -183,10 +183,11 @@ class VisualOdometry:
         return self._pose.copy()
 
     # ---------------------------------------------------------------------------------------------
-    def process(self, image, depth_m, stamp: float) -> VoResult:
+    def process(self, image, depth_m, stamp: float, mask=None) -> VoResult:
         """One frame: image (H, W) grey or (H, W, 3) RGB uint8, depth_m (H, W) metres along the
-        optical axis (0 or NaN: no depth), stamp in seconds."""
-        feats = self._features(image, depth_m)
+        optical axis (0 or NaN: no depth), stamp in seconds; mask (H, W), optional: features only
+        where it is non-zero (e.g. not on the robot's own body, which moves with the camera)."""
+        feats = self._features(image, depth_m, mask)
         if self._keyframe is None:
             return self._first_keyframe(feats, stamp)
         result = self._track(feats, stamp)
@@ -240,7 +241,7 @@ class VisualOdometry:
         return VoResult(stamp, T.copy(), cov.copy(), OK, "", len(inl), len(kf_idx), n_feat, new_kf)
 
     # ---------------------------------------------------------------------------------------------
-    def _features(self, image, depth_m) -> _Features:
+    def _features(self, image, depth_m, mask=None) -> _Features:
         img = np.asarray(image)
         grey = cv2.cvtColor(img, cv2.COLOR_RGB2GRAY) if img.ndim == 3 else img
         if grey.dtype != np.uint8:
@@ -248,7 +249,12 @@ class VisualOdometry:
         depth = np.asarray(depth_m, np.float32)
         if depth.shape != grey.shape:
             raise ValueError(f"depth_m: shape {depth.shape} differs from the image's {grey.shape}")
-        kps, desc = self._orb.detectAndCompute(grey, None)
+        if mask is not None:
+            mask = np.asarray(mask)
+            if mask.shape != grey.shape:
+                raise ValueError(f"mask: shape {mask.shape} differs from the image's {grey.shape}")
+            mask = (mask != 0).astype(np.uint8)
+        kps, desc = self._orb.detectAndCompute(grey, mask)
         uv = np.array([k.pt for k in kps], np.float64).reshape(-1, 2)
         if len(uv) == 0:
             return _Features(uv, None)
