@@ -111,3 +111,34 @@ def test_without_the_imu_the_model_has_no_sensors():
 def test_bad_imu_values_are_refused_naming_the_key(raw, message):
     with pytest.raises(ValueError, match=message):
         SimConfig.from_dict({"imu": raw})
+
+
+def test_the_accelerometer_sample_is_the_mean_over_its_period_and_the_gyro_the_instant_reading():
+    """As the BMI055's digital filter averages before it decimates: a contact jolt of one physics step
+    enters its sample weighted by its share of the period, not whole or not at all."""
+    world = _world()
+    plant = world.plant
+    quiet = ImuConfig(gyro_noise_density_deg_s_per_sqrt_hz=0.0, accel_noise_density_ug_per_sqrt_hz=0.0,
+                      gyro_bias_walk_rad_s_per_sqrt_s=0.0, accel_bias_walk_m_s2_per_sqrt_s=0.0)
+    imu = ImuSensor(quiet, np.random.default_rng(0), step_s=plant.dt_s)
+    a = int(plant.model.sensor_adr[mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_SENSOR, "imu_accel")])
+    assert not plant.disturbances.items     # the jolts below are the only pushes
+    readings, checked, off_instant = [], 0, 0.0
+    imu.poll(plant)                          # t = 0: the forward pass's reading, and the sum starts
+    for k in range(1, 200):                  # 0.4 s of 2 ms steps, a jolt on the head every 10th
+        if k % 10 == 0:
+            plant.data.xfrc_applied[plant._body_id("base_link"), 2] = 200.0
+        plant.step_to(k * plant.dt_s)
+        plant.data.xfrc_applied[:] = 0.0
+        readings.append(plant.data.sensordata[a:a + 3].copy())
+        s = imu.poll(plant)
+        if s is None:
+            continue
+        # mj_step's sensors read the state before it integrates: the readings summed are those
+        # MuJoCo computed in each step taken since the previous sample
+        np.testing.assert_allclose(s.linear_acceleration_m_s2, np.mean(readings, axis=0), atol=1e-9)
+        np.testing.assert_allclose(s.angular_velocity_rad_s, plant.imu_truth()[1], atol=1e-12)
+        off_instant = max(off_instant, float(np.abs(s.linear_acceleration_m_s2 - readings[-1]).max()))
+        readings, checked = [], checked + 1
+    assert checked == pytest.approx(0.4 * quiet.rate_hz, abs=2)
+    assert off_instant > 1.0                 # the jolts: the mean is not the last step's reading

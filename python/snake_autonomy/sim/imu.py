@@ -10,6 +10,11 @@ point: the plant's time moves in whole steps (2 ms), and a 200 Hz grid is not a 
 them, so the spacing alternates (4 and 6 ms at 200 Hz) around the rate's period. A sample's time
 is that of the state MuJoCo's sensors read (Plant.imu_truth: one physics step back).
 
+The accelerometer's sample is the mean of the specific force over every physics step since the
+previous sample (Plant.imu_accel_mean), as the BMI055's digital low-pass filter averages before it
+decimates: an instant sample would alias the head's contact jolts (a few ms long, tens of m/s^2) into
+the 200 Hz samples. The gyro's sample is the instant reading (the body's rate changes smoothly).
+
 What it does to the true readings (config/sim.yaml imu:, ImuConfig), per axis and sample:
 - white noise of the datasheet's noise density over the sample's bandwidth: std = density x
   sqrt(rate_hz / 2) (the sensor's low-pass filter keeps the noise below the Nyquist frequency);
@@ -97,7 +102,8 @@ class ImuSensor:
         if not self.clock.due(plant.time_s + self.half_step_s):
             return None
         self.clock.tick(plant.time_s + self.half_step_s)
-        return self.measure(*plant.imu_truth())
+        t_s, gyro, _ = plant.imu_truth()
+        return self.measure(t_s, gyro, plant.imu_accel_mean())
 
     def measure(self, t_s: float, gyro_rad_s, accel_m_s2) -> ImuSample:
         """A sample at t_s of the true angular velocity and specific force (sensor frame)."""

@@ -71,6 +71,8 @@ class Plant:
 
         self._steps = 0
         self._sensed_step = 0              # the step whose state MuJoCo's sensors last read
+        # the accelerometer's readings summed over the physics steps since imu_accel_mean() last ran
+        self._accel_sum, self._accel_n = np.zeros(3), 0
         self.limit_violations = 0          # goals received beyond a joint limit (then clamped)
         self._goal = np.zeros(self.num_joints)
         self._torque_on = np.ones(self.num_joints, dtype=bool)
@@ -107,7 +109,14 @@ class Plant:
                           else target)
             end = min(target, grid_end, max(event_step, self._steps + 1))
             self._apply_disturbances()
-            mujoco.mj_step(self.model, self.data, nstep=end - self._steps)
+            if self._imu_adr is None:
+                mujoco.mj_step(self.model, self.data, nstep=end - self._steps)
+            else:                          # one step at a time: every step's specific force is summed
+                a = self._imu_adr[1]
+                for _ in range(end - self._steps):
+                    mujoco.mj_step(self.model, self.data)
+                    self._accel_sum += self.data.sensordata[a:a + 3]
+                self._accel_n += end - self._steps
             self._steps = end
             self._sensed_step = end - 1    # mj_step reads the sensors before it integrates
 
@@ -210,6 +219,17 @@ class Plant:
         g, a = self._imu_adr
         return (self._sensed_step * self.dt_s, self.data.sensordata[g:g + 3].copy(),
                 self.data.sensordata[a:a + 3].copy())
+
+    def imu_accel_mean(self) -> np.ndarray:
+        """The mean specific force (m/s^2, the IMU's frame) over the physics steps since the last call,
+        and starts a new sum; with no step since then, the last forward pass's reading."""
+        if self._imu_adr is None:
+            raise ValueError("imu_accel_mean: this plant has no IMU (Plant(imu_in_head=...))")
+        if self._accel_n == 0:
+            return self.imu_truth()[2]
+        mean = self._accel_sum / self._accel_n
+        self._accel_sum, self._accel_n = np.zeros(3), 0
+        return mean
 
     def center_of_mass(self) -> np.ndarray:
         return self.data.subtree_com[self._body_ids["base_link"]].copy()
