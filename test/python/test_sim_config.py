@@ -1,4 +1,6 @@
 """config/sim.yaml loads; a bad config names every bad key and value at once."""
+import dataclasses
+
 import pytest
 
 from snake_autonomy.sim.config import Range, SimConfig
@@ -10,6 +12,20 @@ def test_shipped_config_loads(root):
     assert isinstance(cfg.physics.floor_friction, Range)
     assert cfg.calibration_path() == root / "config" / "camera.yaml"
     assert cfg.calibration_path().is_file()
+
+
+def test_the_code_defaults_are_the_shipped_configs_values(root):
+    """SimConfig() (what a run without sim.yaml, and WorldSpec's default, simulate) is config/sim.yaml:
+    a refit of the file (the VIO drift's x2.25) must reach the code's defaults too."""
+    shipped = dataclasses.asdict(SimConfig.from_yaml(root / "config" / "sim.yaml"))
+    defaults = dataclasses.asdict(SimConfig())
+    shipped.pop("base_dir"), defaults.pop("base_dir")        # where the file lies, not a value of it
+    differ = [f"{section}.{key}: code {value!r}, sim.yaml {shipped[section][key]!r}"
+              for section, values in defaults.items() if isinstance(values, dict)
+              for key, value in values.items() if shipped[section][key] != value]
+    differ += [f"{k}: code {v!r}, sim.yaml {shipped[k]!r}" for k, v in defaults.items()
+               if not isinstance(v, dict) and shipped[k] != v]
+    assert not differ, "; ".join(differ)
 
 
 def test_every_problem_is_listed():
