@@ -229,3 +229,26 @@ def test_the_loop_runs_the_layered_planner_its_config_names(root, name):
     loop.on_frame(10.0, np.zeros_like(frame))       # a view with no floor: a wall right ahead
     tick = loop.tick(10.0)
     assert tick.state == NO_FREE_ARC and tick.backwards
+
+
+def test_local_map_knows_the_cells_the_body_lay_on_unless_a_view_marked_them():
+    m = _map_with([[0.3, 0.0]])                    # a mark the body's cells reach
+    body = np.column_stack([np.linspace(-1.0, 0.3, 30), np.zeros(30)])
+    assert not m.seen_free(body).any() and (m.unknown_distance(body[:-1]) == 0).all()
+    m.mark_body(body, 0.045)
+    seen = m.seen_free(body)
+    assert seen[:-1].all() and not seen[-1]        # the marked cell stays an obstacle's
+    assert (m.unknown_distance(body[:-1]) > 0).all()
+    assert m.unknown_distance(np.array([[-1.0, 0.3]]))[0] == 0.0     # beside the body: nobody saw it
+
+
+def test_body_sweep_keeps_the_body_on_known_cells_when_asked():
+    sweep = BodySweep(COBRA, CFG.follower, SweepParams())
+    m = _map_with([[3.0, 3.0]])                    # nothing near: only unknown cells behind the body
+    body = sweep.sweep(0.0, 0.0, 0.0).rows[0]
+    m.mark_body(body, 0.045)
+    back = sweep.sweep(0.0, 0.0, -0.1)
+    assert sweep.check(back, m, np.eye(4)).free_m == pytest.approx(0.1)        # unknown counts free
+    assert sweep.check(back, m, np.eye(4), known=True).free_m < 0.1             # the tail backs into the unseen
+    m.mark_body(body - [0.15, 0.0], 0.045)         # the body lay there before (its track)
+    assert sweep.check(back, m, np.eye(4), known=True).free_m == pytest.approx(0.1)

@@ -100,9 +100,10 @@ class BodySweep:
             travel.append(np.linspace(0.0, travel_m, len(path) + 1)[1:])
         return Sweep(np.concatenate(rows), np.abs(np.concatenate(travel)), len(RESHAPE_FRACTIONS))
 
-    def check(self, sweep: Sweep, local_map, T_world_g: np.ndarray) -> SweepCheck:
+    def check(self, sweep: Sweep, local_map, T_world_g: np.ndarray, known: bool = False) -> SweepCheck:
         """How far the sweep is clear of the map's occupied cells (T_world_g: the ground frame in the
-        world, 4x4)."""
+        world, 4x4). known: the body must also stay on cells the map knows (seen or lain on): no station
+        comes nearer an unknown cell than half the width, or than SLACK_M nearer than the body is now."""
         R, N, _ = sweep.rows.shape
         pts = sweep.rows.reshape(-1, 2) @ T_world_g[:2, :2].T + T_world_g[:2, 3]
         d = local_map.distance(pts).reshape(R, N)
@@ -113,6 +114,10 @@ class BodySweep:
         nearest = float(d[0].min()) if N else self.need_m
         allowed = min(self.need_m, nearest - SLACK_M)
         ok = (d >= allowed).all(axis=1)
+        if known:
+            du = local_map.unknown_distance(pts).reshape(R, N)
+            half_u = min(half, float(du[0].min()) - SLACK_M) if N else half
+            ok &= (du >= half_u).all(axis=1)
         margin = (d - 0.5 * self.geometry.width_m).min(axis=1)
         if not ok[:sweep.reshape_rows + 1].all():
             return SweepCheck(-1.0, float(margin[:sweep.reshape_rows + 1].min()))

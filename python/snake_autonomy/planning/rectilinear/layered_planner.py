@@ -68,11 +68,15 @@ class LayeredPlanner:
                goal_xy=None, goal_radius_m: float = 0.0) -> Replan:
         T_world_g = T_world_ground(pose)
         self.map.add_view(ground, self.intrinsics.K(), T_world_g @ np.asarray(T_ground_camera, float))
+        kappa_now = self.follower.kappa_per_m
+        body_now = self.sweep.sweep(kappa_now, kappa_now, 0.0).rows[0]
+        half = 0.5 * self.sweep.geometry.width_m
+        self.map.mark_body(world_xy(T_world_g, body_now),
+                           half + (self.cfg.local_map.start_free_m if self.map.updates == 1 else 0.0))
         route_path = None
         if goal_xy is not None:
             self.route.update(self.map, pose[:2], goal_xy)
             route_path = self.route.path
-        kappa_now = self.follower.kappa_per_m
         cands = [self._candidate(c, poses, s, kappa_now, T_world_g) for c, poses, s in self._arcs]
         need = max(self.sp.min_free_m, self.sp.resume_free_m) if self.recovery.active else self.sp.min_free_m
         valid = [i for i, c in enumerate(cands) if c.free_m >= need]
@@ -137,7 +141,8 @@ class LayeredPlanner:
         self.progress.reset()
         if self.recovery.side is None:
             self.recovery.side = self._turn_side(cands, T_world_g, goal_xy)
-        back = self.sweep.check(self.sweep.sweep(kappa_now, kappa_now, -rp.back_off_m), self.map, T_world_g)
+        back = self.sweep.check(self.sweep.sweep(kappa_now, kappa_now, -rp.back_off_m), self.map, T_world_g,
+                                rp.known_only)
         turn = self._free_turn(kappa_now, T_world_g)
         b = self.recovery.next({BACK_OFF: back.free_m >= rp.back_off_m - 1e-9, TURN: turn is not None})
         self.holding = b == WAIT
@@ -169,7 +174,8 @@ class LayeredPlanner:
         fp, rp = self.follower.params, self.cfg.recovery
         for side in (self.recovery.side, -self.recovery.side):
             for k in (fp.kappa_turn_per_m, 0.5 * fp.kappa_turn_per_m):
-                chk = self.sweep.check(self.sweep.sweep(kappa_now, side * k, rp.turn_crawl_m), self.map, T_world_g)
+                chk = self.sweep.check(self.sweep.sweep(kappa_now, side * k, rp.turn_crawl_m), self.map, T_world_g,
+                                       rp.known_only)
                 if chk.free_m >= rp.turn_crawl_m - 1e-9:
                     return side * k
         return None

@@ -48,6 +48,8 @@ class LocalMapParams:
     free_log_odds: float = -0.3       # below: free (seen as floor)
     blind_m: float = 0.15             # the head's first metres need not be seen free: the camera's near
                                       # field (it sees the floor from about 0.06 m ahead of the head)
+    start_free_m: float = 0.25        # the robot is placed with this much free floor round its body: known
+                                      # free at the first view (the camera has not seen beside or behind it)
 
     def validate(self) -> List[str]:
         p = []
@@ -55,8 +57,9 @@ class LocalMapParams:
                     "max_log_odds", "blind_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
-        if not self.face_depth_m >= 0:
-            p.append(f"face_depth_m: must be >= 0, got {self.face_depth_m}")
+        for key in ("face_depth_m", "start_free_m"):
+            if not getattr(self, key) >= 0:
+                p.append(f"{key}: must be >= 0, got {getattr(self, key)}")
         for key in ("edge_px", "stride_px"):
             v = getattr(self, key)
             if not isinstance(v, int) or v < (1 if key == "stride_px" else 0):
@@ -75,7 +78,8 @@ class LocalMap:
         self.n = int(math.ceil(params.size_m / params.cell_m))
         self.log_odds = np.zeros((self.n, self.n), np.float32)     # [i, j]: x, y
         self.origin = None                  # world (x, y) of cell (0, 0)'s centre; None: not placed yet
-        self._dist = None
+        self.swept = np.zeros((self.n, self.n), bool)               # cells the body has lain on
+        self._dist = self._unknown_dist = None
         self._cleared_key, self._cleared = None, None     # distance_clearing's field and the cells it cleared
         self.updates = 0
 
@@ -95,9 +99,11 @@ class LocalMap:
         src_i, dst_i = slice(max(0, si), min(n, n + si)), slice(max(0, -si), min(n, n - si))
         src_j, dst_j = slice(max(0, sj), min(n, n + sj)), slice(max(0, -sj), min(n, n - sj))
         new[dst_i, dst_j] = self.log_odds[src_i, src_j]
-        self.log_odds = new
+        swept = np.zeros_like(self.swept)
+        swept[dst_i, dst_j] = self.swept[src_i, src_j]
+        self.log_odds, self.swept = new, swept
         self.origin = self.origin + shift * self.params.cell_m
-        self._dist = None
+        self._dist = self._unknown_dist = None
 
     def cells(self, xy: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(M, 2) world points -> their cells (i, j) and whether they lie in the window."""
@@ -139,8 +145,25 @@ class LocalMap:
         lo = self.log_odds.ravel()                       # a view of the grid
         lo[free] = np.maximum(lo[free] - p.miss_log_odds, p.min_log_odds)
         lo[occ] = np.minimum(lo[occ] + p.hit_log_odds, p.max_log_odds)
-        self._dist = None
+        self._dist = self._unknown_dist = None
         self.updates += 1
+
+    def mark_body(self, xy: np.ndarray, radius_m: float) -> None:
+        """The cells within radius_m of the body's stations xy (world, (M, 2)) are known free: the body lies
+        there. Kept apart from the log-odds: a modelled body a few centimetres off the real one must not
+        clear an obstacle's mark, only make its surroundings known."""
+        if self.origin is None:
+            return
+        r = int(np.floor(radius_m / self.params.cell_m))
+        a = np.arange(-r, r + 1)
+        di, dj = np.meshgrid(a, a, indexing="ij")
+        disc = di ** 2 + dj ** 2 <= r * r
+        i, j, inside = self.cells(xy)
+        ii = (i[inside, None] + di[disc][None, :]).ravel()
+        jj = (j[inside, None] + dj[disc][None, :]).ravel()
+        ok = (ii >= 0) & (ii < self.n) & (jj >= 0) & (jj < self.n)
+        self.swept[ii[ok], jj[ok]] = True
+        self._unknown_dist = None
 
     def _cell_ids(self, xy: np.ndarray) -> np.ndarray:
         """The distinct flat indices of the window's cells the points fall in (points outside: none)."""
@@ -204,12 +227,27 @@ class LocalMap:
         return np.where(inside, np.maximum(d, 0.0), np.inf)
 
     def seen_free(self, xy: np.ndarray) -> np.ndarray:
-        """(M, 2) world points -> (M,) whether a view showed their cell as floor."""
+        """(M, 2) world points -> (M,) whether a view showed their cell as floor, or the body lay on it and no
+        view has marked it."""
         xy = np.asarray(xy, float).reshape(-1, 2)
         if self.origin is None:
             return np.zeros(len(xy), bool)
         i, j, inside = self.cells(xy)
-        return inside & self.free()[i, j]
+        return inside & (self.free()[i, j] | (self.swept[i, j] & (self.log_odds[i, j] <= 0.0)))
+
+    def unknown_distance(self, xy: np.ndarray) -> np.ndarray:
+        """(M, 2) world points -> (M,) distance to the nearest unknown cell (neither seen nor lain on; 0
+        off the window), less half a cell."""
+        xy = np.asarray(xy, float).reshape(-1, 2)
+        if self.origin is None:
+            return np.zeros(len(xy))
+        if self._unknown_dist is None:
+            known = self.free() | self.occupied() | self.swept
+            self._unknown_dist = (distance_transform_edt(known) * self.params.cell_m if not known.all()
+                                  else np.full(known.shape, np.inf))
+        i, j, inside = self.cells(xy)
+        d = self._unknown_dist[i, j] - 0.5 * self.params.cell_m
+        return np.where(inside, np.maximum(d, 0.0), 0.0)
 
     def grid(self) -> np.ndarray:
         """(n, n) int8 OCCUPIED / FREE / UNKNOWN, [i, j] = x, y (nav_msgs/OccupancyGrid's values)."""

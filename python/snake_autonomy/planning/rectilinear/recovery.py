@@ -5,8 +5,10 @@ asks the next behaviour of `sequence` (config/nav.yaml `recovery:`), as Nav2's r
 subtree runs its behaviours in turn (round robin): back_off (tail first along the body's own track,
 for one replan; possible when the body sweep of the way back is clear), turn (in place, towards the
 route's side, with a reshape the body sweep finds clear), wait (hold one replan: the views may clear a
-misjudged cell). A behaviour that is not possible now is skipped; none possible: wait. A valid arc
-ends the recovery (the next one starts from the sequence's beginning).
+misjudged cell). With `known_only` backing off and turning keep the body on cells the local map knows
+(seen as floor or lain on): the camera never saw what lies beside or behind the body. A behaviour
+that is not possible now is skipped; none possible: wait. A valid arc ends the recovery (the next one
+starts from the sequence's beginning).
 Progress checker (Nav2's SimpleProgressChecker): the robot must move `progress_m` within
 `progress_window_s` while it follows; if it does not, the planner recovers as if no arc were valid.
 """
@@ -27,6 +29,7 @@ class RecoveryParams:
     turn_crawl_m: float = 0.05        # a turn in place crawls on this far in a replan (4-5 mm/s on COBRA)
     progress_m: float = 0.05
     progress_window_s: float = 120.0
+    known_only: bool = True           # back off / turn only over cells seen or lain on
 
     def validate(self) -> List[str]:
         p = []
@@ -35,6 +38,8 @@ class RecoveryParams:
             p.append(f"sequence: expected a non-empty list of {', '.join(BEHAVIOURS)}, got {self.sequence!r}")
         p += [f"{k}: must be > 0, got {getattr(self, k)}" for k in
               ("back_off_m", "turn_crawl_m", "progress_m", "progress_window_s") if not getattr(self, k) > 0]
+        if not isinstance(self.known_only, bool):
+            p.append(f"known_only: must be true or false, got {self.known_only!r}")
         return p
 
 
