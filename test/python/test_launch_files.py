@@ -171,15 +171,15 @@ def test_sim_launch_world_and_mission_run_both_the_planner_commanding_only_its_l
     from the mission's navigate_to legs (no world goal) and is silent without one; the mission node
     records the run (no nav recorder)."""
     env = dict(os.environ, SNAKE_AUTONOMY_ROOT=str(root))
-    params = _dump(env, "sim.launch", "world:=config/worlds/one_obstacle.yaml", "mission:=round_the_obstacle")
-    assert params["/mission/mission"] == params["/sim/mission"] == "round_the_obstacle"
+    params = _dump(env, "sim.launch", "world:=config/worlds/one_obstacle.yaml", "mission:=tracker_planner_tracker")
+    assert params["/mission/mission"] == params["/sim/mission"] == "tracker_planner_tracker"
     assert params["/planner/command_without_goal"] == "none"
     assert "/planner/world" not in params and "/nav_record/robot" not in params
     assert params["/sim/world"] == str(root / "config/worlds/one_obstacle.yaml")
     assert params["/mission/world_frame"] == params["/planner/world_frame"] == "map"
     # rviz:=true: one viz_node (mission.launch's; rviz.launch's too would be a second /snake_viz)
     r = subprocess.run(["python3", "-c", NODES_SCRIPT, str(root / "launch" / "sim.launch"), "rviz:=true",
-                        "world:=config/worlds/one_obstacle.yaml", "mission:=round_the_obstacle"],
+                        "world:=config/worlds/one_obstacle.yaml", "mission:=tracker_planner_tracker"],
                        env=env, capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stdout + r.stderr
     nodes = set(json.loads(r.stdout.strip().splitlines()[-1]))
