@@ -8,6 +8,10 @@ Publishes   base_pose (geometry_msgs/PoseWithCovarianceStamped, motion capture o
             covariance from sim.yaml's mocap noise; feedback mocap)
             odom (nav_msgs/Odometry, the simulated RTAB-Map: camera pose, 30 Hz, null pose with
             covariance 9999 while lost; feedback vio: pose_remap_node turns it into base_pose)
+            neither with feedback vo: vio_node estimates odom from the head camera, rendered then
+            from the IMU's camera_link in an obstacle-free textured room (sim/scene.vo_room) at
+            ~vo_camera_rate_hz (10) and ~vo_camera_width x ~vo_camera_height (320x240) on the
+            camera/* topics below, with ground_truth/camera_pose (camera_link) per frame
             camera/imu (sensor_msgs/Imu, the head camera's IMU: MuJoCo's gyro and accelerometer at
             camera_link with the BMI055-like errors of sim.yaml imu: (sim/imu.py), at imu.rate_hz (200),
             frame ~imu_frame (camera_link; REP 145: rad/s, m/s^2 with gravity; no orientation:
@@ -25,7 +29,7 @@ Publishes   base_pose (geometry_msgs/PoseWithCovarianceStamped, motion capture o
 Subscribes  sim/disturbance (geometry_msgs/WrenchStamped: header.frame_id = the body, base_link or
             link_1..link_11; world-frame force and torque; lasts ~disturbance_duration_s),
             tracking_status (the mission's active waypoint: arms the mission's mid-leg disturbances).
-Params      ~feedback (mocap|vio), ~seed, ~start ("x,y,heading_deg" of the centre of mass), ~port,
+Params      ~feedback (mocap|vio|vo), ~seed, ~start ("x,y,heading_deg" of the centre of mass), ~port,
             ~sim_config, ~robot_config, ~tracker_config, ~mission (for its disturbances), ~world_frame
             (odom), ~camera_frame (camera), ~imu_frame (camera_link), ~rate_hz (physics and sensor poll,
             200), ~disturbance_duration_s.
@@ -67,12 +71,16 @@ from snake_autonomy.nodes.image_msgs import to_camera_info, to_image
 from snake_autonomy.nodes.planner_display import contact_marker, world_markers
 from snake_autonomy.paths import config_path, resolve_world_path
 from snake_autonomy.planning.rectilinear.config import NavConfig
+from snake_autonomy.perception.camera_model import R_LINK_OPTICAL, CameraIntrinsics
+from snake_autonomy.sim.camera import LinkMount
 from snake_autonomy.sim.camera_process import CameraProcess
 from snake_autonomy.sim.collisions import CollisionMonitor
 from snake_autonomy.sim.depth_noise import named_depth_model
 from snake_autonomy.sim.realtime import RealTimeSim, SimSetup
-from snake_autonomy.sim.scene import world_plant_fields
+from snake_autonomy.sim.mjcf import camera_link_in_base
+from snake_autonomy.sim.scene import vo_room, world_plant_fields
 from snake_autonomy.sim.world_file import load_world
+from snake_autonomy.transforms import matrix_to_quat
 
 
 def _pose(msg_pose, position, quat):
@@ -108,13 +116,21 @@ class SimNode:
         self.nav_cfg, self.camera = None, None
         extra = {}
         self.world = None
+        feedback = rospy.get_param("~feedback", "mocap")
+        self.vo = feedback == "vo"      # the visual-inertial odometry (vio_node) estimates from the camera
+        if self.vo and self.world_file:
+            raise ValueError("~feedback vo with a world: not supported (the planner's camera is nav.yaml's "
+                             "mount, the odometry's is the IMU's camera_link, and one render stream serves one)")
+        if self.vo:
+            room = vo_room()
+            extra = {"scene_xml": room.scene_xml, "assets_xml": room.assets_xml}
         if self.world_file:
             self.nav_cfg = NavConfig.from_yaml(rospy.get_param("~nav_config", str(config / "nav.yaml")))
             self.world = load_world(self.world_file)
             extra = world_plant_fields(self.world, self.nav_cfg.plant.flat_belly_fraction)
-        feedback = rospy.get_param("~feedback", "mocap")
-        setup = SimSetup(feedback=feedback, seed=int(rospy.get_param("~seed", 0)),
-                         sensors=("mocap", feedback, "imu"),
+        setup_feedback = "mocap" if self.vo else feedback     # vo: motion capture is the ground truth only
+        setup = SimSetup(feedback=setup_feedback, seed=int(rospy.get_param("~seed", 0)),
+                         sensors=("mocap", setup_feedback, "imu"),
                          start=start_t, port=rospy.get_param("~port", "/tmp/snake_sim_bus"),
                          sim_config=rospy.get_param("~sim_config", str(config / "sim.yaml")),
                          robot=rospy.get_param("~robot_config", str(config / "robots" / "cobra.yaml")),
@@ -130,7 +146,7 @@ class SimNode:
         self.depth_noise = (named_depth_model(self.depth_model, self.sim.params.config.depth_noise,
                                               self.nav_cfg.intrinsics.fx, self.sim.params.rng("depth_noise"))
                             if self.world_file else None)
-        self.feedback = setup.feedback
+        self.feedback = feedback
         # /clock: the plant's time from the wall time of the start. With /use_sim_time this node's own
         # rospy clock comes back from /clock, so it stamps with the value it publishes instead.
         self.use_sim_time = bool(rospy.get_param("/use_sim_time", False))
@@ -157,10 +173,16 @@ class SimNode:
         self.updater = diagnostic_updater.Updater()
         self.updater.setHardwareID("mujoco")
         self.updater.add("simulated robot", self.diagnose)
-        source = self.sim.params.config.mocap if self.feedback == "mocap" else self.sim.params.config.vio
-        self._source_rate = {"min": 0.9 * source.rate_hz, "max": 1.1 * source.rate_hz}   # the task keeps this dict
+        # the pose source's rate: motion capture's, the simulated VIO's, or (vo) the odometry camera's
+        if self.vo:
+            self.vo_camera_rate_hz = float(rospy.get_param("~vo_camera_rate_hz", 10.0))
+            source_rate_hz, source_topic = self.vo_camera_rate_hz, "camera/color/image_raw"
+        else:
+            source = self.sim.params.config.mocap if self.feedback == "mocap" else self.sim.params.config.vio
+            source_rate_hz, source_topic = source.rate_hz, "base_pose" if self.feedback == "mocap" else "odom"
+        self._source_rate = {"min": 0.9 * source_rate_hz, "max": 1.1 * source_rate_hz}   # the task keeps this dict
         self.source_freq = diagnostic_updater.HeaderlessTopicDiagnostic(
-            "base_pose" if self.feedback == "mocap" else "odom", self.updater,
+            source_topic, self.updater,
             diagnostic_updater.FrequencyStatusParam(self._source_rate, 0.0, 10))
         rospy.Subscriber("sim/disturbance", WrenchStamped, self.on_disturbance, queue_size=10)
         rospy.Subscriber("tracking_status", TrackingStatus, self.on_status, queue_size=10)
@@ -180,12 +202,26 @@ class SimNode:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self.loop, name="sim", daemon=True)
         self._thread.start()
-        if self.world_file:
+        if self.world_file or self.vo:
             self.start_camera()
 
     # -- the head camera (with a world) ---------------------------------------------------------------
     def start_camera(self):
-        self.camera_rate_hz = float(rospy.get_param("~camera_rate_hz", 0.5))
+        """The navigation camera (with a world: nav.yaml's intrinsics and mount), or with ~feedback vo the
+        odometry camera: ~vo_camera_width x ~vo_camera_height (320x240, the D435i's 615 px focal length
+        scaled) at ~vo_camera_rate_hz (10), rendered from the IMU's camera_link (sim/camera.LinkMount);
+        then ground_truth/camera_pose (camera_link) comes with every frame."""
+        if self.vo:
+            w, h = int(rospy.get_param("~vo_camera_width", 320)), int(rospy.get_param("~vo_camera_height", 240))
+            f = 615.0 * w / 640.0
+            self.intrinsics = CameraIntrinsics(w, h, f, f, w / 2.0, h / 2.0)
+            mount = LinkMount(camera_link_in_base(self.sim.robot.head_length_m, self.sim.world.camera_in_head))
+            self.camera_rate_hz = self.vo_camera_rate_hz
+            self.depth_noise = named_depth_model(self.depth_model, self.sim.params.config.depth_noise, f,
+                                                 self.sim.params.rng("depth_noise"))
+        else:
+            self.intrinsics, mount = self.nav_cfg.intrinsics, self.nav_cfg.mount
+            self.camera_rate_hz = float(rospy.get_param("~camera_rate_hz", 0.5))
         if not self.camera_rate_hz > 0:
             raise ValueError(f"~camera_rate_hz: must be > 0, got {self.camera_rate_hz}")
         self.camera_depth = bool(rospy.get_param("~camera_depth", True))
@@ -194,12 +230,13 @@ class SimNode:
         self.pub_info = rospy.Publisher("camera/color/camera_info", CameraInfo, queue_size=1)
         self.pub_depth = rospy.Publisher("camera/depth/image_rect_raw", Image, queue_size=1) \
             if self.camera_depth else None
-        self.camera = CameraProcess(self.sim.plant.mjcf, self.nav_cfg.intrinsics, self.nav_cfg.mount,
+        self.camera = CameraProcess(self.sim.plant.mjcf, self.intrinsics, mount,
                                     colour=True, depth=self.camera_depth, depth_model=self.depth_noise)
         self._camera_thread = threading.Thread(target=self.camera_loop, name="camera", daemon=True)
         self._camera_thread.start()
-        rospy.loginfo(f"head camera: {self.nav_cfg.intrinsics.width}x{self.nav_cfg.intrinsics.height} at "
-                      f"{self.camera_rate_hz:g} Hz, {self.depth_model} depth, world {self.world_file}")
+        rospy.loginfo(f"head camera: {self.intrinsics.width}x{self.intrinsics.height} at "
+                      f"{self.camera_rate_hz:g} Hz, {self.depth_model} depth, "
+                      f"{'at camera_link, the odometry room' if self.vo else f'world {self.world_file}'}")
 
     def camera_loop(self):
         period = 1.0 / self.camera_rate_hz
@@ -210,18 +247,26 @@ class SimNode:
                 t_s = self.sim.plant.time_s
                 qpos = self.sim.plant.data.qpos.copy()
                 T_wb = self.sim.plant.frame_transform("base_link")
+            stamp = self.stamp(t_s)            # the snapshot's time: the image shows the state then
             self.camera.request(t_s, qpos, T_wb)
             frame = None
             while frame is None and not self._stop.is_set():
                 frame = self.camera.poll(0.2)
             if frame is None:
                 break
-            stamp = self.stamp(frame.t_s)
             try:
-                self.pub_info.publish(to_camera_info(self.nav_cfg.intrinsics, stamp, self.optical_frame))
+                self.pub_info.publish(to_camera_info(self.intrinsics, stamp, self.optical_frame))
                 self.pub_rgb.publish(to_image(frame.rgb, "rgb8", stamp, self.optical_frame))
                 if self.pub_depth is not None:
                     self.pub_depth.publish(to_image(frame.depth_m, "32FC1", stamp, self.optical_frame))
+                if self.vo:
+                    self.source_freq.tick()
+                    gt = PoseStamped()
+                    gt.header.stamp, gt.header.frame_id = stamp, self.world_frame
+                    T = frame.T_world_camera.copy()
+                    T[:3, :3] = T[:3, :3] @ R_LINK_OPTICAL.T            # optical -> camera_link
+                    _pose(gt.pose, T[:3, 3], matrix_to_quat(T[:3, :3]))
+                    self.pub_gt_cam.publish(gt)
             except rospy.ROSException:
                 break
             st = self.camera.stats

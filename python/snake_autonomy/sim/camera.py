@@ -1,6 +1,6 @@
 """The simulated head camera: MuJoCo offscreen renders of colour, depth and segmentation.
 
-    cam = HeadCamera(plant.model, CameraIntrinsics.d435i_like(), mount=CameraMount(...))
+    cam = HeadCamera(plant.model, CameraIntrinsics.d435i_like(), mount=CameraMount(...))   # or LinkMount(T)
     frame = cam.render(plant.data, plant.frame_transform("base_link"))
     frame.rgb (H, W, 3) uint8, frame.depth_m (H, W) float32 (z along the optical axis, 0 = nothing),
     frame.labels (H, W) uint8 of LABEL_*, frame.T_world_camera (4x4, OpenCV optical frame)
@@ -14,14 +14,28 @@ Rendering sets MuJoCo's GL frustum from the intrinsics directly, so any fx, fy, 
 picks its GL backend when first imported: snake_autonomy's __init__ sets MUJOCO_GL=egl (headless)
 unless it is set.
 """
+from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
 
 from ..perception.camera_model import (GROUND_GEOMS, LABEL_BACKGROUND, LABEL_GROUND, LABEL_OBSTACLE, LABEL_ROBOT,
-                                       OBSTACLE_PREFIX, CameraFrame, CameraIntrinsics, CameraMount)
+                                       OBSTACLE_PREFIX, R_LINK_OPTICAL, CameraFrame, CameraIntrinsics, CameraMount)
 
 NEAR_CLIP_M = 0.01                  # the head camera's near clip (rendering)
+
+
+@dataclass
+class LinkMount:
+    """A camera at a link frame (x forward, y left, z up) given as its 4x4 pose in base_link: the
+    visual odometry's camera at the IMU's camera_link (sim/mjcf.camera_link_in_base), where a
+    CameraMount is the navigation camera's mount (nav.yaml camera.mount). Either is HeadCamera's mount."""
+    T_base_link: np.ndarray
+
+    def T_base_optical(self) -> np.ndarray:
+        t = np.asarray(self.T_base_link, float).copy()
+        t[:3, :3] = t[:3, :3] @ R_LINK_OPTICAL
+        return t
 
 
 class HeadCamera:

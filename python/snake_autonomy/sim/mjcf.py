@@ -76,9 +76,16 @@ def _f(x: float) -> str:
     return f"{float(x):.17g}"
 
 
+def camera_link_in_base(head_length_m: float, camera_in_head) -> np.ndarray:
+    """camera_link's 4x4 pose in base_link: head_link (thesis eq. 3.3, base . Trans(-H, 0, 0) .
+    Rx(+90 deg)) . config/camera.yaml's camera_in_head. The one place both the IMU's site and the
+    odometry camera's render (sim/camera.LinkMount) take it from."""
+    return make_transform(rot_x(np.pi / 2), (-head_length_m, 0.0, 0.0)) @ np.asarray(camera_in_head, float)
+
+
 def _imu(head_length_m: float, imu_in_head) -> tuple:
     """The IMU's site on base_link (head_link . imu_in_head) and its sensors."""
-    T = make_transform(rot_x(np.pi / 2), (-head_length_m, 0.0, 0.0)) @ np.asarray(imu_in_head, float)
+    T = camera_link_in_base(head_length_m, imu_in_head)
     x, y, z, w = matrix_to_quat(T[:3, :3])
     site = (f'      <site name="{IMU_SITE}" pos="{_f(T[0, 3])} {_f(T[1, 3])} {_f(T[2, 3])}" '
             f'quat="{_f(w)} {_f(x)} {_f(y)} {_f(z)}"/>')

@@ -119,3 +119,36 @@ def world_plant_fields(world: World, flat_belly_fraction: Optional[float]) -> di
     scene = build_scene(world)
     return {"scene_xml": scene.scene_xml, "assets_xml": scene.assets_xml, "start_base": world.start_rad,
             "flat_belly_fraction": flat_belly_fraction}
+
+
+#: the visual odometry's room (sim_node ~feedback vo without a world): walls this far from the origin
+#: on each side and this high, so that the level head camera sees texture wherever it turns
+VO_ROOM_HALF_M, VO_ROOM_HEIGHT_M = 2.5, 2.0
+_VO_WALL_COLOURS = [((0.8, 0.7, 0.3), (0.2, 0.1, 0.4)), ((0.3, 0.6, 0.8), (0.6, 0.1, 0.1)),
+                    ((0.7, 0.4, 0.6), (0.1, 0.3, 0.1)), ((0.6, 0.8, 0.5), (0.3, 0.2, 0.5))]
+
+
+def vo_room() -> Scene:
+    """An obstacle-free room for the visual odometry: a random-dot floor (texels of about 2 cm) and four
+    random-dot walls (about 4 cm), VO_ROOM_HALF_M from the origin. The walls are obstacles to the
+    contacts' count (obstacle_<k>) but stand beyond a short run's reach."""
+    half, h = VO_ROOM_HALF_M, 0.5 * VO_ROOM_HEIGHT_M
+    assets = ['    <texture name="floor_tex" type="2d" builtin="flat" mark="random" random="0.5" '
+              'rgb1="0.55 0.5 0.45" rgb2="0.55 0.5 0.45" markrgb="0.25 0.2 0.2" width="256" height="256"/>',
+              '    <material name="floor_mat" texture="floor_tex" texrepeat="1 1"/>']
+    # one directional light towards each wall (a single one leaves the walls it skims dark: too few
+    # ORB features there) and some ambient light
+    scene = [f'    <light name="scene_light_{k}" dir="{_v(d)}" directional="true" diffuse="0.35 0.35 0.35" '
+             f'ambient="{"0.25 0.25 0.25" if k == 0 else "0 0 0"}" castshadow="false"/>'
+             for k, d in enumerate([(1, 0.2, -1), (-1, -0.2, -1), (-0.2, 1, -1), (0.2, -1, -1)])]
+    scene += [f'    <geom name="floor_visual" type="plane" pos="0 0 0.0002" size="{half:.6g} {half:.6g} 0.1" '
+             'material="floor_mat" contype="0" conaffinity="0"/>']
+    walls = [((half, 0.0), (0.02, half)), ((-half, 0.0), (0.02, half)), ((0.0, half), (half, 0.02)),
+             ((0.0, -half), (half, 0.02))]
+    for k, (((x, y), (sx, sy)), (rgb, mark)) in enumerate(zip(walls, _VO_WALL_COLOURS)):
+        assets += [f'    <texture name="wall_tex_{k}" type="2d" builtin="flat" mark="random" random="0.5" '
+                   f'rgb1="{_v(rgb)}" rgb2="{_v(rgb)}" markrgb="{_v(mark)}" width="128" height="128"/>',
+                   f'    <material name="wall_mat_{k}" texture="wall_tex_{k}" texrepeat="1 1"/>']
+        scene.append(f'    <geom name="obstacle_{k}" type="box" pos="{_v((x, y, h))}" size="{_v((sx, sy, h))}" '
+                     f'material="wall_mat_{k}" contype="2" conaffinity="1"/>')
+    return Scene("\n".join(scene) + "\n", "\n".join(assets) + "\n")

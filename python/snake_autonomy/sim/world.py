@@ -126,6 +126,7 @@ class SimWorld:
                  start_base_pose(self.robot, self.kinematics, spec.start, self.heading_offset_rad))
         camera_in_head = (load_camera_calibration(self.config.calibration_path()).camera_in_head
                           if {"vio", "imu"} & set(sensors) else None)
+        self.camera_in_head = camera_in_head    # camera_link in head_link (config/camera.yaml), or None
         self.plant = Plant(self.robot, self.params, start=start, scene_xml=spec.scene_xml,
                            assets_xml=spec.assets_xml, imu_in_head=camera_in_head if "imu" in sensors else None)
         self.backend = MujocoServoBackend(self.plant)
