@@ -1,0 +1,104 @@
+"""estimation/vio_stream.py: colour and depth paired by stamp, the IMU samples up to a frame fed before
+it, a frame waiting for its IMU sample at most imu_wait_s, a newer pair replacing an unprocessed one,
+an exception inside the fusion counted (failed) and published as lost at the last pose, lost
+intervals opened and closed. The fusion is a stand-in that records its calls."""
+import numpy as np
+import pytest
+
+from snake_autonomy.estimation.vio_fusion import FusedResult
+from snake_autonomy.estimation.visual_odometry import LOST, LOST_COVARIANCE, OK
+from snake_autonomy.estimation.vio_stream import VioStream
+
+
+class FakeFusion:
+    def __init__(self):
+        self.calls, self.fail_at, self.lost_at = [], set(), set()
+
+    def add_imu(self, t, g, a):
+        self.calls.append(("imu", t))
+
+    def add_frame(self, rgb, depth, stamp):
+        self.calls.append(("frame", stamp))
+        if stamp in self.fail_at:
+            raise RuntimeError("indeterminate system")
+        T = np.eye(4)
+        T[0, 3] = stamp
+        lost = stamp in self.lost_at
+        cov = np.eye(6) * (LOST_COVARIANCE if lost else 1e-4)
+        return FusedResult(stamp, T, T, np.zeros(3), cov, cov, LOST if lost else OK, "lost" if lost else "", None)
+
+
+class Clock:
+    t = 0.0
+
+    def __call__(self):
+        return self.t
+
+
+@pytest.fixture
+def stream():
+    clock = Clock()
+    s = VioStream(np.diag([300.0, 300.0, 1.0]), np.eye(4), imu_wait_s=0.1, clock=clock)
+    s.fusion = FakeFusion()
+    return s, clock
+
+
+def frame(s, t):
+    s.add_colour(t, np.zeros((4, 4, 3), np.uint8))
+    s.add_depth(t, np.zeros((4, 4), np.float32))
+
+
+def test_a_frame_waits_for_its_imu_then_takes_the_samples_up_to_it(stream):
+    s, clock = stream
+    for k in range(5):
+        s.add_imu(0.005 * k, np.zeros(3), np.zeros(3))
+    frame(s, 0.03)
+    assert s.step() is None                      # the IMU has not reached 0.03 yet
+    s.add_imu(0.03, np.zeros(3), np.zeros(3))
+    s.add_imu(0.035, np.zeros(3), np.zeros(3))
+    out = s.step()
+    assert out.ok and out.stamp == 0.03 and out.T_world_link[0, 3] == 0.03
+    assert s.fusion.calls == [("imu", 0.005 * k) for k in range(5)] + [("imu", 0.03), ("frame", 0.03)]
+    frame(s, 0.1)
+    clock.t = 0.05
+    assert s.step() is None
+    clock.t = 0.2                                # waited imu_wait_s: processed with what there is
+    assert s.step().stamp == 0.1 and s.fusion.calls[-2:] == [("imu", 0.035), ("frame", 0.1)]
+
+
+def test_pairs_by_stamp_and_a_newer_pair_replaces_an_unprocessed_one(stream):
+    s, clock = stream
+    s.add_imu(10.0, np.zeros(3), np.zeros(3))
+    s.add_colour(1.0, np.zeros((4, 4, 3), np.uint8))
+    s.add_depth(1.1, np.zeros((4, 4), np.float32))     # not the colour's stamp: no frame
+    assert s.step() is None
+    frame(s, 1.2)
+    frame(s, 1.3)
+    assert s.step().stamp == 1.3 and s.stats.dropped == 1 and s.step() is None
+
+
+def test_a_failing_frame_is_counted_and_published_lost_at_the_last_pose(stream):
+    s, clock = stream
+    s.add_imu(10.0, np.zeros(3), np.zeros(3))
+    s.fusion.fail_at = {0.2}
+    s.fusion.lost_at = {0.3}
+    outs = []
+    for t in (0.1, 0.2, 0.3, 0.4):
+        frame(s, t)
+        outs.append(s.step())
+    assert [o.ok for o in outs] == [True, False, False, True]
+    assert outs[1].T_world_link[0, 3] == 0.1 and np.all(np.diag(outs[1].covariance) == LOST_COVARIANCE)
+    assert "RuntimeError: indeterminate system" in outs[1].reason
+    st = s.stats
+    assert (st.frames, st.tracked, st.lost, st.failed) == (4, 2, 2, 1)
+    assert st.lost_intervals == [(0.2, 0.4)] and not st.lost_now()
+    summary = st.summary()
+    assert summary["lost_intervals"] == 1 and summary["lost_s_total"] == pytest.approx(0.2)
+
+
+def test_a_failure_before_any_estimate_publishes_nothing(stream):
+    s, clock = stream
+    s.add_imu(10.0, np.zeros(3), np.zeros(3))
+    s.fusion.fail_at = {0.1}
+    frame(s, 0.1)
+    assert s.step() is None and s.stats.failed == 1 and s.stats.lost_now()
