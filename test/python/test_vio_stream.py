@@ -68,6 +68,7 @@ def test_a_frame_waits_for_its_imu_then_takes_the_samples_up_to_it(stream):
 
 def test_pairs_by_stamp_and_a_newer_pair_replaces_an_unprocessed_one(stream):
     s, clock = stream
+    s.add_imu(0.0, np.zeros(3), np.zeros(3))
     s.add_imu(10.0, np.zeros(3), np.zeros(3))
     s.add_colour(1.0, np.zeros((4, 4, 3), np.uint8))
     s.add_depth(1.1, np.zeros((4, 4), np.float32))     # not the colour's stamp: no frame
@@ -79,6 +80,7 @@ def test_pairs_by_stamp_and_a_newer_pair_replaces_an_unprocessed_one(stream):
 
 def test_a_failing_frame_is_counted_and_published_lost_at_the_last_pose(stream):
     s, clock = stream
+    s.add_imu(0.0, np.zeros(3), np.zeros(3))
     s.add_imu(10.0, np.zeros(3), np.zeros(3))
     s.fusion.fail_at = {0.2}
     s.fusion.lost_at = {0.3}
@@ -98,7 +100,18 @@ def test_a_failing_frame_is_counted_and_published_lost_at_the_last_pose(stream):
 
 def test_a_failure_before_any_estimate_publishes_nothing(stream):
     s, clock = stream
+    s.add_imu(0.0, np.zeros(3), np.zeros(3))
     s.add_imu(10.0, np.zeros(3), np.zeros(3))
     s.fusion.fail_at = {0.1}
     frame(s, 0.1)
     assert s.step() is None and s.stats.failed == 1 and s.stats.lost_now()
+
+
+def test_a_first_frame_without_imu_samples_before_it_is_dropped_not_failed(stream):
+    s, clock = stream
+    s.add_imu(1.0, np.zeros(3), np.zeros(3))
+    frame(s, 0.5)                               # the IMU started after it: nothing to level on
+    assert s.step() is None and s.stats.dropped == 1 and s.stats.failed == 0 and s.fusion.calls == []
+    s.add_imu(1.1, np.zeros(3), np.zeros(3))
+    frame(s, 1.05)
+    assert s.step().ok and s.fusion.calls == [("imu", 1.0), ("frame", 1.05)]

@@ -122,8 +122,10 @@ class VioStream:
             self._pending = None
             samples = [s for s in self._imu if s[0] <= stamp]
             self._imu = [s for s in self._imu if s[0] > stamp]
-        if stamp <= self._last_frame_t:
-            self.stats.dropped += 1                  # an old frame (a restarted stream): not fusable
+        if stamp <= self._last_frame_t or (not samples and self._last_frame_t == -np.inf):
+            # an old frame (a restarted stream), or a first frame with no IMU sample before it (the
+            # fusion levels its first pose on the specific force): not fusable
+            self.stats.dropped += 1
             return None
         self._last_frame_t = stamp
         t0 = self.clock()
