@@ -17,7 +17,11 @@ The mission node wires it to topics; the simulator can drive it directly. Safety
   ROS side): the tracker is not stepped and `Decision.navigating` tells the caller not to send gait
   commands; the leg ends reached (the tracker goes on with the next waypoint) or aborts the mission
   with the navigator's reason, naming the leg. Abort, pause, time limit and close cancel the leg's goal
-  (a leg paused is sent again on resume). Without a navigator a leg aborts the mission.
+  (a leg paused is sent again on resume). Without a navigator a leg aborts the mission. A leg reached
+  (the navigator's goal succeeded, or the centre of mass inside its ``radius_m``) is followed by its
+  after-hold: the hold gait every tick for ``leg_hold_s`` (the body straightens and comes to rest), then
+  the leg's scout stop or the tracker's gait at the next tick, so the driver hears a command every tick
+  from the planner's last one on.
 
 Heading. The tracker's yaw is the direction the robot travels when it sidewinds. ``com_pose`` carries
 the virtual chassis (x axis along the body, eq. 3.11-3.14); ``heading_offset_rad`` (config/tracker.yaml
@@ -28,7 +32,7 @@ thesis states for COBRA; +90 deg on the simulated COBRA, which sidewinds towards
 import math
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Tuple
 
 from ..control import TrackerCommand, WaypointTracker, YawMovingAverage
 from .mission import Mission
@@ -60,7 +64,10 @@ class MissionRunner:
     def __init__(self, mission: Mission, pose_timeout_s: float = 0.5, yaw_window: int = 10,
                  min_fresh_samples: Optional[int] = None, heading_offset_rad: float = 0.0,
                  scout_planner: Optional[ScoutPlanner] = None,
-                 executor: Optional[TrajectoryExecutor] = None, navigator: Optional[Navigator] = None):
+                 executor: Optional[TrajectoryExecutor] = None, navigator: Optional[Navigator] = None,
+                 leg_hold_s: Optional[float] = None):
+        """leg_hold_s: the after-hold of a reached navigate_to leg; None: the navigator's ``settle_s``
+        (MoveBaseNavigator's ~nav_settle_s), 0 when it has none."""
         if not (isinstance(pose_timeout_s, (int, float)) and math.isfinite(pose_timeout_s) and pose_timeout_s > 0):
             raise ValueError(f"pose_timeout_s: must be a positive number, got {pose_timeout_s!r}")
         self.mission = mission
@@ -87,6 +94,13 @@ class MissionRunner:
         self.paused: Optional[str] = None      # why the mission holds until resume() (a driver fault)
         self.navigator = navigator
         self._leg_t0: Optional[float] = None   # when the navigate_to leg under way was sent
+        if leg_hold_s is None:
+            leg_hold_s = getattr(navigator, "settle_s", 0.0)
+        if not (isinstance(leg_hold_s, (int, float)) and math.isfinite(leg_hold_s) and leg_hold_s >= 0):
+            raise ValueError(f"leg_hold_s: must be a number of seconds >= 0, got {leg_hold_s!r}")
+        self.leg_hold_s = float(leg_hold_s)
+        # a reached leg's after-hold under way: (until when, the leg's index, its leg_state)
+        self._after_leg: Optional[Tuple[float, int, str]] = None
 
     @property
     def hold_gait(self) -> str:
@@ -190,6 +204,10 @@ class MissionRunner:
             return self._hold(t_s, self.outcome, stale=False, finished=True)
         if self.paused is not None:
             return self._hold(t_s, f"paused: {self.paused} (resume to go on)", stale=False)
+        if self._after_leg is not None:
+            d = self._after_leg_tick(t_s)
+            if d is not None:
+                return d
         if self.tracker.waypoint_index in self.mission.legs:
             return self._navigate(t_s, self.tracker.waypoint_index)
         problem = self.pose_problem(t_s)
@@ -256,9 +274,9 @@ class MissionRunner:
             self.filter.reset()     # the yaw while the planner drove says nothing of the tracker's heading
             if self.tracker.done:
                 self.state, self.outcome = DONE, "done: every waypoint reached"
-            elif index in self.mission.scouts:
-                self._start_scout(t_s, index)
-            return self._leg_decision(t_s, index, f"reached: {text}", distance, reached=True)
+                return self._leg_decision(t_s, index, f"reached: {text}", distance, reached=True)
+            self._after_leg = (t_s + self.leg_hold_s, index, f"reached: {text}")
+            return self._after_leg_tick(t_s, distance, reached=True)
         if state == LEG_FAILED:
             self._leg_t0 = None     # the goal has ended: nothing to cancel
             self.abort(f"{leg.describe(index)}: {text}")
@@ -268,17 +286,36 @@ class MissionRunner:
             return self._leg_decision(t_s, index, "time limit reached", distance, finished=True)
         return self._leg_decision(t_s, index, text or state, distance)
 
+    def _after_leg_tick(self, t_s: float, distance: float = NAN, reached: bool = False) -> Optional[Decision]:
+        """A tick of a reached leg's after-hold: the hold while it lasts; once over, the leg's scout stop
+        starts, or None and the tracker goes on at this tick. The reached tick itself always reports the
+        leg reached (the run's metrics count it there)."""
+        until, index, leg_state = self._after_leg
+        holding = t_s < until
+        if not holding:
+            self._after_leg = None
+            if index in self.mission.scouts:
+                self._start_scout(t_s, index)
+        if holding or reached:
+            note = f"{leg_state}; holding {until - t_s:.1f} s before going on" if holding else leg_state
+            d = self._leg_decision(t_s, index, note, distance, reached, driving=False)
+            d.trajectory_active = self.scout is not None and self.scout.trajectory_active
+            return d
+        return self._scouting(t_s, self.scout.phase) if self.scout is not None else None
+
     def _leg_decision(self, t_s: float, index: int, leg_state: str, distance: float = NAN,
-                      reached: bool = False, finished: bool = False) -> Decision:
-        """The decision of a leg's tick: no gait command while it runs, the hold when the mission ended."""
+                      reached: bool = False, finished: bool = False, driving: bool = True) -> Decision:
+        """The decision of a leg's tick: no gait command while the navigator drives, the hold in its
+        after-hold (driving False) and when the mission ended."""
         tr, ended = self.tracker, finished or self.state != RUNNING
+        navigating = driving and not ended
         note = f"{self.mission.legs[index].describe(index)}: {leg_state}"
         status = dict(waypoint_index=tr.waypoint_index, num_waypoints=len(self.mission.waypoints),
                       waypoint_reached=reached, distance=distance, yaw_error_abs=NAN, yaw_error_rel=NAN,
                       yaw_error=NAN, w=NAN, mode=tr.mode, delta=0.0,
-                      gait=self.hold_gait if ended else NAVIGATE_TO, done=tr.done, pose_stale=False, note=note)
-        return Decision(t_s, self.hold_gait, False, 0.0, status, hold=ended, finished=ended,
-                        outcome=self.outcome if ended else "", navigating=not ended, leg_state=leg_state)
+                      gait=NAVIGATE_TO if navigating else self.hold_gait, done=tr.done, pose_stale=False, note=note)
+        return Decision(t_s, self.hold_gait, False, 0.0, status, hold=not navigating, finished=ended,
+                        outcome=self.outcome if ended else "", navigating=navigating, leg_state=leg_state)
 
     def _cancel_leg(self) -> None:
         if self._leg_t0 is not None:

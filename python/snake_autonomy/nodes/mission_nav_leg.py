@@ -7,10 +7,12 @@ Settle         before the goal goes out the mission node sends its hold (repeate
                ~nav_settle_s (4 s): the tracker's gait (sidewinding, a turn) decays to a straight body at
                rest, and the planner's first replan sees a camera frame taken from there. From the goal on
                the mission node sends nothing: planner_node commands until the goal ends (its last command
-               the stop gait keeping the body's curvature). After a SUCCEEDED goal the same hold straightens
-               the body for ~nav_settle_s before the runner hears of it and the tracker goes on. Without
-               either settle the simulated COBRA rolled over: onto its side when the rectilinear gait took
-               over mid-sidewind, onto its back when sidewinding started from the curved rectilinear stop.
+               the stop gait keeping the body's curvature). The leg reached (the goal SUCCEEDED or the
+               centre of mass inside radius_m), the runner's after-hold (MissionRunner leg_hold_s, this
+               navigator's settle_s) sends the hold every tick for ~nav_settle_s, straightening the body,
+               and the tracker's gait follows at the next tick. Without either settle the simulated COBRA
+               rolled over: onto its side when the rectilinear gait took over mid-sidewind, onto its back
+               when sidewinding started from the curved rectilinear stop.
 Params         ~nav_server_timeout_s (10: a leg's wait for the move_base server), ~nav_settle_s (4; 0: none).
 Outcomes       SUCCEEDED: the leg is reached. ABORTED, PREEMPTED (by another goal on the planner),
                REJECTED, RECALLED, LOST: the leg failed, with the server's text; the runner aborts the
@@ -52,8 +54,8 @@ def move_base_goal(leg: NavLegSpec, frame_id: str) -> MoveBaseGoal:
 class MoveBaseNavigator:
     def __init__(self, world_frame: str, server_timeout_s: float, action_name: str = "move_base",
                  settle_s: float = 0.0, hold: Optional[Callable[[str], None]] = None):
-        """hold(why): sends the mission's hold gait, logged unless why is empty (the settles around a goal;
-        settle_s 0: none)."""
+        """hold(why): sends the mission's hold gait, logged unless why is empty (the settle before a goal;
+        settle_s 0: none). The runner reads settle_s for its after-hold of a reached leg."""
         if not (math.isfinite(server_timeout_s) and server_timeout_s > 0):
             raise ValueError(f"~nav_server_timeout_s: must be a positive number of seconds, got {server_timeout_s!r}")
         if not (math.isfinite(settle_s) and settle_s >= 0):
@@ -153,17 +155,7 @@ class MoveBaseNavigator:
         text = self.client.get_goal_status_text()
         text = f"move_base goal {word}" + (f": {text}" if text else "")
         (rospy.loginfo if state == SUCCEEDED else rospy.logwarn)(f"navigate_to leg: {text}")
-        if state == SUCCEEDED and self.settle_s > 0 and self.hold is not None:
-            threading.Thread(target=self._settle_then, args=(generation, text), daemon=True,
-                             name="navigate_to-settle").start()
-        else:
-            self._set(generation, state, text)
-
-    def _settle_then(self, generation: int, text: str) -> None:
-        """After a SUCCEEDED goal (in a thread: the client's callback returns at once): the hold, then the
-        leg reached."""
-        if self._settle(generation, ACTIVE, "the tracker goes on"):
-            self._set(generation, SUCCEEDED, text)
+        self._set(generation, state, text)
 
     def _set(self, generation: int, state: str, text: str) -> None:
         with self.lock:
