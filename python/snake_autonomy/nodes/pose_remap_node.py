@@ -14,7 +14,11 @@ Params      ~camera_config (config/camera.yaml: the lost-tracking thresholds; an
             ~extrinsic (tf: the camera's pose in the head from TF, ~head_frame (head_link) ->
             ~camera_frame (camera_link): the URDF's fixed joint, generated from camera.yaml, which stays
             the one file a person edits; poses wait until the transform is known | file: camera.yaml).
+Shutdown    a rospy.on_shutdown hook (run before rospy closes the topics) stops the timer and the odom
+            callbacks (odometry ignored) and waits for the one under way: nothing is published to a closed topic.
 """
+import threading
+
 import diagnostic_updater
 import numpy as np
 import rospy
@@ -64,6 +68,8 @@ class PoseRemapNode:
             self.tf_listener = tf2_ros.TransformListener(self.tf_buffer)
         self.gate = TrackingGate(load_gate_params(self.camera_config))
         self.last_state = None
+        self.lock = threading.Lock()     # one callback at a time; stop() waits for the one under way
+        self.stopped = False
         self.pub_pose = rospy.Publisher("base_pose", PoseWithCovarianceStamped, queue_size=10)
         self.updater = diagnostic_updater.Updater()
         self.updater.setHardwareID("rtabmap_odometry")
@@ -72,10 +78,18 @@ class PoseRemapNode:
             "base_pose", self.updater, diagnostic_updater.FrequencyStatusParam({"min": 1.0, "max": 1000.0}, 0.0, 10))
         rospy.Subscriber("odom", Odometry, self.on_odom, queue_size=20)
         rospy.Service("~reset", Trigger, self.srv_reset)
-        rospy.Timer(rospy.Duration(0.1), self.on_timer)
+        self.timer = rospy.Timer(rospy.Duration(0.1), self.on_timer)
+        rospy.on_shutdown(self.stop)
         self.on_state_change()
         rospy.loginfo(f"pose remapper: H = {self.head_length} m, camera extrinsic from "
                       f"{self.extrinsic_source or f'TF {self.head_frame} -> {self.camera_frame} (waiting)'}")
+
+    def stop(self):
+        """No more work in callbacks once the one under way is done: the timer stopped, odometry ignored
+        (unregistering would call the master, which may be gone)."""
+        with self.lock:
+            self.stopped = True
+            self.timer.shutdown()
 
     # -- the extrinsic -------------------------------------------------------------------------------
     def use_extrinsic(self, camera_in_head, source):
@@ -105,6 +119,11 @@ class PoseRemapNode:
 
     # -- odometry in, base pose out ------------------------------------------------------------------
     def on_odom(self, msg):
+        with self.lock:
+            if not (self.stopped or rospy.is_shutdown()):
+                self.remap(msg)
+
+    def remap(self, msg):
         if not self.try_tf_extrinsic():
             return
         p, q = msg.pose.pose.position, msg.pose.pose.orientation
@@ -129,6 +148,12 @@ class PoseRemapNode:
             self.on_state_change()
 
     def on_timer(self, _event):
+        with self.lock:
+            if not (self.stopped or rospy.is_shutdown()):
+                self.check_state()
+
+    def check_state(self):
+        """The stale-pose check between odometry messages, and the periodic /diagnostics."""
         self.try_tf_extrinsic()
         self.gate.state_at(rospy.get_time())
         if self.gate.state != self.last_state:
@@ -157,8 +182,11 @@ class PoseRemapNode:
         return stat
 
     def srv_reset(self, _req):
-        self.gate.reset()
-        self.on_state_change()
+        with self.lock:
+            if self.stopped:
+                return TriggerResponse(success=False, message="the pose remapper is shutting down")
+            self.gate.reset()
+            self.on_state_change()
         return TriggerResponse(success=True, message="lost-tracking state reset: the next good pose is accepted")
 
 
