@@ -149,7 +149,13 @@ class DriverTrajectory(DriverTestCase):
         def finals():
             with self.status_lock:
                 return [s for s in self.statuses if s.id in ids and s.phase in ended]
-        wait_for(lambda: {s.id for s in finals()} == set(ids), 15.0, "a final status for each of the 20")
+        try:
+            wait_for(lambda: {s.id for s in finals()} == set(ids), 15.0, "a final status for each of the 20")
+        except AssertionError as e:     # say which ended and which did not, and every status seen of them
+            with self.status_lock:
+                seen = [(s.id, s.phase, s.abort) for s in self.statuses if s.id in ids]
+            missing = sorted(set(ids) - {s.id for s in finals()})
+            raise AssertionError(f"{e}: no final status for {missing}; statuses seen: {seen}") from None
         rospy.sleep(1.0)  # a duplicate would come within the next publisher cycles
         got = finals()
         self.assertEqual(sorted(s.id for s in got), sorted(ids), "exactly one final status each")
