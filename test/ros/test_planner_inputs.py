@@ -59,8 +59,16 @@ class PlannerInputsTest(unittest.TestCase):
         cls.timer = rospy.Timer(rospy.Duration(0.05), cls.stream)
 
     @classmethod
+    def tearDownClass(cls):
+        # Stopped before rospy closes the publishers, so no publish() to a closed topic at exit.
+        cls.poses_on = cls.frames_on = False
+        cls.timer.shutdown()
+
+    @classmethod
     def stream(cls, _event):
         """Poses at 20 Hz and depth frames at 4 Hz while switched on."""
+        if rospy.is_shutdown():
+            return
         now = rospy.Time.now()
         if cls.poses_on:
             m = PoseWithCovarianceStamped()
