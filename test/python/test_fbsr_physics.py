@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from snake_autonomy import _core
+from snake_autonomy.planning.fbsr import collision
 from snake_autonomy.planning.fbsr.build import build_planner
 from snake_autonomy.runs.scout_execute import centre_of_pressure, run_plan, self_contacts
 from snake_autonomy.sim.config import SimConfig, servo_torque_limit_nm
@@ -76,3 +77,34 @@ def test_cli_run_writes_metrics_with_the_contract_keys(tmp_path):
                       "planned_head_height_m", "max_torque_ratio", "active_modules"}
     assert m["tipped"] is False and m["outcome"] == "ok" and m["active_modules"] == 2
     assert (out / "plan.json").is_file()
+
+
+def test_cobra_raise_makes_no_link_link_contact_in_physics(root):
+    """COBRA's tail once curled to 3.3 mm of module 2 (config/scout.yaml's lying posture): the plan
+    kept that gap, but the first raise's load on the servos closed it in physics and modules 2 and
+    11 touched for 193 steps (seed 1). The lying posture must leave room for the servos to give."""
+    planner = build_planner("cobra", torque_limit_nm=servo_torque_limit_nm())[0]
+    plan = planner.plan(seed=1)
+    result = run_plan(plan, root / "config/sim.yaml", seed=1)
+    assert result["extra"]["self_contact_steps"] == 0
+    assert result["metrics"]["outcome"] == "ok", result["extra"]["reason"]
+
+
+def test_the_planners_capsules_are_the_plants_link_geoms(root):
+    """The planner's clearance of every non-adjacent pair of modules equals MuJoCo's distance
+    between the two link geoms (same radius, same end points), in COBRA's lying posture."""
+    planner = build_planner("cobra", torque_limit_nm=servo_torque_limit_nm())[0]
+    chain = planner.chain
+    pose = chain.pose(chain.q_lying)
+    heading = float(np.arctan2(pose.rotations[0][1, 0], pose.rotations[0][0, 0]))
+    params = SimConfig.from_yaml(root / "config/sim.yaml").draw(0, num_joints=chain.num_joints)
+    plant = Plant(chain.robot, params, start=(*pose.positions[0, :2], heading), q0_rad=chain.q_lying)
+    model, data = plant.model, plant.data
+    mujoco.mj_forward(model, data)
+    geoms = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name)
+             for name in ["head"] + [f"link_{i + 1}" for i in range(chain.num_joints)]]
+    pairs = collision.module_pairs(chain.num_modules)
+    planned = collision.clearances(pose.positions, chain.radius_m, pairs)
+    fromto = np.zeros(6)
+    plant_m = [mujoco.mj_geomDistance(model, data, geoms[i], geoms[j], 1.0, fromto) for i, j in pairs]
+    np.testing.assert_allclose(plant_m, planned, atol=1e-6)

@@ -325,7 +325,7 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
                       resting_modules(chain, plan.q_end, plan.active_modules))
     plant.step(SETTLE_S)
     monitor.base_from = plan.active_modules
-    step = (lambda t: (monitor(), record.append((t, plant.frame_positions())))) \
+    step = (lambda t: (monitor(t), record.append((t, plant.frame_positions())))) \
         if record is not None else monitor
     send_through_driver(plant, plan, sample_period_s, step)
     for _ in range(int(round(HOLD_S / DRIVER_PERIOD_S))):
