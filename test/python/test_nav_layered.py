@@ -105,6 +105,17 @@ def test_body_sweep_reshape_swings_into_an_obstacle_inside_the_bend():
     assert left.free_m < 0 and right.free_m == pytest.approx(0.3)
 
 
+@pytest.mark.parametrize("keeps_centroid", [True, False])
+def test_body_sweep_body_now_is_where_every_sweep_starts(keeps_centroid):
+    sweep = BodySweep(COBRA, CFG.follower, SweepParams(reshape_keeps_centroid=keeps_centroid))
+    for kappa in (-1.2, 0.0, 0.7):
+        now = sweep.body_now(kappa)
+        assert now.shape == sweep.sweep(kappa, -kappa, 0.3).rows[0].shape
+        np.testing.assert_allclose(now, sweep.sweep(kappa, 1.5, 0.3).rows[0], atol=1e-12)
+    # a bent body is not the straight one: the ends lie off the x axis
+    assert abs(sweep.body_now(1.0)[0, 1]) > 0.05
+
+
 def test_body_sweep_crawl_stops_before_an_obstacle_ahead():
     sweep = BodySweep(COBRA, CFG.follower, SweepParams())
     m = _map_with([[0.5, 0.0]])

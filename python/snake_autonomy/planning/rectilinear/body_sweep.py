@@ -76,6 +76,12 @@ class BodySweep:
         k = np.sign(kappa) * max(0.0, abs(kappa) - self.params.dead_band_per_m)
         return self.fp.omega(float(k))
 
+    def body_now(self, kappa_now: float) -> np.ndarray:
+        """(N, 2) the body's stations now (base_link at the ground frame's origin, heading 0): a sweep's
+        row 0, without its reshape and crawl."""
+        middle = middle_pose((0.0, 0.0, 0.0), kappa_now, self.geometry.half_length_m)
+        return _uniform_shapes(middle, np.array([kappa_now]), self._s, self.params.reshape_keeps_centroid)[0, :, :2]
+
     def sweep(self, kappa_now: float, kappa_new: float, travel_m: float) -> Sweep:
         """The body's stations from its shape now (base_link at the ground frame's origin, heading 0)
         through the reshape to kappa_new and travel_m of crawl (negative: backwards)."""

@@ -69,7 +69,7 @@ class LayeredPlanner:
         T_world_g = T_world_ground(pose)
         self.map.add_view(ground, self.intrinsics.K(), T_world_g @ np.asarray(T_ground_camera, float))
         kappa_now = self.follower.kappa_per_m
-        body_now = self.sweep.sweep(kappa_now, kappa_now, 0.0).rows[0]
+        body_now = self.sweep.body_now(kappa_now)
         half = 0.5 * self.sweep.geometry.width_m
         self.map.mark_body(world_xy(T_world_g, body_now),
                            half + (self.cfg.local_map.start_free_m if self.map.updates == 1 else 0.0))

@@ -17,6 +17,7 @@ computed once per update) and whether a point was seen free; grid_route.py plans
 numpy + scipy only: costmap_2d and grid_map are C++ ROS libraries, and the planner must run without
 ROS in the batch simulator.
 """
+import functools
 import math
 from dataclasses import dataclass
 from typing import List, Tuple
@@ -154,16 +155,22 @@ class LocalMap:
         clear an obstacle's mark, only make its surroundings known."""
         if self.origin is None:
             return
-        r = int(np.floor(radius_m / self.params.cell_m))
-        a = np.arange(-r, r + 1)
-        di, dj = np.meshgrid(a, a, indexing="ij")
-        disc = di ** 2 + dj ** 2 <= r * r
+        di, dj = self._disc(int(np.floor(radius_m / self.params.cell_m)))
         i, j, inside = self.cells(xy)
-        ii = (i[inside, None] + di[disc][None, :]).ravel()
-        jj = (j[inside, None] + dj[disc][None, :]).ravel()
+        ii = (i[inside, None] + di[None, :]).ravel()
+        jj = (j[inside, None] + dj[None, :]).ravel()
         ok = (ii >= 0) & (ii < self.n) & (jj >= 0) & (jj < self.n)
         self.swept[ii[ok], jj[ok]] = True
         self._unknown_dist = None
+
+    @staticmethod
+    @functools.lru_cache(maxsize=8)
+    def _disc(r: int):
+        """The cell offsets (di, dj) within r cells of a cell (a handful of radii per run: cached)."""
+        a = np.arange(-r, r + 1)
+        di, dj = np.meshgrid(a, a, indexing="ij")
+        disc = di ** 2 + dj ** 2 <= r * r
+        return di[disc], dj[disc]
 
     def _cell_ids(self, xy: np.ndarray) -> np.ndarray:
         """The distinct flat indices of the window's cells the points fall in (points outside: none)."""
