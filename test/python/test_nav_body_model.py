@@ -96,6 +96,19 @@ def test_cobra_reshapes_about_its_centroid_not_its_middle():
     assert 0.1 < r.lateral_m[0] < 0.25 and 0.1 < r.lateral_m[-1] < 0.25, r.lateral_m
 
 
+def test_the_12_link_robot_reshapes_about_its_centroid_too():
+    """The 12-link robot (L 0.84 m), straight to 3 /m in 3 s, then 2.5 s on: measured head +0.180, tail
+    +0.117 m to the inside, the frames at the middle -0.058..-0.076 m to the OUTSIDE, the centroid
+    +0.018 m. Keeping the centroid, body_poses says +0.18 at the ends and -0.08 at the middle; about the
+    middle, +0.26 and 0. About 2 s."""
+    from snake_autonomy.runs.turn_sweep import reshape_step
+    r = reshape_step(3.0, "chang_rectilinear")
+    assert abs(r.centroid_m) < 0.04
+    mid = r.lateral_m[len(r.lateral_m) // 2 - 1:len(r.lateral_m) // 2 + 2]
+    assert (mid < -0.04).all(), r.lateral_m
+    assert 0.08 < r.lateral_m[0] < 0.23 and 0.08 < r.lateral_m[-1] < 0.23, r.lateral_m
+
+
 def test_body_poses_keeping_the_centroid():
     """The model of the test above (body_model.body_poses keep_centroid): from straight to 1 /m the
     centroid stays, the middle goes (1 - sin(u) / u) / kappa = 0.093 m to the outside (u = 0.755) and
