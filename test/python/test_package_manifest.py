@@ -34,6 +34,7 @@ THIRD_PARTY = {
     "actionlib": ("rosdep", "actionlib"), "actionlib_msgs": ("rosdep", "actionlib_msgs"),
     "move_base_msgs": ("rosdep", "move_base_msgs"),
     "cv_bridge": ("rosdep", "cv_bridge"), "image_geometry": ("rosdep", "image_geometry"),
+    "dynamic_reconfigure": ("rosdep", "dynamic_reconfigure"),
     "mujoco": ("pypi", "mujoco"), "evo": ("pypi", "evo"), "rosbags": ("pypi", "rosbags"),
     "dynamixel_sdk": ("pypi", "dynamixel-sdk"), "shapely": ("pypi", "shapely"),
     "cv2": ("pypi", "opencv-python-headless"), "sklearn": ("pypi", "scikit-learn"), "joblib": ("pypi", "joblib"),

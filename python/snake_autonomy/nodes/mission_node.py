@@ -21,7 +21,9 @@ Services    mission/load (snake_autonomy/LoadMission), mission/start, mission/ab
             ~auto_start and `rosservice call` (the one-line stop of any run) need no action client.
 Diagnostics /diagnostics (diagnostic_updater): "mission" (state, mission, waypoint, distance, last
             scout stop; WARN while holding for a stale pose, ERROR when a run aborted) and
-            "tracking_status topic status" (the tracker's rate against ~rate_hz).
+            "tracking_status topic status" (the tracker's rate against ~rate_hz), "tracker gains".
+Reconfigure ~tracker (dynamic_reconfigure, cfg/Tracker.cfg): kp, delta0_deg, delta_lim_deg at run time, for the
+            running mission and every later one (nodes/gain_tuning.py); start values from ~tracker_config.
 Time        with use_sim_time the node waits for the first /clock before it loads or starts anything.
 Params      ~mission (file or provided name: loaded at start-up), ~auto_start (false), ~tracker_config
             (config/tracker.yaml), ~tracker_overrides (a YAML file whose `tracker:` section is merged
@@ -49,6 +51,8 @@ import rospy
 import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Pose, PoseArray, PoseStamped, PoseWithCovarianceStamped
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from std_srvs.srv import Trigger, TriggerResponse
 
@@ -57,6 +61,7 @@ from snake_autonomy.missions.runner import DONE, MissionRunner
 from snake_autonomy.missions.scout import fbsr_scout_planner
 from snake_autonomy.msg import (BoundState, GaitCommand, RunMissionAction, RunMissionFeedback, RunMissionResult,
                                 TrackingStatus, WaypointResult)
+from snake_autonomy.nodes.gain_tuning import TrackerGains
 from snake_autonomy.nodes.mission_action import DecisionSeries, fill_feedback, fill_result, mission_from_goal
 from snake_autonomy.nodes.mission_goal_frame import GoalFrames
 from snake_autonomy.nodes.mission_nav_leg import MoveBaseNavigator
@@ -74,23 +79,8 @@ RECORDED = {  # topic -> type, recorded into the run's bag besides com_pose and 
     "ground_truth/base_pose": PoseStamped,
     "ground_truth/camera_pose": PoseStamped,
     "ground_truth/com_pose": PoseStamped,
+    "odom": Odometry, "joint_states": JointState, "bound_state": BoundState,
 }
-
-
-def _optional_types():
-    out = {}
-    try:
-        from nav_msgs.msg import Odometry
-        out["odom"] = Odometry
-    except ImportError:
-        pass
-    try:
-        from sensor_msgs.msg import JointState
-        out["joint_states"] = JointState
-    except ImportError:
-        pass
-    out["bound_state"] = BoundState
-    return out
 
 
 class MissionNode:
@@ -154,7 +144,6 @@ class MissionNode:
         self._rec_subs = []
         if self.record:
             types = dict(RECORDED)
-            types.update(_optional_types())
             types.update(standard_topic_types())
             for topic, msg_type in types.items():
                 self._rec_subs.append(rospy.Subscriber(topic, msg_type, self._recorder(topic), queue_size=100))
@@ -173,6 +162,7 @@ class MissionNode:
         self._rate = {"min": 0.9 * self.rate_hz, "max": 1.1 * self.rate_hz}   # the task keeps this dict
         self.status_freq = diagnostic_updater.HeaderlessTopicDiagnostic(
             "tracking_status", self.updater, diagnostic_updater.FrequencyStatusParam(self._rate, 0.0, 10))
+        self.gains = TrackerGains(self)   # the ~tracker Server, "tracker gains" on /diagnostics
         rospy.Timer(rospy.Duration(1.0), lambda _e: self.updater.update())
         self.set_state("idle")
 
@@ -198,9 +188,9 @@ class MissionNode:
         planner = executor = None
         if mission.scouts:
             planner, executor = self.scout_parts()
-        return MissionRunner(mission, self.pose_timeout_s, self.yaw_window,
-                             heading_offset_rad=self.heading_offset_rad, scout_planner=planner, executor=executor,
-                             navigator=self.navigator)
+        return self.gains.tuned_runner(MissionRunner(
+            mission, self.pose_timeout_s, self.yaw_window, heading_offset_rad=self.heading_offset_rad,
+            scout_planner=planner, executor=executor, navigator=self.navigator))
 
     def scout_parts(self):
         """The scout planner (FBSR, ~robot) and the executor that publishes driver/joint_trajectory,
@@ -533,7 +523,7 @@ class MissionNode:
         source = Path(self.mission.source)
         text = source.read_text() if source.is_file() else yaml.safe_dump(self.mission.raw)
         self.log = RunLog(self.run_dir, self.mission.name, self.mission.waypoints, t, mission_yaml=text,
-                          tracker=self.mission.tracker_params,
+                          tracker=dict(vars(self.runner.tracker.params)),   # with gains tuned at run time
                           extra={"rate_hz": self.rate_hz, "pose_timeout_s": self.pose_timeout_s,
                                  "heading_offset_deg": math.degrees(self.heading_offset_rad),
                                  "tracker_config": self.defaults.get("source", ""),

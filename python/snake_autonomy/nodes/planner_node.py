@@ -22,6 +22,9 @@ Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with cur
             /diagnostics ("planner: navigation": WARN with no free arc, OK otherwise; replans, stops,
             distance to the goal, the follower's mode, the goal and its source, goals refused),
             nav/goal (visualization_msgs/Marker, latched: the goal's disc; planner_goals.py).
+Reconfigure ~follower (dynamic_reconfigure, cfg/Follower.cfg): the follower's k_heading, lookahead_m and
+            kappa_rate_per_m_s at run time, applied at the next tick (nodes/gain_tuning.py); start values from
+            ~nav_config's follower:; "planner: follower gains" on /diagnostics shows the ones in use.
 Goals       optional at start: ~world (a world file: its goal and goal radius) or ~goal ("x,y", the world
             frame) + ~goal_radius_m; without either the robot holds (state no_goal) until a goal comes:
             move_base_simple/goal (geometry_msgs/PoseStamped: rviz's "2D Nav Goal") or the action below,
@@ -67,6 +70,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from snake_autonomy import _core
 from snake_autonomy.msg import GaitCommand
+from snake_autonomy.nodes.gain_tuning import FollowerGains
 from snake_autonomy.nodes.image_msgs import from_camera_info, from_image, to_image
 from snake_autonomy.nodes.planner_display import local_grid, occupancy, traversability_mask
 from snake_autonomy.nodes.planner_goals import PARAMETER, Goal, GoalServer
@@ -145,6 +149,7 @@ class PlannerNode:
         self.updater = diagnostic_updater.Updater()
         self.updater.setHardwareID("rectilinear_planner")
         self.updater.add("navigation", self.diagnose)
+        self.gains = FollowerGains(self)   # the ~follower Server, "follower gains" on /diagnostics
         self.goals = GoalServer(self._goal(), self.goal_radius_m, self.abort_after_s, lambda: self.world_frame)
         g = self.guarded
         rospy.Subscriber("camera/color/camera_info", CameraInfo, g(self.on_info, "camera_info"), queue_size=1)
@@ -293,6 +298,7 @@ class PlannerNode:
         now = rospy.Time.now()
         goal, seq = self.goals.poll()            # what arrived since the last tick: the goal now
         loop = self.loop
+        self.gains.before_tick(loop)             # gains tuned since the last tick (dynamic_reconfigure)
         if loop is None:
             self.gate(goal is not None)
             self.publish_command(True, 0.0, straight=True)
