@@ -170,7 +170,7 @@ def test_a_plan_that_lifts_twelve_modules_off_a_five_module_base_tips_in_physics
     m, extra = result["metrics"], result["extra"]
     assert m["tipped"] is True and m["outcome"] == "tipped"
     assert m["cop_inside_fraction"] > 0.99
-    assert extra["max_base_lift_m"] > 0.05
+    assert extra["max_base_lift_m"] > 0.05 and extra["max_stage_base_rise_m"] >= extra["max_base_lift_m"]
     assert extra["longest_com_outside_s"] > 1.0 and extra["base_load_fraction"] < 0.8
     assert extra["air_load_fraction"] > 0.2
     assert m["final_head_height_m"] < 0.1
@@ -187,6 +187,7 @@ def test_a_plan_the_planner_made_holds_its_base_in_physics(root):
     assert result["metrics"]["outcome"] == "ok"
     assert extra["base_load_fraction"] == pytest.approx(1.0, abs=0.05) and extra["air_load_fraction"] < 0.01
     assert extra["min_com_margin_m"] > 0.01 and extra["longest_com_outside_s"] == 0.0
+    assert 0.0 <= extra["max_stage_base_rise_m"] < scout_execute.BASE_GAP_M
 
 
 def test_cli_refuses_a_pipe_the_head_does_not_get_into_with_where_it_ended(tmp_path, capsys):

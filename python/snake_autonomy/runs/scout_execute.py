@@ -226,6 +226,7 @@ class Monitor:
         self.torque_limit_nm = torque_limit_nm
         self.radius_m = float(plant.robot.link_radius_m)
         self.inside, self.max_torque_ratio, self.max_lift_m = [], 0.0, 0.0
+        self.max_stage_base_rise_m = 0.0   # the current stage's base frames, highest above the floor
         self.no_pressure_steps = 0    # steps with no floor contact pushing up: no CoP to check
         self.longest_no_pressure, self._no_pressure_run = 0, 0
         self.base_from = plant.robot.num_frames   # frames >= this index are the final base
@@ -268,6 +269,8 @@ class Monitor:
         first = self.base_at(t)
         on_base = modules >= first
         base = frames[first:]
+        if len(base):
+            self.max_stage_base_rise_m = max(self.max_stage_base_rise_m, float((base[:, 2] - self.radius_m).max()))
         base_contacts = np.vstack([points[on_base], base[base[:, 2] - self.radius_m < BASE_GAP_M, :2]])
         com = self.plant.center_of_mass()[:2]
         self.com_margins.append(float(Support.of(base_contacts).signed_distance([com])[0]))
@@ -350,6 +353,7 @@ def run_plan(plan: Plan, sim_yaml, seed: int = 0, pipe=None,
         "active_modules": int(plan.active_modules),
     }
     extra = {"head_xy_m": head[:2].tolist(), "max_base_lift_m": monitor.max_lift_m,
+             "max_stage_base_rise_m": monitor.max_stage_base_rise_m,
              "no_pressure_steps": monitor.no_pressure_steps,
              "self_contact_steps": monitor.self_contact_steps,
              "base_load_fraction": measured.base_load_fraction, "air_load_fraction": measured.air_load_fraction,
