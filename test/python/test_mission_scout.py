@@ -167,3 +167,42 @@ def test_a_refused_lowering_aborts_the_mission_with_the_head_held_up():
         t += 1.0
     assert r.state == "aborted" and "lowering: the executor refused" in r.outcome
     assert d.finished and d.trajectory_active and [n for _, n in ex.sent] == ["raise"]
+
+
+class DoneNavigator:
+    """A navigator whose goal has succeeded as soon as it is sent."""
+    settle_s = 0.0
+
+    def __init__(self):
+        self.sent = []
+
+    def send(self, index, leg):
+        self.sent.append(index)
+
+    def poll(self):
+        return ("succeeded", "move_base goal succeeded") if self.sent else ("pending", "")
+
+    def cancel(self):
+        pass
+
+
+def test_scout_on_a_last_navigate_to_leg_raises_there_then_finishes_the_mission():
+    m = validate_mission({"waypoints": [[0.5, 0.0, 0.0], {"navigate_to": {"x_m": 1.0, "y_m": 0.0},
+                                                          "scout": {"height_m": 0.3, "hold_s": 2}}]}, "leg")
+    ex, nav = FakeExecutor(), DoneNavigator()
+    r = MissionRunner(m, pose_timeout_s=1e6, yaw_window=1, scout_planner=planner(), executor=ex, navigator=nav)
+    r.start(0.0)
+    r.on_pose(0.0, 0.5, 0.0, 0.0)
+    r.step(0.5)                               # the tracker reaches waypoint 0: the leg is next
+    d = r.step(1.0)                           # the leg's goal is sent and has succeeded
+    assert nav.sent == [1] and d.status["waypoint_reached"] and not d.finished and r.scout is not None
+    assert r.scout.wait_planned(WAIT_S)
+    t, decisions = 2.0, []
+    while r.state == "running" and t < 30.0:
+        decisions.append(r.step(t))
+        t += 1.0
+    # raise 4 s, hold 2 s, lower 3 s: done at the tick the lowering has finished, never a gait before
+    assert r.state == "done" and decisions[-1].finished and r.outcome == "done: every waypoint reached"
+    assert [n for _, n in ex.sent] == ["raise", "lower"] and r.scout_log[0].outcome == "done"
+    assert r.scout_log[0].waypoint_index == 1 and decisions[-1].t_s == ex.sent[1][0] + 3.0
+    assert all(x.hold and x.gait == "hold" for x in decisions)

@@ -21,7 +21,8 @@ The mission node wires it to topics; the simulator can drive it directly. Safety
   (the navigator's goal succeeded, or the centre of mass inside its ``radius_m``) is followed by its
   after-hold: the hold gait every tick for ``leg_hold_s`` (the body straightens and comes to rest), then
   the leg's scout stop or the tracker's gait at the next tick, so the driver hears a command every tick
-  from the planner's last one on.
+  from the planner's last one on. A scout stop on the last waypoint (a leg's or the tracker's) ends the
+  mission once the head is down.
 
 Heading. The tracker's yaw is the direction the robot travels when it sidewinds. ``com_pose`` carries
 the virtual chassis (x axis along the body, eq. 3.11-3.14); ``heading_offset_rad`` (config/tracker.yaml
@@ -197,6 +198,9 @@ class MissionRunner:
                 d = self.final_decision(t_s)
                 d.trajectory_active = True
                 return d
+            if self.tracker.done:  # the last waypoint's stop is over, the head down: the mission ends
+                self.state, self.outcome = DONE, "done: every waypoint reached"
+                return self._hold(t_s, self.outcome, stale=False, finished=True)
         limit = self.mission.time_limit_s
         if limit is not None and t_s - self.t_start > limit:
             self.state, self.outcome = TIMEOUT, f"timeout: time limit {limit:g} s reached"
@@ -272,7 +276,7 @@ class MissionRunner:
             self._leg_t0 = None
             self.tracker.skip()
             self.filter.reset()     # the yaw while the planner drove says nothing of the tracker's heading
-            if self.tracker.done:
+            if self.tracker.done and index not in self.mission.scouts:
                 self.state, self.outcome = DONE, "done: every waypoint reached"
                 return self._leg_decision(t_s, index, f"reached: {text}", distance, reached=True)
             self._after_leg = (t_s + self.leg_hold_s, index, f"reached: {text}")
