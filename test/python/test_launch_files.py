@@ -54,15 +54,53 @@ def test_driver_launch_mock_port_follows_the_clone_and_hardware_port_stays(root)
     assert _dump(env, "mission.launch", "results_dir:=/data/runs")["/mission/results_dir"] == "/data/runs"
 
 
-def test_sim_launch_lists_no_required_arg(root):
-    """`roslaunch --ros-args`: every arg a user may leave out has a default (roslaunch calls an arg with
-    an empty default "Required")."""
-    r = subprocess.run(["roslaunch", "--ros-args", "snake_autonomy", "sim.launch"], capture_output=True, text=True,
+@pytest.mark.parametrize("name", LAUNCH_FILES)
+def test_no_launch_file_lists_a_required_arg(root, name):
+    """`roslaunch --ros-args`: every arg a user may leave out has a default (roslaunch calls an arg whose
+    default, or computed value, is empty "Required")."""
+    r = subprocess.run(["roslaunch", "--ros-args", "snake_autonomy", name], capture_output=True, text=True,
                        timeout=120)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "Required" not in r.stdout, r.stdout
-    for arg in ("world", "classifier", "results_dir", "robot", "record"):
-        assert f"\n  {arg} (default " in r.stdout, arg
+    if name == "sim.launch":
+        for arg in ("world", "classifier", "results_dir", "robot", "record"):
+            assert f"\n  {arg} (default " in r.stdout, arg
+
+
+def test_the_defaults_that_mean_none_give_the_nodes_what_empty_gave(root):
+    """none / config defaults (not empty, see above) reach the nodes as before: no mission (load via
+    mission/load), no tracker overrides, the odometry's frame, config/driver.yaml's bus latency; and an
+    empty value given on the command line still means the same."""
+    env = dict(os.environ, SNAKE_AUTONOMY_ROOT=str(root))
+    for extra in ((), ("mission:=", "tracker_overrides:=", "results_dir:=")):
+        mission = _dump(env, "mission.launch", *extra)
+        assert (mission["/mission/mission"], mission["/mission/tracker_overrides"]) == ("", "")
+        assert mission["/mission/results_dir"] == str(root / "results")
+        assert os.path.samefile(mission["/mission/scout_config"], root / "config" / "scout.yaml")
+    assert _dump(env, "mission.launch", "mission:=star")["/mission/mission"] == "star"
+    assert _dump(env, "orchestration.launch")["/pose_remapper/world_frame"] == ""
+    assert _dump(env, "pose_remap.launch", "world_frame:=map")["/pose_remapper/world_frame"] == "map"
+    driver_yaml = yaml.safe_load((root / "config" / "driver.yaml").read_text())
+    assert _dump(env, "driver.launch")["/driver/bus_latency_s"] == driver_yaml["bus_latency_s"]
+    assert _dump(env, "driver.launch", "bus_latency_s:=")["/driver/bus_latency_s"] == driver_yaml["bus_latency_s"]
+    assert _dump(env, "driver.launch", "mock:=true")["/driver/bus_latency_s"] == 0.05
+
+
+def test_rviz_launch_sets_a_fixed_frame_only_when_given(root):
+    script = ("import sys, roslaunch.config, roslaunch.xmlloader\n"
+              "cfg = roslaunch.config.load_config_default([(sys.argv[1], sys.argv[2:])], None, verbose=False,\n"
+              "    loader=roslaunch.xmlloader.XmlLoader(resolve_anon=False), assign_machines=False)\n"
+              "print([n.args for n in cfg.nodes if n.name == 'rviz'][0])")
+
+    def rviz_args(*args):
+        r = subprocess.run(["python3", "-c", script, str(root / "launch" / "rviz.launch"), *args],
+                           capture_output=True, text=True, timeout=120)
+        assert r.returncode == 0, r.stdout + r.stderr
+        return r.stdout.strip().splitlines()[-1].split()
+
+    assert rviz_args()[0] == "-d" and rviz_args()[1].endswith("/rviz/snake.rviz") and len(rviz_args()) == 2
+    assert rviz_args("fixed_frame:=")[2:] == []
+    assert rviz_args("fixed_frame:=map")[2:] == ["-f", "map"]
 
 
 def test_sim_launch_robot_reaches_every_node_and_a_world_is_recorded(root):
