@@ -63,3 +63,30 @@ def test_sim_launch_makes_a_relative_world_absolute_against_the_shell_directory(
     assert _world_params(cwd, "~/w.yaml", HOME=str(world.parent)) == (str(world), str(world))
     assert _world_params(cwd, "") == (None, None)               # no world: the mission run, no planner
     assert _world_params(cwd, "none") == (None, None)
+
+
+def test_a_world_name_is_the_packages_world_as_a_mission_name_is(root, world):
+    """world:=NAME (no '/', no .yaml suffix) is config/worlds/NAME.yaml of the package, from any directory;
+    a file name with its suffix stays a file of the shell's directory."""
+    cwd = world.parent
+    sim_world, planner_world = _world_params(cwd, "one_obstacle")
+    assert sim_world == planner_world
+    assert os.path.samefile(sim_world, root / "config" / "worlds" / "one_obstacle.yaml")
+    assert _world_params(cwd, "w.yaml") == (str(world), str(world))
+
+
+def test_bringup_resolves_world_as_sim_launch_does(root, world):
+    env = dict(os.environ, PWD=str(world.parent.parent), SNAKE_AUTONOMY_ROOT=str(root))
+    args = ("bus:=sim", "camera:=sim", "odometry:=sim")
+
+    def dump(w):
+        r = subprocess.run(["roslaunch", "--dump-params", "snake_autonomy", "bringup.launch", *args, f"world:={w}"],
+                           cwd=world.parent.parent, env=env, capture_output=True, text=True, timeout=120)
+        assert r.returncode == 0, r.stdout + r.stderr
+        params = yaml.safe_load(r.stdout)
+        assert params.get("/sim/world") == params.get("/planner/world")
+        return params.get("/sim/world")
+
+    assert os.path.samefile(dump("corridor"), root / "config" / "worlds" / "corridor.yaml")
+    assert dump("sub/w.yaml") == str(world)
+    assert dump("none") is None
