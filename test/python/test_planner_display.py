@@ -1,5 +1,6 @@
 """planner_display: the obstacle map rasterised into nav/map's OccupancyGrid (the cells a known
-polygon covers, the grid's bound), the traversability mask, and a world's ground-truth markers."""
+polygon covers, the grid's bound), the traversability mask, a world's ground-truth markers, the
+simulated robot's contacts as markers; rviz/nav.rviz displays every one of these topics."""
 import math
 
 import numpy as np
@@ -9,8 +10,11 @@ from shapely.geometry import Point, box
 pytest.importorskip("nav_msgs.msg")
 pytest.importorskip("visualization_msgs.msg")
 
-from snake_autonomy.nodes.planner_display import (FREE, OCCUPIED, grid_window, local_grid, occupancy,  # noqa: E402
-                                                  rasterise, traversability_mask, world_markers)
+from snake_autonomy.nodes.planner_display import (FREE, OCCUPIED, contact_markers, grid_window,  # noqa: E402
+                                                  local_grid, occupancy, rasterise, traversability_mask,
+                                                  world_markers)
+from snake_autonomy.runs.recorded_topics import CONTACT_TEXT  # noqa: E402
+from snake_autonomy.sim.collisions import ContactEpisode  # noqa: E402
 from snake_autonomy.planning.rectilinear.local_map import LocalMap, LocalMapParams  # noqa: E402
 from snake_autonomy.sim.world_file import World  # noqa: E402
 from visualization_msgs.msg import Marker  # noqa: E402
@@ -115,3 +119,29 @@ def test_world_markers_show_every_obstacle_and_the_goal_disc():
     assert (goal.type, goal.pose.position.x, goal.pose.position.y) == (Marker.CYLINDER, 2.0, 0.5)
     assert goal.scale.x == pytest.approx(0.6)
     assert len({(m.ns, m.id) for m in markers[1:]}) == 3
+
+
+def test_contact_markers_hold_every_episode_where_its_link_touched():
+    episodes = [ContactEpisode(1.0, "obstacle_0", "link_3", 0.4, -0.1),
+                ContactEpisode(2.5, "obstacle_2", "base_link", 1.2, 0.3)]
+    markers = contact_markers(episodes, 0, "map").markers
+    assert [(m.id, m.type, m.header.frame_id) for m in markers] == [(0, Marker.SPHERE, "map"),
+                                                                    (1, Marker.SPHERE, "map")]
+    assert [(m.pose.position.x, m.pose.position.y) for m in markers] == [(0.4, -0.1), (1.2, 0.3)]
+    assert [m.text.split(CONTACT_TEXT) for m in markers] == [["link_3", "obstacle_0"], ["base_link", "obstacle_2"]]
+    assert all(m.pose.position.z > 0 and m.scale.x > 0 and m.color.a > 0 for m in markers)
+    assert contact_markers([], 0, "map").markers == []
+
+
+def test_the_navigation_rviz_config_displays_every_topic_of_the_planner_and_the_simulated_world(root):
+    import yaml
+    cfg = yaml.safe_load((root / "rviz" / "nav.rviz").read_text())
+    displays = cfg["Visualization Manager"]["Displays"]
+    enabled = {d.get("Topic") or d.get("Marker Topic") or d.get("Image Topic"): d.get("Enabled") for d in displays}
+    shown = {"nav/map", "nav/path", "nav/route", "nav/arcs", "nav/goal", "nav/traversability", "viz/path",
+             "sim/world_markers", "sim/contact_markers"}
+    assert {topic: enabled.get(topic) for topic in shown} == dict.fromkeys(shown, True)
+    assert "nav/traversability_mask" in enabled          # configured, off at start (the overlay shows the same)
+    tools = cfg["Visualization Manager"]["Tools"]
+    assert {"Class": "rviz/SetGoal", "Topic": "move_base_simple/goal"}.items() <= next(
+        t for t in tools if t["Class"] == "rviz/SetGoal").items()

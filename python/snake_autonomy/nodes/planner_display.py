@@ -10,7 +10,8 @@ builders: no node, no master (planner_node and sim_node publish them).
 - world_markers(): a world file's obstacles and goal disc (sim/world_file.py World) ->
   visualization_msgs/MarkerArray (sim/world_markers: the simulation's ground truth, not what the
   planner knows).
-- contact_marker(): one contact episode of the simulated robot (sim/contacts).
+- contact_marker(): one contact episode of the simulated robot (sim/contacts);
+  contact_markers(): every episode so far (sim/contact_markers, latched, shown in rviz/nav.rviz).
 """
 import math
 from typing import Optional, Tuple
@@ -164,3 +165,10 @@ def contact_marker(episode, index: int, stamp, frame_id: str) -> Marker:
     m.color = CONTACT_COLOUR
     m.text = f"{episode.link}{CONTACT_TEXT}{episode.obstacle}"
     return m
+
+
+def contact_markers(episodes, stamp, frame_id: str) -> MarkerArray:
+    """Every contact episode so far, one contact_marker each (ids = the episodes' order): a latched array
+    shows rviz, and anything started after a contact, all of them (a lone Marker reaches only those
+    subscribed when it is sent)."""
+    return MarkerArray(markers=[contact_marker(e, i, stamp, frame_id) for i, e in enumerate(episodes)])

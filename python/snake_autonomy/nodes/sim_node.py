@@ -51,7 +51,8 @@ Contacts between the robot and the obstacles are counted per episode as the batc
 them (sim/collisions.py): "obstacle_contacts" and "min_clearance_m" (sampled at 5 Hz) in the
 "sim: simulated robot" diagnostics, a ROS_WARN and a marker on sim/contacts (visualization_msgs/Marker,
 a sphere where the link touched, text "LINK touched OBSTACLE"; planner_display.contact_marker) at
-each new episode.
+each new episode, and sim/contact_markers (visualization_msgs/MarkerArray, latched: every episode so
+far, as rviz/nav.rviz shows them).
 """
 import math
 import threading
@@ -68,7 +69,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from snake_autonomy.msg import GaitCommand, TrackingStatus, TrajectoryStatus
 from snake_autonomy.nodes.image_msgs import to_camera_info, to_image
-from snake_autonomy.nodes.planner_display import contact_marker, world_markers
+from snake_autonomy.nodes.planner_display import contact_marker, contact_markers, world_markers
 from snake_autonomy.paths import config_path, resolve_world_path
 from snake_autonomy.planning.rectilinear.config import NavConfig
 from snake_autonomy.perception.camera_model import R_LINK_OPTICAL, CameraIntrinsics
@@ -167,6 +168,7 @@ class SimNode:
         self.pub_gt_com = rospy.Publisher("ground_truth/com_pose", PoseStamped, queue_size=10)
         if self.world is not None:   # latched: rviz started later still gets them
             self.pub_contact = rospy.Publisher("sim/contacts", Marker, queue_size=10)
+            self.pub_contacts_all = rospy.Publisher("sim/contact_markers", MarkerArray, queue_size=1, latch=True)
             self.pub_world = rospy.Publisher("sim/world_markers", MarkerArray, queue_size=1, latch=True)
             self.pub_world.publish(world_markers(self.world, rospy.Time.now(), self.world_frame))
         self.last_status = None
@@ -336,6 +338,7 @@ class SimNode:
                 rospy.logwarn(f"sim: {e.link} touched {e.obstacle} at ({e.x_m:.2f}, {e.y_m:.2f}) m "
                               f"({self.contacts.collisions} contact episode(s) so far)")
                 self.pub_contact.publish(contact_marker(e, i, rospy.Time.now(), self.world_frame))
+            self.pub_contacts_all.publish(contact_markers(self.contacts.episodes, rospy.Time.now(), self.world_frame))
 
     def stamp(self, t_s):
         if not self.use_sim_time:
