@@ -56,6 +56,7 @@ class FakeTrajectory:
 class FakeExecutor:
     def __init__(self, refuse=()):
         self.sent, self.refuse, self._end = [], set(refuse), -math.inf
+        self.heights = []                   # what head_height_m returns, call after call (then NaN)
 
     def execute(self, trajectory, t_s):
         if trajectory.name in self.refuse:
@@ -66,6 +67,9 @@ class FakeExecutor:
 
     def finished(self, t_s):
         return t_s >= self._end
+
+    def head_height_m(self):
+        return self.heights.pop(0) if self.heights else math.nan
 
 
 def planner(fail=None, gate=None):
@@ -154,6 +158,28 @@ def test_scout_at_the_last_waypoint_finishes_the_mission_after_lowering():
     assert d.finished and r.state == "done"
     assert [n for _, n in ex.sent] == ["raise", "lower"] and r.scout_log[0].outcome == "done"
     assert t == ex.sent[1][0] + 3.0 and ex.sent[1][0] >= ex.sent[0][0] + 4.0
+
+
+def test_the_measured_head_height_is_the_lowest_the_executor_reads_while_held():
+    m = validate_mission({"waypoints": [{"pose": [1.0, 0.0, 0.0], "scout": {"hold_s": 3}}]}, "held")
+    ex = FakeExecutor()
+    r = arrive(m, planner(), ex)
+    r.step(1.0)
+    assert r.scout.wait_planned(WAIT_S)
+    t = 2.0
+    while r.scout.phase != "holding":
+        r.step(t)
+        t += 1.0
+    ex.heights = [0.31, math.nan, 0.29]            # one per tick while held; a NaN (no pose) is skipped
+    while r.scout.phase == "holding":
+        r.step(t)
+        t += 1.0
+    assert ex.heights == []                         # all three read: held 3 s, polled every second
+    ex.heights = [0.05]                             # read after the hold: not the held height
+    while not r.step(t).finished:
+        t += 1.0
+    rec = r.scout_log[0].as_dict()
+    assert rec["outcome"] == "done" and rec["measured_head_height_m"] == pytest.approx(0.29)
 
 
 def test_a_refused_lowering_aborts_the_mission_with_the_head_held_up():

@@ -8,7 +8,8 @@ Checks: the mission ends done with both waypoints reached (metrics.json); the le
 as one move_base goal that SUCCEEDED, and the planner drove it with the rectilinear gait; the scout stop
 is on the leg's waypoint, done, its phases in order, held hold_s; while raised the head (TF world frame
 -> base_link) rose to the planned 0.3 m within 3 cm (sim_scout's tolerance) and was down again at the
-end; the simulated robot touched no cylinder and never rolled over (sim_node's diagnostics).
+end, and metrics.json's measured_head_height_m (base_pose's z while held) is within 3 cm of the plan;
+the simulated robot touched no cylinder and never rolled over (sim_node's diagnostics).
 """
 import glob
 import json
@@ -117,6 +118,9 @@ class SimThreeSystemsTest(unittest.TestCase):
                       f"m), last {heads[-1]:.3f} m; sim_node {sim}")
         self.assertLess(abs(top - stop["planned_head_height_m"]), HEAD_TOL_M)
         self.assertLess(heads[-1], 0.1, "the head was not lowered")
+        # metrics.json's measured height: the lowest base_pose z while held, as the batch run reports it
+        self.assertIsNotNone(stop["measured_head_height_m"], stop)
+        self.assertLess(abs(stop["measured_head_height_m"] - stop["planned_head_height_m"]), HEAD_TOL_M, stop)
 
         self.assertEqual(sim.get("rolled_over"), "False", f"sim_node: {sim}")
         self.assertEqual(sim.get("obstacle_contacts"), "0", f"sim_node: {sim}")

@@ -72,6 +72,10 @@ class TrajectoryExecutor(Protocol):
     def finished(self, t_s: float) -> bool:
         """The last trajectory sent has reached its last point (which is then held)."""
 
+    def head_height_m(self) -> float:
+        """The head's height above the floor as the executor's side measures it now (the robot's pose
+        source on the ROS side); NaN when it has none. Sampled while held: the record's lowest."""
+
 
 ScoutPlanner = Callable[[ScoutSpec], ScoutPlan]
 
@@ -104,7 +108,7 @@ class ScoutRecord:
     outcome: str = ""                        # "done" or "failed: <why>"
     planned_head_height_m: float = math.nan
     planning_time_s: float = math.nan
-    measured_head_height_m: float = math.nan                 # the lowest while held (the simulator's)
+    measured_head_height_m: float = math.nan                 # the lowest while held (batch: the plant's)
     phases: Dict[str, float] = field(default_factory=dict)   # phase -> mission time it began
 
     def as_dict(self) -> dict:
@@ -170,12 +174,22 @@ class ScoutStop:
         elif self.phase == RAISING and self.executor.finished(t_s):
             self._enter(t_s, HOLDING)
             self._hold_until = t_s + rec.spec.hold_s
-        elif self.phase == HOLDING and t_s >= self._hold_until:
-            self._send(t_s, self.plan.lower_trajectory, LOWERING)
+        elif self.phase == HOLDING:
+            self._measure_head()
+            if t_s >= self._hold_until:
+                self._send(t_s, self.plan.lower_trajectory, LOWERING)
         elif self.phase == LOWERING and self.executor.finished(t_s):
             self._enter(t_s, DONE)
             rec.outcome = DONE
         return self.phase
+
+    def _measure_head(self) -> None:
+        """The lowest head height the executor measures while the raise is held (none: stays NaN)."""
+        z = self.executor.head_height_m()
+        if math.isfinite(z):
+            rec = self.record
+            rec.measured_head_height_m = z if math.isnan(rec.measured_head_height_m) \
+                else min(rec.measured_head_height_m, z)
 
     def _send(self, t_s, trajectory, phase) -> None:
         why = self.executor.execute(trajectory, t_s)

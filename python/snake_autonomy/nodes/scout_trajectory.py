@@ -5,18 +5,22 @@ joint_N, radians, time_from_start; header.stamp zero: start on receipt). `TopicT
 is missions/scout.py's TrajectoryExecutor for the mission node: it publishes on
 `driver/joint_trajectory` (the driver's TrajectorySource) with a header.frame_id of its own
 (the driver's id for it) and counts it finished when `driver/trajectory_status` says so for that id:
-done (the last point held), aborted or refused (`aborted` keeps why). Pure wiring: no node, no master
-needed to build a message.
+done (the last point held), aborted or refused (`aborted` keeps why). The head's height while a raise is
+held is base_pose's z (base_link is the head module; the robot's pose source: motion capture or the
+remapped odometry). Pure wiring: no node, no master needed to build a message.
 """
+import math
 import threading
 
 import rospy
+from geometry_msgs.msg import PoseWithCovarianceStamped
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from snake_autonomy.msg import TrajectoryStatus
 
 TOPIC = "driver/joint_trajectory"
 STATUS_TOPIC = "driver/trajectory_status"
+POSE_TOPIC = "base_pose"            # base_link's pose: its z is the head's height
 ENDED = ("done", "aborted", "refused")
 
 
@@ -46,8 +50,16 @@ class TopicTrajectoryExecutor:
         self._ended = {}                    # trajectory id -> its final TrajectoryStatus
         self._id, self._count = None, 0
         self.aborted = ""
+        self._head_z = math.nan
         if subscribe:
             self.sub = rospy.Subscriber(STATUS_TOPIC, TrajectoryStatus, self.on_status)
+            self.pose_sub = rospy.Subscriber(POSE_TOPIC, PoseWithCovarianceStamped, self.on_pose, queue_size=1)
+
+    def on_pose(self, msg) -> None:
+        self._head_z = msg.pose.pose.position.z
+
+    def head_height_m(self) -> float:
+        return self._head_z
 
     def on_status(self, msg) -> None:
         if msg.phase in ENDED:

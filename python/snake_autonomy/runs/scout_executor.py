@@ -56,6 +56,10 @@ class DriverTrajectoryExecutor:
             self.aborted = f"{p['abort']}: {p['reason']}"
         return True
 
+    def head_height_m(self) -> float:
+        """NaN: the batch run measures the plant's head itself, every physics step (runs/batch.py)."""
+        return float("nan")
+
     @property
     def active(self) -> bool:
         return self._sequence is not None
