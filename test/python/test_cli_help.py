@@ -3,6 +3,8 @@ commands report progress on stderr unless told not to."""
 import argparse
 import json
 
+import pytest
+
 from snake_autonomy import cli
 
 from conftest import ROOT
@@ -70,3 +72,11 @@ def test_nav_run_with_no_progress_prints_no_bar(tmp_path, capsys):
     captured = capsys.readouterr()
     assert "%|" not in captured.err and "sim s" not in captured.err
     json.loads(captured.out.strip().splitlines()[-1])
+
+
+@pytest.mark.parametrize("extra,bar", [((), True), (("--no-progress",), False)])
+def test_nav_eval_perception_counts_its_rendered_scenes_on_stderr(capsys, extra, bar):
+    assert cli.main(["nav", "eval-perception", "--scenes", "1", *extra]) == 0
+    captured = capsys.readouterr()
+    assert ("1/1" in captured.err and "scene" in captured.err and "%|" in captured.err) == bar, captured.err
+    assert "%|" not in captured.out and "depth: precision" in captured.out

@@ -4,7 +4,7 @@
     snake_autonomy nav train-classifier --out FILE  render a labelled training set, train the
                                                     monocular block classifier, write FILE (joblib)
                                                     and FILE.json (held-out figures, both methods)
-    snake_autonomy nav eval-perception [--model FILE] [--scenes N]
+    snake_autonomy nav eval-perception [--model FILE] [--scenes N] [--no-progress]
                                                     precision/recall and ms per frame of the depth
                                                     method (and the classifier) on held-out scenes
     snake_autonomy nav run --world FILE [--robot R] [--perception depth|mono|truth] [--seed N]
@@ -68,6 +68,7 @@ def add_arguments(parser):
     ev.add_argument("--scenes", type=int, default=15, help="held-out scenes (one frame each)")
     ev.add_argument("--seed", type=int, default=100000,
                     help="the scenes' seed (train-classifier's held out: its seed + 100000)")
+    ev.add_argument("--no-progress", action="store_true", help="no progress bar (rendered scenes, on stderr)")
     run = sub.add_parser("run", help="the closed loop on the simulated robot in batch")
     run.add_argument("--world", required=True, metavar="FILE", help="world file (YAML)")
     run.add_argument("--perception", choices=("depth", "mono", "truth"), default="depth",
@@ -170,6 +171,19 @@ def evaluate(cfg, robot, frames, classifier=None) -> dict:
     return out
 
 
+def _counted(items, total: int, desc: str, enabled: bool):
+    """The items as they come, counted on a progress bar on stderr (none when not enabled)."""
+    bar = progress_bar(total, desc, "scene", enabled=enabled)
+    try:
+        for item in items:
+            yield item
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
 def _print(results: dict) -> None:
     for name, r in results.items():
         print(f"  {name:5s}: precision {r['precision']:.3f} (min {r['precision_min']:.3f}), recall "
@@ -193,16 +207,8 @@ def main(args) -> int:
         cfg, robot, params = _setup(args)
         t0 = time.perf_counter()
         scenes = render_scenes(robot, params, args.scenes, args.seed, cfg.intrinsics, cfg.mount, depth=False)
-        bar = progress_bar(args.scenes, "nav train-classifier: rendering", "scene", enabled=not args.no_progress)
-        train = []
-        try:
-            for f in scenes:
-                train.append((f.rgb, f.ground_truth_ground()))
-                if bar is not None:
-                    bar.update(1)
-        finally:
-            if bar is not None:
-                bar.close()
+        train = [(f.rgb, f.ground_truth_ground()) for f in _counted(
+            scenes, args.scenes, "nav train-classifier: rendering", not args.no_progress)]
         t1 = time.perf_counter()
         clf = BlockClassifier.train(train, cfg.classifier.block_px, cfg.classifier.dct_coefficients,
                                     cfg.classifier.svm_c, stride_px=cfg.classifier.stride_px,
@@ -226,7 +232,8 @@ def main(args) -> int:
         clf = None
         if args.model:
             clf = BlockClassifier.load(args.model)
-        frames = list(render_scenes(robot, params, args.scenes, args.seed, cfg.intrinsics, cfg.mount))
+        frames = list(_counted(render_scenes(robot, params, args.scenes, args.seed, cfg.intrinsics, cfg.mount),
+                               args.scenes, "nav eval-perception: rendering", not args.no_progress))
         _print(evaluate(cfg, robot, frames, clf))
         return 0
     if args.nav_command == "run":
