@@ -86,21 +86,38 @@ def test_the_defaults_that_mean_none_give_the_nodes_what_empty_gave(root):
     assert _dump(env, "driver.launch", "mock:=true")["/driver/bus_latency_s"] == 0.05
 
 
-def test_rviz_launch_sets_a_fixed_frame_only_when_given(root):
-    script = ("import sys, roslaunch.config, roslaunch.xmlloader\n"
-              "cfg = roslaunch.config.load_config_default([(sys.argv[1], sys.argv[2:])], None, verbose=False,\n"
-              "    loader=roslaunch.xmlloader.XmlLoader(resolve_anon=False), assign_machines=False)\n"
-              "print([n.args for n in cfg.nodes if n.name == 'rviz'][0])")
+RVIZ_SCRIPT = """
+import json, sys
+import roslaunch.config, roslaunch.xmlloader
+cfg = roslaunch.config.load_config_default([(sys.argv[1], sys.argv[2:])], None, verbose=False,
+    loader=roslaunch.xmlloader.XmlLoader(resolve_anon=False), assign_machines=False)
+print(json.dumps({n.name: n.args for n in cfg.nodes}))
+"""
 
+
+def _node_args(root, launch, *args):
+    """{node name: its args} of a launch file as roslaunch resolves it (nothing started)."""
+    r = subprocess.run(["python3", "-c", RVIZ_SCRIPT, str(root / "launch" / launch), *args],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def test_rviz_launch_sets_a_fixed_frame_only_when_given(root):
     def rviz_args(*args):
-        r = subprocess.run(["python3", "-c", script, str(root / "launch" / "rviz.launch"), *args],
-                           capture_output=True, text=True, timeout=120)
-        assert r.returncode == 0, r.stdout + r.stderr
-        return r.stdout.strip().splitlines()[-1].split()
+        return _node_args(root, "rviz.launch", *args)["rviz"].split()
 
     assert rviz_args()[0] == "-d" and rviz_args()[1].endswith("/rviz/snake.rviz") and len(rviz_args()) == 2
     assert rviz_args("fixed_frame:=")[2:] == []
     assert rviz_args("fixed_frame:=map")[2:] == ["-f", "map"]
+
+
+def test_a_navigation_run_with_rviz_has_the_navigation_config_and_the_path_travelled(root):
+    """sim.launch world:=W rviz:=true (no mission node): rviz with rviz/nav.rviz in the world frame, and
+    viz_node (the path travelled) started by rviz.launch."""
+    nodes = _node_args(root, "sim.launch", "world:=one_obstacle", "rviz:=true")
+    assert {"snake_viz", "planner", "nav_record"} <= set(nodes) and "mission" not in nodes
+    assert nodes["rviz"].split()[1].endswith("/rviz/nav.rviz") and nodes["rviz"].split()[2:] == ["-f", "map"]
 
 
 def test_sim_launch_robot_reaches_every_node_and_a_world_is_recorded(root):
