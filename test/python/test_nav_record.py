@@ -3,7 +3,9 @@ without a master: a hand-made bag of a run killed before its end, with a contact
 found no free arc."""
 import csv
 import json
+import math
 
+import numpy as np
 import pytest
 
 pytest.importorskip("rosbag")
@@ -15,9 +17,12 @@ from visualization_msgs.msg import Marker  # noqa: E402
 
 from snake_autonomy.cli import main as cli_main  # noqa: E402
 from snake_autonomy.msg import GaitCommand  # noqa: E402
+from snake_autonomy.runs.nav_metrics import NavFacts, nav_metrics  # noqa: E402
 from snake_autonomy.runs.nav_record import read_nav_run, start_event  # noqa: E402
 from snake_autonomy.runs.run_log import RunBag  # noqa: E402
 from snake_autonomy.sim.world_file import World  # noqa: E402
+
+from conftest import ROOT  # noqa: E402
 
 WORLD = World(start=(0.0, 0.0, 0.0), goal=(1.0, 0.0), goal_radius_m=0.2, name="hand_made")
 IDENTITY = {"robot": "cobra", "perception": "depth", "seed": 3, "world": "hand_made", "flat_belly_fraction": 0.8,
@@ -123,3 +128,27 @@ def test_a_bag_without_a_navigation_run_is_refused(tmp_path):
     log.close_bag("ended")
     with pytest.raises(RunBagError, match="no navigation run"):
         read_nav_run(tmp_path / "run" / "run.bag")
+
+
+def test_the_report_of_a_recorded_run_writes_the_files_and_columns_of_nav_run(killed_run, tmp_path):
+    """The same figures as `snake_autonomy nav run` (a 3 s batch run): every file it writes, each CSV
+    with the same columns, and metrics.json with every key of nav run's contract."""
+    batch = tmp_path / "batch"
+    assert cli_main(["nav", "run", "--world", str(ROOT / "config" / "worlds" / "one_obstacle.yaml"),
+                     "--time-limit", "3", "--no-progress", "--out", str(batch)]) == 0
+    report = tmp_path / "report"
+    assert cli_main(["report", str(killed_run), "--out", str(report)]) == 0
+    batch_files = {p.name for p in batch.iterdir()}
+    assert {"metrics.json", "topview.png", "trajectory.csv", "commands.csv", "contacts.csv",
+            "replans.csv"} <= batch_files
+    # frames/ holds the camera's frames at replans: the hand-made bag has no camera
+    assert batch_files <= {p.name for p in report.iterdir()} | {"frames"}, batch_files
+    for name in sorted(n for n in batch_files if n.endswith(".csv")):
+        with open(batch / name) as a, open(report / name) as b:
+            assert next(csv.reader(a)) == next(csv.reader(b)), name
+    contract = set(nav_metrics(NavFacts(
+        world=WORLD, trajectory=np.zeros((0, 3)), t_end_s=0.0, final_pose=(0.0, 0.0, 0.0), loop_reached_t_s=None,
+        stop_xy=None, collisions=0, min_clearance_m=math.nan, path_length_m=0.0, replans=[], stops_no_free_arc=0,
+        rolled_over=False, contact_modes=[], min_radius_m=1.0, identity={})))
+    assert contract <= set(json.loads((report / "metrics.json").read_text()))
+    assert contract <= set(json.loads((batch / "metrics.json").read_text()))
