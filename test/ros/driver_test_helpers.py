@@ -15,6 +15,13 @@ from snake_autonomy.sim.mock_servo_bus import MockBusClient
 from snake_autonomy.srv import RebootServo
 
 
+def diagnostic_values(msg, name_suffix):
+    """key -> value of the first status of a DiagnosticArray whose name ends with name_suffix (None if
+    the message has no such status)."""
+    return next(({kv.key: kv.value for kv in st.values} for st in msg.status if st.name.endswith(name_suffix)),
+                None)
+
+
 def wait_for(cond, timeout, what):
     deadline = time.monotonic() + timeout
     while True:
