@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from snake_autonomy.planning.fbsr import spline
-from snake_autonomy.planning.fbsr.cost import (Directive, Pipe, pipe_cost, pipe_wall_overlap,
+from snake_autonomy.planning.fbsr.cost import (Directive, Pipe, head_clearance, pipe_cost, pipe_wall_overlap,
                                                stability_cost)
 
 
@@ -67,3 +67,20 @@ def test_pipe_wall_only_stops_modules_at_the_wall_above_the_mouth():
               [0.3, 0.0, 0.4],      # beside the pipe
               [0.07, 0.0, 0.1]]     # under the mouth
     np.testing.assert_allclose(pipe_wall_overlap(frames, pipe, r), [0.0, 0.025, 0.0, 0.0])
+
+
+def test_pipe_clearance_keeps_the_head_above_the_lip_that_far_inside_the_bore():
+    """The bore's edge for a frame is 45 mm off the axis (R 70 mm less a 25 mm module); with a
+    20 mm clearance the head (frame 0) 43 mm off it above the lip is 18 mm too far out; the
+    modules behind it, there or under the lip, keep only the bore."""
+    pipe = Pipe(0.0, 0.0, radius_m=0.07, mouth_m=0.25, wall_m=0.01)
+    r, c = 0.025, 0.02
+    arm = [[0.043, 0.0, 0.30],    # the head, 2 mm inside the bore's edge
+           [0.043, 0.0, 0.27],    # the module behind it, as far out
+           [0.043, 0.0, 0.20],    # under the lip
+           [0.110, 0.0, 0.30]]    # beside the pipe
+    np.testing.assert_allclose(pipe_wall_overlap(arm, pipe, r), [0.0, 0.0, 0.0, 0.0])
+    np.testing.assert_allclose(pipe_wall_overlap(arm, pipe, r, head_clearance(c, 4)),
+                               [0.018, 0.0, 0.0, 0.0], atol=1e-12)
+    centred = [[0.020, 0.0, 0.30]] + arm[1:]
+    np.testing.assert_allclose(pipe_wall_overlap(centred, pipe, r, head_clearance(c, 4)), 0.0, atol=1e-12)

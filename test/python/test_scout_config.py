@@ -37,6 +37,8 @@ def test_every_problem_is_listed_with_its_key_its_value_and_the_file(tmp_path):
     ("max_restarts", 10 ** 9, "planner.max_restarts: must be at most 100, got 1000000000"),
     ("cost_samples", 10 ** 8, "planner.cost_samples: must be at most 200, got 100000000"),
     ("head_height_tol_m", 0, "planner.head_height_tol_m: must be > 0, got 0.0"),
+    ("pipe_clearance_m", -0.01, "planner.pipe_clearance_m: must be >= 0, got -0.01"),
+    ("pipe_clearance_m", 0.5, "planner.pipe_clearance_m: must be at most 0.1 m, got 0.5"),
 ])
 def test_a_bad_planner_value_is_refused_naming_the_key(key, value, words):
     with pytest.raises(ConfigError) as err:

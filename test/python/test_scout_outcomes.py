@@ -9,6 +9,7 @@ import pytest
 from snake_autonomy import cli
 from snake_autonomy.cli import scout as scout_cli
 from snake_autonomy.planning.fbsr.build import build_planner
+from snake_autonomy.planning.fbsr.config import ScoutConfig, default_path
 from snake_autonomy.runs import scout_execute
 from snake_autonomy.planning.fbsr import planner as fbsr_planner
 from snake_autonomy.planning.fbsr.planner import Plan
@@ -199,5 +200,7 @@ def test_cli_refuses_a_pipe_the_head_does_not_get_into_with_where_it_ended(tmp_p
     err = capsys.readouterr().err.strip()
     assert err.startswith("scout run: --pipe 0.05,-0.1,0.07: no plan found puts the head into the pipe with at "
                           "most 2 active modules of unified_snake (the last raise ended ")
-    assert "inside the bore is within 0.045 m of the axis above the mouth at 0.25 m" in err
+    clearance = ScoutConfig.from_yaml(default_path()).planner.pipe_clearance_m
+    assert (f"the plan must end it within {0.0446 - clearance:.3f} m of the axis: the bore's 0.045 m less "
+            f"pipe_clearance_m {clearance:g} m, at least 0.020 m above the mouth at 0.25 m") in err
     assert not (out / "metrics.json").exists()

@@ -35,6 +35,7 @@ class PlannerConfig:
     self_collision_margin_m: float = 0.002
     self_collision_push_m: float = 0.025
     k_self_collision_per_m2: float = 1.0e5
+    pipe_clearance_m: float = 0.0
     joint_margin_deg: float = 3.0
     max_restarts: int = 8
     max_shift_replans: int = 4
@@ -96,7 +97,7 @@ class ScoutConfig:
             ("k_out_per_m2", 0, False, None, ""),
             ("margin_m", 0, True, 0.5, " m"), ("joint_margin_deg", 0, True, 45, ""),
             ("self_collision_margin_m", 0, True, 0.05, " m"), ("self_collision_push_m", 0, True, 0.1, " m"),
-            ("k_self_collision_per_m2", 0, False, None, ""),
+            ("k_self_collision_per_m2", 0, False, None, ""), ("pipe_clearance_m", 0, True, 0.1, " m"),
             ("max_restarts", 0, True, 100, ""), ("max_shift_replans", 0, True, 100, ""),
             ("shift_restarts", 0, True, 100, ""), ("max_backtracks", 0, True, 100, ""),
             ("max_final_cycles", 0, True, 100, ""),

@@ -16,7 +16,8 @@ closer than that is pushed only to where it started).
   horizontal distance of every active module to the pipe axis, sum_i (x_i - qx)^2 + (y_i - qy)^2.
 - Ct: the integral of sum_j (tau_j / tau_limit)^2 over the active joints (quasi-static gravity).
 - With a pipe, its wall: frames at the mouth's height or above stay out of it (in the bore or
-  outside the pipe).
+  outside the pipe); inside, the head keeps the pipe clearance from the bore's edge (the arm sags
+  and lags its plan under load: room for that on the way in; the head is what catches on the lip).
 The integrals use the trapezoidal rule on the stage's cost samples.
 """
 from dataclasses import dataclass
@@ -42,6 +43,7 @@ class Weights:
     self_margin_m: float = 0.0          # capsule clearance kept between non-adjacent modules
     self_push_m: float = 0.003          # ... and pushed this much beyond it
     k_wall_per_m2: float = 1.0e4     # the pipe's wall (0: ignored, the pipe only attracts)
+    pipe_clearance_m: float = 0.0    # frames inside the bore keep this from its edge (pipe_wall_overlap)
 
 
 @dataclass
@@ -91,14 +93,24 @@ def pipe_cost(positions_xy, pipe: Pipe) -> float:
     return float(np.sum(d[:, 0] ** 2 + d[:, 1] ** 2))
 
 
-def pipe_wall_overlap(positions, pipe: Pipe, module_radius_m: float) -> np.ndarray:
+def head_clearance(clearance_m: float, frames: int) -> np.ndarray:
+    """Per frame, the clearance from the bore's edge: the head's (frame 0) only. Kept by every
+    frame, the whole arm would have to enter near the axis, and no tuning seed got in that way."""
+    out = np.zeros(frames)
+    out[0] = clearance_m
+    return out
+
+
+def pipe_wall_overlap(positions, pipe: Pipe, module_radius_m: float, clearance_m=0.0) -> np.ndarray:
     """How far (m) each frame's capsule reaches into the pipe's wall, which spans radii
     [radius, radius + wall] from the mouth up: frames at or above the mouth (less a module radius)
-    stay within the bore or outside the pipe; the overlap is the way out, inward or outward."""
+    stay within the bore, clearance_m from its edge, or outside the pipe; the overlap is the way
+    out, inward or outward. clearance_m may be one per frame (head_clearance). The clearance is
+    room for the arm's sag: a head planned at the bore's edge caught on the lip in physics."""
     p = np.asarray(positions, float)
     off_axis = np.hypot(p[..., 0] - pipe.x_m, p[..., 1] - pipe.y_m)
     high = p[..., 2] > pipe.mouth_m - module_radius_m
-    inward = off_axis - (pipe.radius_m - module_radius_m)
+    inward = off_axis - (pipe.radius_m - module_radius_m - clearance_m)
     outward = pipe.radius_m + pipe.wall_m + module_radius_m - off_axis
     return np.where(high, np.clip(np.minimum(inward, outward), 0.0, None), 0.0)
 
@@ -165,7 +177,7 @@ class StageCost:
         if self.pipe is not None:
             d = pos[:, :, :m, :2] - (self.pipe.x_m, self.pipe.y_m)
             out["Cp"] = self._integrate(np.sum(d ** 2, axis=(2, 3)))
-            wall = pipe_wall_overlap(pos[:, :, :m], self.pipe, r)
+            wall = pipe_wall_overlap(pos[:, :, :m], self.pipe, r, head_clearance(w.pipe_clearance_m, m))
             out["pipe_wall"] = self._integrate(np.sum(wall ** 2, axis=2))
         if w.k_torque:
             qq = np.repeat(self.q_start[None, None, :], s_n, axis=1).repeat(b, axis=0)

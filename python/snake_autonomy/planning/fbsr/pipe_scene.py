@@ -24,7 +24,9 @@ def pipe_mjcf(pipe: Pipe) -> str:
     return "\n".join(lines) + "\n"
 
 
-def head_in_mouth(head_xyz, pipe: Pipe, module_radius_m: float, depth_m: float = 0.0) -> bool:
-    """The head is more than depth_m past the mouth and within the pipe's bore."""
+def head_in_mouth(head_xyz, pipe: Pipe, module_radius_m: float, depth_m: float = 0.0,
+                  clearance_m: float = 0.0) -> bool:
+    """The head is more than depth_m past the mouth and within the pipe's bore, at least
+    clearance_m from its edge."""
     d = float(np.hypot(head_xyz[0] - pipe.x_m, head_xyz[1] - pipe.y_m))
-    return head_xyz[2] > pipe.mouth_m + depth_m and d < pipe.radius_m - module_radius_m
+    return head_xyz[2] > pipe.mouth_m + depth_m and d < pipe.radius_m - module_radius_m - clearance_m

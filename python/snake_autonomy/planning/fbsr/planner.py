@@ -18,9 +18,12 @@ when the head ends higher.
 The pipe (paper fig. 6): the head aims under the mouth, and once under it, the next raise (with
 the same modules) aims 5 cm inside; with every module active, up to max_final_cycles more raises
 (the best of each's restarts, without the pipe potential, which pulls every module to the axis
-against the head's way in). The plan ends once the head is PIPE_DEPTH_M past the mouth within the
-bore (the pipe's radius less a module's); a plan whose last raise leaves it elsewhere is refused
-with where the head ended.
+against the head's way in). The plan ends once the head is PIPE_DEPTH_M past the mouth and
+pipe_clearance_m inside the bore's edge (the bore: the pipe's radius less a module's); on the way
+in, the head keeps that clearance from the edge above the lip (cost.pipe_wall_overlap). The
+clearance is room for the sag: under load the arm ends some 15 mm sideways of its plan, and a head
+planned 1.6 mm inside the edge caught on the lip. A plan whose last raise leaves the head elsewhere
+is refused with where it ended and the clearance.
 """
 import time
 from dataclasses import dataclass, field
@@ -117,6 +120,7 @@ class FbsrPlanner:
             # The head goes into the mouth from below: first under it, then in.
             target_m = np.asarray(pipe.entry_point(), float)
             below = np.asarray(pipe.entry_point(-2.0 * self.chain.radius_m), float)
+            bore_m = pipe.radius_m - self.chain.radius_m - cfg.pipe_clearance_m
         directive = Directive(height_m=height_m, target_m=target_m)
         m = min(self.posture.initial_active, max_active)
         q = self.chain.q_lying.copy()
@@ -143,7 +147,7 @@ class FbsrPlanner:
             here = (first, q, m, head_before, transferred, raised)
             if into_pipe:
                 head_now = self.chain.pose(q).head
-                under = np.hypot(*(head_now[:2] - below[:2])) < pipe.radius_m - self.chain.radius_m
+                under = np.hypot(*(head_now[:2] - below[:2])) < bore_m
                 directive = Directive(target_m=target_m if under else below)
             q_before = q
             try:
@@ -180,10 +184,11 @@ class FbsrPlanner:
                 break
             if target_m is not None and np.linalg.norm(head_xyz - np.asarray(target_m)) < cfg.target_tol_m:
                 break
-            if into_pipe and head_in_mouth(head_xyz, pipe, self.chain.radius_m, PIPE_DEPTH_M):
+            if into_pipe and head_in_mouth(head_xyz, pipe, self.chain.radius_m, PIPE_DEPTH_M,
+                                           cfg.pipe_clearance_m):
                 break                   # in the bore (a later cycle aiming closer may come out again)
             if into_pipe and directive.target_m is below and entered_at != m and \
-                    np.hypot(*(head_xyz[:2] - below[:2])) < pipe.radius_m - self.chain.radius_m:
+                    np.hypot(*(head_xyz[:2] - below[:2])) < bore_m:
                 entered_at = m          # under the mouth: the next raise, with the same modules, goes in
                 continue
             if m >= max_active and target_m is not None and extra_cycles < cfg.max_final_cycles:
@@ -281,7 +286,8 @@ class FbsrPlanner:
                           k_out_per_m2=cfg.k_out_per_m2, k_wall_per_m2=cfg.k_wall_per_m2,
                           k_clearance_per_m2=cfg.k_self_collision_per_m2,
                           self_margin_m=cfg.self_collision_margin_m,
-                          self_push_m=cfg.self_collision_push_m)
+                          self_push_m=cfg.self_collision_push_m,
+                          pipe_clearance_m=cfg.pipe_clearance_m)
         cost = StageCost(self.chain, q, m, support, weights, directive, cfg.stage_duration_s,
                          cfg.cost_samples, pipe, self.torque_limit_nm)
         max_restarts = cfg.max_restarts if max_restarts is None else max_restarts
@@ -298,15 +304,22 @@ class FbsrPlanner:
     def _pipe_missed(self, pipe: Pipe, head_xyz, max_active: int) -> str:
         """Why a plan into the pipe is refused: where its last raise left the head."""
         d = float(np.hypot(head_xyz[0] - pipe.x_m, head_xyz[1] - pipe.y_m))
+        c = self.cfg.pipe_clearance_m
         return (f"--pipe {pipe.x_m:g},{pipe.y_m:g},{pipe.radius_m:g}: no plan found puts the head into the "
                 f"pipe with at most {max_active} active modules of {self.robot.name} (the last raise "
-                f"ended {d:.3f} m from the axis at {head_xyz[2]:.3f} m; inside the bore is within "
-                f"{pipe.radius_m - self.chain.radius_m:.3f} m of the axis above the mouth at {pipe.mouth_m:g} m)")
+                f"ended {d:.3f} m from the axis at {head_xyz[2]:.3f} m; the plan must end it within "
+                f"{pipe.radius_m - self.chain.radius_m - c:.3f} m of the axis: the bore's "
+                f"{pipe.radius_m - self.chain.radius_m:.3f} m less pipe_clearance_m {c:g} m, at least "
+                f"{PIPE_DEPTH_M:.3f} m above the mouth at {pipe.mouth_m:g} m)")
 
     def _check_pipe(self, pipe: Pipe) -> None:
         if not pipe.radius_m > self.chain.radius_m:
             raise PlanningError(f"--pipe radius {pipe.radius_m} m: must exceed the module "
                                 f"radius {self.chain.radius_m} m for the head to enter")
+        if not pipe.radius_m > self.chain.radius_m + self.cfg.pipe_clearance_m:
+            raise PlanningError(f"--pipe radius {pipe.radius_m} m: leaves no room for the head with "
+                                f"pipe_clearance_m {self.cfg.pipe_clearance_m:g} m from the bore's edge "
+                                f"(module radius {self.chain.radius_m} m)")
         lying = self.chain.pose(self.chain.q_lying).positions[:, :2]
         d = np.hypot(lying[:, 0] - pipe.x_m, lying[:, 1] - pipe.y_m)
         if np.any(d < pipe.radius_m + self.chain.radius_m):

@@ -10,7 +10,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from . import collision, spline
-from .cost import StageCost, pipe_wall_overlap
+from .cost import StageCost, head_clearance, pipe_wall_overlap
 from .support import Support
 
 
@@ -83,9 +83,12 @@ class Checks:
         if low < r - self.ground_tol_m:
             out.append(f"a module goes {1e3 * (r - low):.1f} mm into the floor")
         if cost.pipe is not None and cost.w.k_wall_per_m2 > 0:
-            wall = float(pipe_wall_overlap(pos[:, :cost.m], cost.pipe, r).max())
+            wall = float(pipe_wall_overlap(pos[:, :cost.m], cost.pipe, r,
+                                             head_clearance(cost.w.pipe_clearance_m, cost.m)).max())
             if wall > self.ground_tol_m:
-                out.append(f"a module goes {1e3 * wall:.1f} mm into the pipe's wall")
+                out.append(f"a module goes {1e3 * wall:.1f} mm into the pipe's wall"
+                           + (f" (with the {1e3 * cost.w.pipe_clearance_m:.0f} mm pipe clearance)"
+                              if cost.w.pipe_clearance_m > 0 else ""))
         clearance, pair = collision.worst_clearance(pos, r)
         if clearance < self.self_margin_m:
             out.append(self_collision_problem(clearance, pair, self.self_margin_m))
