@@ -132,6 +132,7 @@ def add_arguments(parser):
                     help="seconds after the first command that moves, or auto (as nav experiment)")
     rx.add_argument("--time-factor", type=float, default=None, metavar="F", help="with --time-limit auto")
     rx.add_argument("--out", required=True, metavar="DIR", help="table.md, summary.json, runs/, worlds/")
+    rx.add_argument("--no-progress", action="store_true", help="no progress bar (ROS + batch runs, on stderr)")
     for p in (tr, ev, run, ex, wd, rx):
         p.add_argument("--robot", default="cobra", help="robot name (config/robots/NAME.yaml) or YAML file")
         p.add_argument("--config", default=None,
@@ -497,12 +498,17 @@ def _ros_experiment(args) -> int:
     files = [str((Path(w.source) if args.world_files is not None else out / "worlds" / f"{w.name}.yaml").resolve())
              for w in worlds]
     t0 = time.perf_counter()
+    bar = progress_bar(len(worlds) * len(seeds), "nav ros-experiment", "run", enabled=not args.no_progress)
     try:
         rows = run_experiment(list(zip(worlds, files)), seeds, out, limits, robot=args.robot,
-                              perception=args.perception, classifier=args.classifier, nav_config=args.config)
+                              perception=args.perception, classifier=args.classifier, nav_config=args.config,
+                              on_run=bar.update if bar is not None else None)
     except RuntimeError as e:
         print(f"nav ros-experiment: {e}", file=sys.stderr)
         return 1
+    finally:
+        if bar is not None:
+            bar.close()
     print(comparison_table(rows))
     print(f"\n{len(rows)} runs in {time.perf_counter() - t0:.0f} s: {out / 'table.md'}, {out / 'summary.json'}, "
           f"{out / 'runs'}/WORLD_sSEED/ (metrics.json, batch.json, roslaunch.log, log/)")

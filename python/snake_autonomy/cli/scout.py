@@ -11,7 +11,8 @@ these are the inverse plan's, from the raised posture back down to the lying one
 DIR/run.json (head position, base lift, pipe distance). Without --height-m the head goes as high as
 the active portion allows; with it, planning stops once the head reaches H. Bad options (unknown
 robot, a height no plan reaches, a pipe inside the robot or out of reach, a negative seed, a bad
---config file) end with one message and exit 1, before planning.
+--config file) end with one message and exit 1, before planning. While planning, a bar on stderr
+counts the stages planned (--no-progress: none).
 
 Exit status (EXIT_STATUS): 0 done and, for `run`, metrics.json's outcome "ok"; 1 bad options or
 files; 2 usage; 3 `run` executed the plan but the robot tipped in physics, the head ended outside
@@ -32,6 +33,7 @@ from snake_autonomy.planning.fbsr.planner import lowering
 from snake_autonomy.planning.fbsr.stage import PlanningError
 from snake_autonomy.planning.fbsr.trajectory import driver_velocity_limit, lead_in_s, plan_points, velocity_problems
 from snake_autonomy.runs.scout_execute import run_plan
+from snake_autonomy.runs.sweep_runner import progress_bar
 from snake_autonomy.sim.config import servo_torque_limit_nm
 
 
@@ -72,6 +74,21 @@ def _seed(option, text):
     return value
 
 
+def _count_stages(planner, bar) -> None:
+    """Each stage the planner adds to its plan (raise, shift, lower) counted on the bar, named with its
+    kind and active modules: the planner has no progress hook, so its own stage-adding step is wrapped
+    on this instance (no bar: nothing changes)."""
+    if bar is None:
+        return
+    add = planner._add
+
+    def counted(plan, stage):
+        add(plan, stage)
+        bar.set_postfix_str(f"{stage.kind}, {stage.active_modules} active", refresh=False)
+        bar.update(1)
+    planner._add = counted
+
+
 def add_arguments(parser):
     sub = parser.add_subparsers(dest="scout_command", metavar="SCOUT_COMMAND")
     for name, help_text in (("plan", "plan a head-raising trajectory (plan.json + figures)"),
@@ -87,6 +104,8 @@ def add_arguments(parser):
         p.add_argument("--out", required=True, metavar="DIR", help="results folder")
         p.add_argument("--no-restarts", action="store_true", help="no random restarts (benchmarks)")
         p.add_argument("--config", metavar="YAML", help="planner configuration (default config/scout.yaml)")
+        p.add_argument("--no-progress", action="store_true",
+                       help="no progress bar (planned stages, on stderr)")
         if name == "plan":
             p.add_argument("--lower", action="store_true",
                            help="write the inverse: from the raised posture back to the lying one")
@@ -113,13 +132,18 @@ def main(args) -> int:
         if pipe is not None and math.hypot(pipe.x_m, pipe.y_m) > reach:
             raise ValueError(f"--pipe {args.pipe}: the axis is {math.hypot(pipe.x_m, pipe.y_m):.2f} m from the "
                              f"tail, beyond the {reach:.2f} m length of {planner.robot.name}")
+        bar = progress_bar(None, f"scout {args.scout_command}: planning", "stage", enabled=not args.no_progress)
         try:
+            _count_stages(planner, bar)
             plan = planner.plan(max_active=args.max_active, height_m=args.height_m, pipe=pipe,
                                 seed=seed, restarts=not args.no_restarts)
         except PlanningError as err:
             if args.height_m is None or str(err).startswith("--height-m"):
                 raise
             raise PlanningError(f"--height-m {args.height_m}: no plan reaches it ({err})") from None
+        finally:
+            if bar is not None:
+                bar.close()
     except (ValueError, FileNotFoundError, PlanningError) as err:
         print(f"scout {args.scout_command}: {err}", file=sys.stderr)
         return 1

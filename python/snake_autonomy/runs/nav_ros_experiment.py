@@ -28,7 +28,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
 from snake_autonomy.runs.results import write_json_atomic
@@ -273,9 +273,10 @@ def run_batch(world: World, seed: int, time_limit_s: float, run_dir: Path, robot
 
 def run_experiment(worlds: Sequence[Tuple[World, str]], seeds: Sequence[int], out, time_limits_s: Sequence[float],
                    robot: str = "cobra", perception: str = "depth", classifier: Optional[str] = None,
-                   nav_config: Optional[str] = None) -> List[Dict]:
+                   nav_config: Optional[str] = None, on_run: Optional[Callable[[], None]] = None) -> List[Dict]:
     """Every (world, its absolute file) x seed: the ROS run, then the batch run; OUT/table.md and
-    OUT/summary.json; the rows (comparison_row). RuntimeError when a launch's process survives."""
+    OUT/summary.json; the rows (comparison_row); on_run() after each pair (the CLI's progress bar).
+    RuntimeError when a launch's process survives."""
     check_robot(robot)
     out = Path(out)
     rows, runs, t0 = [], [], time.monotonic()
@@ -298,6 +299,8 @@ def run_experiment(worlds: Sequence[Tuple[World, str]], seeds: Sequence[int], ou
             runs.append({"world": world.name, "world_file": world_file, "seed": seed, "time_limit_s": limit,
                          "ros": ros, "batch": batch})
             _write(out, rows, runs, robot, perception, time.monotonic() - t0)
+            if on_run is not None:
+                on_run()
     return rows
 
 
