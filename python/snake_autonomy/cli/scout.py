@@ -74,19 +74,25 @@ def _seed(option, text):
     return value
 
 
-def _count_stages(planner, bar) -> None:
-    """Each stage the planner adds to its plan (raise, shift, lower) counted on the bar, named with its
-    kind and active modules: the planner has no progress hook, so its own stage-adding step is wrapped
-    on this instance (no bar: nothing changes)."""
-    if bar is None:
-        return
-    add = planner._add
+class _StageBar:
+    """Counts each stage the planner adds to its plan (raise, shift, lower) on a bar on stderr, named
+    with its kind and active modules. The bar appears with the first stage: a plan refused before any
+    (a pipe inside the lying robot) prints its one message only."""
 
-    def counted(plan, stage):
-        add(plan, stage)
-        bar.set_postfix_str(f"{stage.kind}, {stage.active_modules} active", refresh=False)
-        bar.update(1)
-    planner._add = counted
+    def __init__(self, planner, desc: str, enabled: bool):
+        self.bar, self.desc = None, desc
+        if enabled:
+            planner.on_stage = self._count
+
+    def _count(self, stage) -> None:
+        if self.bar is None:
+            self.bar = progress_bar(None, self.desc, "stage")
+        self.bar.set_postfix_str(f"{stage.kind}, {stage.active_modules} active", refresh=False)
+        self.bar.update(1)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
 
 
 def add_arguments(parser):
@@ -132,9 +138,8 @@ def main(args) -> int:
         if pipe is not None and math.hypot(pipe.x_m, pipe.y_m) > reach:
             raise ValueError(f"--pipe {args.pipe}: the axis is {math.hypot(pipe.x_m, pipe.y_m):.2f} m from the "
                              f"tail, beyond the {reach:.2f} m length of {planner.robot.name}")
-        bar = progress_bar(None, f"scout {args.scout_command}: planning", "stage", enabled=not args.no_progress)
+        bar = _StageBar(planner, f"scout {args.scout_command}: planning", not args.no_progress)
         try:
-            _count_stages(planner, bar)
             plan = planner.plan(max_active=args.max_active, height_m=args.height_m, pipe=pipe,
                                 seed=seed, restarts=not args.no_restarts)
         except PlanningError as err:
@@ -142,8 +147,7 @@ def main(args) -> int:
                 raise
             raise PlanningError(f"--height-m {args.height_m}: no plan reaches it ({err})") from None
         finally:
-            if bar is not None:
-                bar.close()
+            bar.close()
     except (ValueError, FileNotFoundError, PlanningError) as err:
         print(f"scout {args.scout_command}: {err}", file=sys.stderr)
         return 1

@@ -27,7 +27,7 @@ is refused with where it ended and the clearance.
 """
 import time
 from dataclasses import dataclass, field
-from typing import List, Optional
+from typing import Callable, List, Optional
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -82,6 +82,7 @@ class FbsrPlanner:
                                 posture.tail_curl_joints)
         self.chain = Chain(robot, q_lying)
         self.torque_limit_nm = torque_limit_nm
+        self.on_stage: Optional[Callable[[Stage], None]] = None   # called with each stage added to a plan
 
     # ---- the supports --------------------------------------------------------------------------
     def support(self, active_modules: int, other: Optional[Support] = None) -> Support:
@@ -295,11 +296,12 @@ class FbsrPlanner:
                         kind, self.chain.base_contacts(m), next_contacts, k1, restarts,
                         random_first, keep_best)
 
-    @staticmethod
-    def _add(plan: Plan, stage: Stage) -> None:
+    def _add(self, plan: Plan, stage: Stage) -> None:
         plan.stages.append(stage)
         plan.restarts += stage.restarts
         plan.stage_times_s.append(stage.planning_time_s)
+        if self.on_stage is not None:
+            self.on_stage(stage)
 
     def _pipe_missed(self, pipe: Pipe, head_xyz, max_active: int) -> str:
         """Why a plan into the pipe is refused: where its last raise left the head."""
