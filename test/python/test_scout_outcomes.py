@@ -105,7 +105,7 @@ def test_cli_run_exit_status_and_metrics_outcome(tmp_path, capsys, monkeypatch, 
     # the planner takes the 2-module raise as in the pipe: the miss is physics' (faked)
     monkeypatch.setattr(fbsr_planner, "head_in_mouth", lambda *_a: True)
     out = tmp_path / "run"
-    assert cli.main(["scout", "run", "--robot", "unified_snake", "--max-active", "2", *pipe,
+    assert cli.main(["scout", "run", "--no-progress", "--robot", "unified_snake", "--max-active", "2", *pipe,
                      "--out", str(out)]) == status
     assert json.loads((out / "metrics.json").read_text())["outcome"] == outcome
     err = capsys.readouterr().err
@@ -148,7 +148,7 @@ def test_cli_run_of_a_plan_that_tips_in_physics_exits_3(tmp_path, capsys, monkey
         self.max_lift_m = max(self.max_lift_m, 0.150)
     monkeypatch.setattr(scout_execute.Monitor, "__call__", lifting)
     out = tmp_path / "tip"
-    assert cli.main(["scout", "run", "--robot", "unified_snake", "--max-active", "2", "--seed", "1",
+    assert cli.main(["scout", "run", "--no-progress", "--robot", "unified_snake", "--max-active", "2", "--seed", "1",
                      "--out", str(out)]) == 3
     m = json.loads((out / "metrics.json").read_text())
     assert m["tipped"] is True and m["outcome"] == "tipped"
@@ -195,7 +195,7 @@ def test_cli_refuses_a_pipe_the_head_does_not_get_into_with_where_it_ended(tmp_p
     """Two active modules cannot lift the head 0.27 m into a mouth 0.25 m up: refused before physics,
     exit 1, the reason naming the pipe, the modules and where the last raise left the head."""
     out = tmp_path / "pipe"
-    assert cli.main(["scout", "run", "--robot", "unified_snake", "--max-active", "2", "--pipe", "0.05,-0.10,0.07",
+    assert cli.main(["scout", "run", "--no-progress", "--robot", "unified_snake", "--max-active", "2", "--pipe", "0.05,-0.10,0.07",
                      "--out", str(out)]) == 1
     err = capsys.readouterr().err.strip()
     assert err.startswith("scout run: --pipe 0.05,-0.1,0.07: no plan found puts the head into the pipe with at "
