@@ -195,7 +195,8 @@ def test_cli_refuses_a_pipe_the_head_does_not_get_into_with_where_it_ended(tmp_p
     """Two active modules cannot lift the head 0.27 m into a mouth 0.25 m up: refused before physics,
     exit 1, the reason naming the pipe, the modules and where the last raise left the head."""
     out = tmp_path / "pipe"
-    assert cli.main(["scout", "run", "--no-progress", "--robot", "unified_snake", "--max-active", "2", "--pipe", "0.05,-0.10,0.07",
+    assert cli.main(["scout", "run", "--no-progress", "--robot", "unified_snake", "--max-active", "2",
+                     "--pipe", "0.05,-0.10,0.07",
                      "--out", str(out)]) == 1
     err = capsys.readouterr().err.strip()
     assert err.startswith("scout run: --pipe 0.05,-0.1,0.07: no plan found puts the head into the pipe with at "
