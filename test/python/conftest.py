@@ -1,5 +1,7 @@
 """Shared pytest fixtures: paths of the package and of ../shared (optional test data), and nav config
 overlays written over config/nav.yaml."""
+import importlib.machinery
+import importlib.util
 import os
 from pathlib import Path
 
@@ -19,6 +21,18 @@ SHARED = next((p for p in _SHARED_CANDIDATES if p.is_dir()), ROOT.parent / "shar
 @pytest.fixture(scope="session")
 def root() -> Path:
     return ROOT
+
+
+@pytest.fixture(scope="session")
+def load_script():
+    """load_script(name): scripts/NAME (a Python script without .py) imported as a module, for tests of its
+    functions."""
+    def load(name: str):
+        loader = importlib.machinery.SourceFileLoader(name, str(ROOT / "scripts" / name))
+        module = importlib.util.module_from_spec(importlib.util.spec_from_loader(name, loader))
+        loader.exec_module(module)
+        return module
+    return load
 
 
 @pytest.fixture(scope="session")

@@ -1,20 +1,8 @@
 """scripts/run_tests names every failed case before its last line, so the end of a long CI log says
 what failed: the names come from the JUnit files the suites write."""
-import importlib.util
-from importlib.machinery import SourceFileLoader
-from pathlib import Path
-
-ROOT = Path(__file__).resolve().parents[2]
 
 
-def _run_tests():
-    loader = SourceFileLoader("run_tests", str(ROOT / "scripts" / "run_tests"))
-    module = importlib.util.module_from_spec(importlib.util.spec_from_loader("run_tests", loader))
-    loader.exec_module(module)
-    return module
-
-
-def test_failed_cases_are_named_with_their_reason(tmp_path):
+def test_failed_cases_are_named_with_their_reason(tmp_path, load_script):
     xml = tmp_path / "r.xml"
     xml.write_text(
         '<testsuites><testsuite name="s">'
@@ -26,14 +14,14 @@ def test_failed_cases_are_named_with_their_reason(tmp_path):
         '  File "x.py", line 1\nRuntimeError: boom\n</error></testcase>'
         '</testsuite></testsuites>')
     failed = []
-    assert _run_tests().count_junit(xml, "pytest", failed) == (4, 2, 1)
+    assert load_script("run_tests").count_junit(xml, "pytest", failed) == (4, 2, 1)
     assert failed == ["pytest: pkg.Case.test_fails: AssertionError: 1 != 2",
                       "pytest: pkg.Case.test_errors: RuntimeError: boom"]
 
 
-def test_a_suite_without_cases_is_named_when_it_failed(tmp_path):
+def test_a_suite_without_cases_is_named_when_it_failed(tmp_path, load_script):
     xml = tmp_path / "r.xml"
     xml.write_text('<testsuite name="rostest_x" tests="3" failures="1" errors="1" skipped="0"/>')
     failed = []
-    assert _run_tests().count_junit(xml, "rostest x.test", failed) == (3, 2, 0)
+    assert load_script("run_tests").count_junit(xml, "rostest x.test", failed) == (3, 2, 0)
     assert len(failed) == 1 and failed[0].startswith("rostest x.test: rostest_x: 2 failed")
