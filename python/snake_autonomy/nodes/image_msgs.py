@@ -13,18 +13,18 @@ from sensor_msgs.msg import CameraInfo, Image
 
 from snake_autonomy.perception.camera_model import CameraIntrinsics
 
-#: encoding -> (channels, bytes per channel)
-_LAYOUT = {"rgb8": (3, 1), "bgr8": (3, 1), "mono8": (1, 1), "32FC1": (1, 4), "16UC1": (1, 2)}
-_DTYPE = {"rgb8": np.uint8, "bgr8": np.uint8, "mono8": np.uint8, "32FC1": np.float32, "16UC1": np.uint16}
+#: encoding -> (channels, element type)
+_LAYOUT = {"rgb8": (3, np.uint8), "bgr8": (3, np.uint8), "mono8": (1, np.uint8), "32FC1": (1, np.float32),
+           "16UC1": (1, np.uint16)}
 MAX_SIDE_PX = 8192        # a camera image's width or height beyond this is a corrupt header
 _BRIDGE = CvBridge()
 
 
 def to_image(array: np.ndarray, encoding: str, stamp, frame_id: str) -> Image:
     """An Image of `array` cast to the encoding's type (rgb8: the array is rgb; bgr8: it is bgr)."""
-    if encoding not in _DTYPE:
-        raise ValueError(f"image encoding {encoding[:40]!r}: expected one of {', '.join(_DTYPE)}")
-    m = _BRIDGE.cv2_to_imgmsg(np.ascontiguousarray(array, dtype=_DTYPE[encoding]), encoding=encoding)
+    if encoding not in _LAYOUT:
+        raise ValueError(f"image encoding {encoding[:40]!r}: expected one of {', '.join(_LAYOUT)}")
+    m = _BRIDGE.cv2_to_imgmsg(np.ascontiguousarray(array, dtype=_LAYOUT[encoding][1]), encoding=encoding)
     m.header.stamp, m.header.frame_id = stamp, frame_id
     return m
 
@@ -36,8 +36,8 @@ def _checked(msg: Image) -> Image:
     for key in ("width", "height"):
         if not 1 <= getattr(msg, key) <= MAX_SIDE_PX:
             raise ValueError(f"image {key} {getattr(msg, key)}: expected 1..{MAX_SIDE_PX}")
-    ch, size = _LAYOUT[msg.encoding]
-    row_bytes = msg.width * ch * size
+    ch, dtype = _LAYOUT[msg.encoding]
+    row_bytes = msg.width * ch * np.dtype(dtype).itemsize
     if msg.step < row_bytes:
         raise ValueError(f"image step {msg.step}: a {msg.encoding} row of width {msg.width} needs {row_bytes} bytes")
     if len(msg.data) != msg.step * msg.height:
