@@ -63,7 +63,9 @@ def test_fused_crawl_then_two_seconds_blank_dead_reckons_with_growing_covariance
         r = run.frame(i, f.rgb, f.depth_m)
         assert r.state == OK, r.reason
         assert run.error_m(r, i) < 0.005                        # measured: at most 3.0 mm
-        assert np.all(np.diag(r.covariance) < 1e-4) and np.array_equal(r.covariance, r.marginal_covariance)
+        # the motion between frames is measured: the covariance grows as odometry's drift does
+        # (measured: at most 1.0e-4, the yaw's, after 1 s)
+        assert np.all(np.diag(r.covariance) < 1e-3) and np.array_equal(r.covariance, r.marginal_covariance)
     seen = r
     black, no_depth = np.zeros_like(straight[0].rgb), np.zeros_like(straight[0].depth_m)
     traces = [np.trace(seen.marginal_covariance[:3, :3])]
@@ -84,7 +86,9 @@ def test_fused_crawl_then_two_seconds_blank_dead_reckons_with_growing_covariance
 
 def test_the_imu_gate_refuses_a_visual_jump(straight):
     """After half a second of tracking the IMU knows the 0.1 m/s; a frame 7 cm further on is refused
-    (gate_m 3 cm), and tracking resumes on the next frame consistent with the IMU's motion."""
+    (gate_m 3 cm). The next motion is measured from the refused frame (its pose may be in the
+    odometry's keyframe): the frame back on the true path is refused too, and tracking resumes on
+    the one after it, consistent with the IMU's motion."""
     run = Run(straight, FusionParams(gate_m=0.03))
     for i in range(5):
         assert run.frame(i, straight[i].rgb, straight[i].depth_m).ok
@@ -94,8 +98,10 @@ def test_the_imu_gate_refuses_a_visual_jump(straight):
     assert np.array_equal(r.covariance, np.eye(6) * LOST_COVARIANCE)
     assert run.error_m(r, 5) < 0.01                             # the IMU's prediction, not the jump
     r = run.frame(6, straight[6].rgb, straight[6].depth_m)
+    assert r.state == LOST and r.reason.startswith("IMU gate"), r.reason
+    r = run.frame(7, straight[7].rgb, straight[7].depth_m)
     assert r.state == OK, r.reason
-    assert run.error_m(r, 6) < 0.01
+    assert run.error_m(r, 7) < 0.01
 
 
 def test_covariance_frames_round_trip_and_levelling():
@@ -125,6 +131,8 @@ def test_config_matches_the_simulated_imu_and_errors_name_the_field(root, tmp_pa
     for text, message in {"fusion: {lag_s: 0}": "fusion.lag_s: must be a finite number > 0, got 0.0",
                           "fusion: {vo_reset_after_lost: -1}": "fusion.vo_reset_after_lost: must be an integer >= 0, "
                                                                "got -1",
+                          "fusion: {vo_factor: loose}": "fusion.vo_factor: must be one of relative, absolute, "
+                                                        "got 'loose'",
                           "fusion: {gate: 1}": "fusion.gate: unknown key (value 1)"}.items():
         path.write_text(text)
         with pytest.raises(ValueError) as exc:
@@ -132,12 +140,12 @@ def test_config_matches_the_simulated_imu_and_errors_name_the_field(root, tmp_pa
         assert str(exc.value) == f"{path}: {message}"
 
 
-def test_fused_rectilinear_crawl_of_the_simulated_robot(root):
-    """3 s of the rectilinear gait from rest: frames at 10 Hz (320x240, D435i-like depth noise) from
-    the head's camera_link (config/camera.yaml: the IMU's frame), the IMU polled every physics step.
-    The head's path is 19 cm (4.9 cm net: the gait sways it), turning up to 12 deg. Neither the
-    odometry nor the fusion loses track; both stay within 2 cm of the truth (measured: the odometry
-    9.8 mm, the fusion 8.1 mm)."""
+def drive_plant(root, gait_name, duration_s, scene=None, start_frames_s=0.0, blank=(), params=None):
+    """The plant driven by a gait from rest for duration_s, its head IMU polled every physics step
+    into a VioFusion (params) from start_frames_s on, frames at 10 Hz (320x240, D435i-like depth
+    noise) from the head's camera_link (config/camera.yaml: the IMU's frame) in scene (the test
+    room's by default); frames whose time falls in blank=(t0, t1) are black with no depth. Returns
+    a list of (t, fused result, visual odometry alone, the camera's true pose)."""
     from snake_autonomy import _core
     from snake_autonomy.perception.camera_model import CameraIntrinsics, CameraMount
     from snake_autonomy.sim.camera import HeadCamera
@@ -149,7 +157,7 @@ def test_fused_rectilinear_crawl_of_the_simulated_robot(root):
     library = _core.GaitLibrary.from_yaml(str(root / "config" / "gaits.yaml"))
     config = SimConfig.from_yaml(str(root / "config" / "sim.yaml"))
     camera_in_head = load_camera_calibration(root / "config" / "camera.yaml").camera_in_head
-    scene_xml, assets_xml = textured_room()
+    scene_xml, assets_xml = scene or textured_room()
     plant = Plant(robot, config.draw(seed=0), (0.0, 0.0, 0.0), scene_xml=scene_xml, assets_xml=assets_xml,
                   imu_in_head=camera_in_head)
     imu = ImuSensor(config.imu, np.random.default_rng(2), step_s=plant.dt_s)
@@ -157,28 +165,60 @@ def test_fused_rectilinear_crawl_of_the_simulated_robot(root):
     intrinsics = CameraIntrinsics(320, 240, focal, focal, 160.0, 120.0)
     noise = DepthNoise(DepthNoiseConfig(), focal, np.random.default_rng(0))
     cam = HeadCamera(plant.model, intrinsics, CameraMount((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)), depth_model=noise)
-    gait = CpgGait(robot, library, "rectilinear")
+    gait = CpgGait(robot, library, gait_name)
 
     def imu_pose():
         return plant.frame_transform("head_link") @ camera_in_head
-    vio = VioFusion(K(), T_IMU_CAMERA, initial_imu_pose=imu_pose())
-    vo = VisualOdometry(K(), initial_pose=imu_pose() @ T_IMU_CAMERA)
-    fused_err, vo_err, frame, path, last = [], [], 0, 0.0, imu_pose()[:3, 3]
-    for step in range(1, int(round(3.0 / plant.dt_s)) + 1):
+    vio = vo = None
+    out, frame = [], int(round(start_frames_s / FRAME_S))
+    for step in range(1, int(round(duration_s / plant.dt_s)) + 1):
         t = step * plant.dt_s
         plant.set_joint_targets(gait.joint_angles(robot, t))
         plant.step_to(t)
         sample = imu.poll(plant)
-        if sample is not None:
+        if vio is None and t + 1e-9 >= start_frames_s:
+            vio = VioFusion(K(), T_IMU_CAMERA, params=params, initial_imu_pose=imu_pose())
+            vo = VisualOdometry(K(), initial_pose=imu_pose() @ T_IMU_CAMERA)
+        if sample is not None and vio is not None:
             vio.add_imu(sample.t_s, sample.angular_velocity_rad_s, sample.linear_acceleration_m_s2)
-        if t + 1e-9 >= frame * FRAME_S:
+        if vio is not None and t + 1e-9 >= frame * FRAME_S:
             f = cam.render(plant.data, imu_pose(), labels=False)       # mount: identity, at camera_link
-            r, rv = vio.add_frame(f.rgb, f.depth_m, t), vo.process(f.rgb, f.depth_m, t)
-            assert r.ok and rv.ok, (t, r.reason, rv.reason)
-            fused_err.append(np.linalg.norm(r.T_world_camera[:3, 3] - f.T_world_camera[:3, 3]))
-            vo_err.append(np.linalg.norm(rv.T_odom_camera[:3, 3] - f.T_world_camera[:3, 3]))
-            path, last = path + np.linalg.norm(f.T_world_camera[:3, 3] - last), f.T_world_camera[:3, 3]
+            rgb, depth = f.rgb, f.depth_m
+            if blank and blank[0] <= t < blank[1]:
+                rgb, depth = np.zeros_like(rgb), np.zeros_like(depth)
+            out.append((t, vio.add_frame(rgb, depth, t), vo.process(rgb, depth, t), f.T_world_camera))
             frame += 1
     cam.close()
-    assert frame == 31 and path > 0.15
+    return out
+
+
+def test_fused_rectilinear_crawl_of_the_simulated_robot(root):
+    """3 s of the rectilinear gait from rest: frames at 10 Hz from the head's camera_link, the IMU
+    polled every physics step. The head's path is 19 cm (4.9 cm net: the gait sways it), turning up
+    to 12 deg. Neither the odometry nor the fusion loses track; both stay within 2 cm of the truth
+    (measured: the odometry 9.8 mm, the fusion 8.1 mm)."""
+    run = drive_plant(root, "rectilinear", 3.0)
+    fused_err, vo_err, path = [], [], 0.0
+    for i, (t, r, rv, T) in enumerate(run):
+        assert r.ok and rv.ok, (t, r.reason, rv.reason)
+        fused_err.append(np.linalg.norm(r.T_world_camera[:3, 3] - T[:3, 3]))
+        vo_err.append(np.linalg.norm(rv.T_odom_camera[:3, 3] - T[:3, 3]))
+        path += np.linalg.norm(T[:3, 3] - run[i - 1][3][:3, 3]) if i else 0.0
+    assert len(run) == 31 and path > 0.15
     assert max(fused_err) < 0.02 and max(vo_err) < 0.02, (max(fused_err), max(vo_err))
+
+
+def test_sidewinding_blank_interval_comes_back_to_the_truth(root):
+    """Sidewinding in the odometry room (sim.launch feedback:=vo's) from 4 s into the gait, 1.5 s of
+    blank frames at 5.5 s: the motion between tracked frames (vo_factor relative) bounds the
+    estimate, and once the odometry sees its keyframe's scene again the estimate comes back towards
+    the truth. Measured: the head's path 1.13 m, 22 of 41 frames lost, 35 cm off at the blank's
+    end, 8.6 cm at the end (the odometry's poses as absolute priors: 29 cm at the end)."""
+    from snake_autonomy.sim.scene import vo_room
+    room = vo_room()
+    run = drive_plant(root, "sidewind", 8.0, scene=(room.scene_xml, room.assets_xml), start_frames_s=4.0,
+                      blank=(5.5, 7.0))
+    err = [float(np.linalg.norm(r.T_world_camera[:3, 3] - T[:3, 3])) for _, r, _, T in run]
+    assert all(not r.ok for t, r, _, _ in run if 5.5 <= t < 7.0)
+    assert max(err) < 0.5, max(err)
+    assert run[-1][1].ok and err[-1] < 0.15, err[-1]

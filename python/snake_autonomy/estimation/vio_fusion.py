@@ -9,14 +9,22 @@ fixed-lag smoother (GTSAM), ROS-free.
 
 One state per camera frame: the IMU's pose X(k) in a gravity-aligned world frame (z up), its
 velocity V(k) and the IMU biases B(k). Consecutive states are tied by a CombinedImuFactor (the
-preintegrated gyro and accelerometer samples between the frames, with the bias random walk); a
-frame the visual odometry tracked adds a pose prior on X(k): the odometry's camera pose (its frame
-is set to the world frame: its initial pose is the first camera pose in the world) moved to the
-IMU, with the odometry's covariance. The odometry's poses are treated as independent measurements
-(a loosely coupled fusion; their errors are in fact correlated over a keyframe's lifetime).
+preintegrated gyro and accelerometer samples between the frames, with the bias random walk). A
+frame the visual odometry tracked adds (vo_factor, config):
+- relative (the default): a between factor from the last tracked frame's state (within half the
+  smoother's window) to X(k): the motion the odometry measured between the two, its covariance the
+  two PnP fits' (the keyframe's own error drops out). The odometry's frame never enters the world:
+  a drifted or restarted odometry frame moves nothing. The first tracked frame after a gap only
+  anchors the next one (it is reported lost). On the simulated star mission (sidewinding) this
+  kept the estimate within metres where the absolute priors ran away (a study; docs/estimation.md).
+- absolute: a pose prior on X(k), the odometry's camera pose (its frame set to the world frame:
+  its initial pose is the first camera pose in the world) moved to the IMU, with the odometry's
+  covariance, as independent measurements (their errors are in fact correlated over a keyframe's
+  lifetime).
 
-The IMU gate: the visual pose is refused when it is further from the pose the IMU predicts from
-the last estimate than gate_m / gate_deg plus gate_sigmas times the prediction's std (so that the
+The IMU gate: the visual pose (relative: the anchor state's estimate moved by the measured motion)
+is refused when it is further from the pose the IMU predicts from the last estimate than gate_m /
+gate_deg plus gate_sigmas times the prediction's std (so that the
 gate widens while dead-reckoning and a diverged state takes the visual pose again). Should the
 smoother fail (an indeterminate system), a new one starts from the visual pose or the prediction.
 
@@ -70,6 +78,9 @@ class FusionParams:
     gate_deg: float = 10.0
     gate_sigmas: float = 3.0                   # ... plus this many of the prediction's std: refused
     vo_reset_after_lost: int = 5               # restart the visual odometry after this many lost frames (0: never)
+    vo_factor: str = "relative"                # relative: the motion between tracked frames; absolute: the pose
+
+    VO_FACTORS = ("relative", "absolute")
 
     def problems(self, prefix: str = "fusion") -> List[str]:
         out = []
@@ -78,6 +89,9 @@ class FusionParams:
             if f.name == "vo_reset_after_lost":
                 if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                     out.append(f"{prefix}.{f.name}: must be an integer >= 0, got {v!r}")
+            elif f.name == "vo_factor":
+                if v not in self.VO_FACTORS:
+                    out.append(f"{prefix}.{f.name}: must be one of {', '.join(self.VO_FACTORS)}, got {v!r}")
             elif isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 out.append(f"{prefix}.{f.name}: must be a finite number > 0, got {v!r}")
         return out
@@ -164,6 +178,7 @@ class VioFusion:
         self._imu: List[tuple] = []                  # samples since the last frame: (t, gyro, accel)
         self._last_imu_t = None
         self._lost_frames = 0
+        self._last_vo = None                         # relative: (state index, stamp, T_vo_imu, PnP covariance)
 
     def add_imu(self, t_s: float, gyro_rad_s, accel_m_s2) -> None:
         self._imu.append((float(t_s), np.asarray(gyro_rad_s, float), np.asarray(accel_m_s2, float)))
@@ -182,32 +197,41 @@ class VioFusion:
         values.insert(V(k), predicted.velocity())
         values.insert(B(k), self._bias)
         vo = self.vo.process(image, depth_m, stamp, mask)
-        state, reason, T_world_imu = OK, "", None
+        state, reason, T_world_imu, anchoring = OK, "", None, False
         if not vo.ok:
             state, reason = LOST, f"visual odometry lost: {vo.reason}"
         else:
-            T_world_imu = vo.T_odom_camera @ self.T_camera_imu
-            reason = self._gate(T_world_imu, predicted.pose().matrix(), pim, stamp - self._t)
-            if reason:
-                state = LOST
+            T_vo_imu = vo.T_odom_camera @ self.T_camera_imu
+            factor, T_world_imu, relative = self._vo_factor(k, vo, T_vo_imu)
+            if factor is None:              # tracked again: the next frame's motion is measured from it
+                state, anchoring = LOST, True
+                reason = "visual odometry: no earlier tracked frame to measure the motion from"
             else:
-                graph.add(gtsam.PriorFactorPose3(X(k), gtsam.Pose3(T_world_imu), self._vo_noise(vo, T_world_imu)))
+                reason = self._gate(T_world_imu, predicted.pose().matrix(), pim, stamp - self._t, relative)
+                if reason:
+                    state = LOST
+                else:
+                    graph.add(factor)
+            if p.vo_factor == "relative":   # the next motion is measured from here, even if refused: a
+                # refused pose may be in the odometry's keyframe, and so in every pose after it
+                self._last_vo = (k, stamp, T_vo_imu, vo.relative_covariance)
         stamps = gtsam.FixedLagSmootherKeyTimestampMap()
         for key in (X(k), V(k), B(k)):
             stamps.insert((key, stamp))
         try:
             self._smoother.update(graph, values, stamps)
             self._k, self._t = k, stamp
+            result = self._estimate(stamp, state, reason, vo)
         except RuntimeError as exc:              # GTSAM's IndeterminateLinearSystemException
             # a new smoother from the visual pose when there is one, else from the IMU's prediction
             start = T_world_imu if state == OK else predicted.pose().matrix()
             self._start(start, predicted.velocity(), self._bias, stamp)
             reason = (reason + "; " if reason else "") + f"smoother restarted: {str(exc).strip().splitlines()[0]}"
-        result = self._estimate(stamp, state, reason, vo)
-        self._lost_frames = 0 if state == OK else self._lost_frames + 1
+            result = self._estimate(stamp, state, reason, vo)
+        self._lost_frames = 0 if state == OK or anchoring else self._lost_frames + 1
         if p.vo_reset_after_lost and self._lost_frames >= p.vo_reset_after_lost:
             self.vo.reset(result.T_world_camera, result.marginal_covariance)
-            self._lost_frames = 0
+            self._lost_frames, self._last_vo = 0, None
         return result
 
     # ---------------------------------------------------------------------------------------------
@@ -227,12 +251,16 @@ class VioFusion:
         self._imu = [s for s in self._imu if s[0] > stamp]
         return pim
 
-    def _gate(self, T_world_imu, T_pred, pim, dt: float) -> str:
+    def _gate(self, T_world_imu, T_pred, pim, dt: float, relative: bool = False) -> str:
         """Why the visual pose is refused ("" when it is not): further from the IMU's prediction than
         gate_m / gate_deg plus gate_sigmas times the prediction's std (the last marginal covariance,
-        its velocity's over dt, and the preintegration's: the gate widens while dead-reckoning)."""
+        its velocity's over dt, and the preintegration's: the gate widens while dead-reckoning).
+        relative: the visual pose is the last state's estimate moved by the measured motion, so the
+        last state's own pose covariance drops out."""
         p = self.params
         pos_var, rot_var, vel_var = self._variances
+        if relative:
+            pos_var = rot_var = 0.0
         cov = np.asarray(pim.preintMeasCov())
         sigma_m = math.sqrt(pos_var + vel_var * dt * dt + float(np.trace(cov[3:6, 3:6])))
         sigma_deg = math.degrees(math.sqrt(rot_var + float(np.trace(cov[0:3, 0:3]))))
@@ -256,6 +284,8 @@ class VioFusion:
         self.vo.reset(self._initial @ self.T_imu_camera)
         vo = self.vo.process(image, depth_m, stamp, mask)
         state, reason = (OK, "") if vo.ok else (LOST, f"visual odometry lost: {vo.reason}")
+        if vo.ok and self.params.vo_factor == "relative":
+            self._last_vo = (self._k, stamp, vo.T_odom_camera @ self.T_camera_imu, vo.relative_covariance)
         return self._estimate(stamp, state, reason, vo)
 
     def _start(self, T_world_imu: np.ndarray, velocity, bias, stamp: float) -> None:
@@ -281,11 +311,32 @@ class VioFusion:
         self._smoother.update(graph, values, stamps)
         self._t = stamp
 
-    def _vo_noise(self, vo: VoResult, T_world_imu: np.ndarray):
+    def _vo_factor(self, k: int, vo: VoResult, T_vo_imu: np.ndarray):
+        """(factor, the IMU's pose it puts state k at, whether it is relative to state k - 1) for a
+        tracked frame; (None, None, False) when relative and no earlier tracked frame is in the window.
+        absolute: a prior on X(k) at the odometry's pose, with its covariance; relative: the motion
+        from the last tracked frame's state (within half the window) as a between factor, with the
+        two frames' PnP covariances (the keyframe's own error drops out of the motion)."""
+        p = self.params
+        if p.vo_factor == "absolute":
+            noise = self._vo_noise(vo.covariance, vo.T_odom_camera, T_vo_imu)
+            return gtsam.PriorFactorPose3(X(k), gtsam.Pose3(T_vo_imu), noise), T_vo_imu, False
+        last = self._last_vo
+        if last is None or vo.stamp - last[1] > 0.5 * p.lag_s:
+            return None, None, False
+        j, _, T_vo_last, rel_last = last
+        T_rel = np.linalg.inv(T_vo_last) @ T_vo_imu
+        noise = self._vo_noise(vo.relative_covariance + rel_last, vo.T_odom_camera, T_vo_imu)
+        T_world_imu = self._smoother.calculateEstimate().atPose3(X(j)).matrix() @ T_rel
+        return gtsam.BetweenFactorPose3(X(j), X(k), gtsam.Pose3(T_rel), noise), T_world_imu, j == k - 1
+
+    def _vo_noise(self, covariance, T_odom_camera, T_vo_imu):
+        """The odometry's camera covariance (its frame's axes) at the IMU, with the floors, in the
+        tangent of the IMU's pose."""
         p = self.params
         floor = np.diag([p.vo_min_sigma_m ** 2] * 3 + [math.radians(p.vo_min_sigma_deg) ** 2] * 3)
-        cov_imu = base_covariance(vo.covariance, vo.T_odom_camera, self.T_camera_imu) + floor
-        return gtsam.noiseModel.Gaussian.Covariance(ros_to_local(cov_imu, T_world_imu[:3, :3]))
+        cov_imu = base_covariance(covariance, T_odom_camera, self.T_camera_imu) + floor
+        return gtsam.noiseModel.Gaussian.Covariance(ros_to_local(cov_imu, T_vo_imu[:3, :3]))
 
     def _estimate(self, stamp, state, reason, vo) -> FusedResult:
         k = self._k

@@ -122,6 +122,9 @@ class VoResult:
     matches: int = 0                   # ratio-test matches to the keyframe
     features: int = 0                  # ORB features in the frame
     keyframe: bool = False             # the frame became the keyframe
+    #: the PnP fit's own covariance against the keyframe (the keyframe's not added; same axes): the
+    #: error of the motion since the keyframe; zero for a first keyframe, None when lost
+    relative_covariance: Optional[np.ndarray] = None
 
     @property
     def ok(self) -> bool:
@@ -233,12 +236,12 @@ class VisualOdometry:
             return self._lost(stamp, f"pose jumped {step_m:.3f} m, {step_deg:.1f} deg from the last good one "
                                      f"(max_step_m {p.max_step_m:g}, max_step_deg {p.max_step_deg:g})",
                               features=n_feat, matches=len(kf_idx), inliers=len(inl))
-        cov = self._covariance_of(T, kf, obj[inl], img[inl], rvec, tvec)
+        cov, rel = self._covariance_of(T, kf, obj[inl], img[inl], rvec, tvec)
         self._pose, self._covariance = T, cov
         new_kf = len(inl) < p.keyframe_min_inliers or len(inl) < p.keyframe_min_overlap * len(kf.points)
         if new_kf:
             new_kf = self._set_keyframe(feats, stamp)
-        return VoResult(stamp, T.copy(), cov.copy(), OK, "", len(inl), len(kf_idx), n_feat, new_kf)
+        return VoResult(stamp, T.copy(), cov.copy(), OK, "", len(inl), len(kf_idx), n_feat, new_kf, rel)
 
     # ---------------------------------------------------------------------------------------------
     def _features(self, image, depth_m, mask=None) -> _Features:
@@ -270,7 +273,8 @@ class VisualOdometry:
             return self._lost(stamp, f"no keyframe yet: {n_3d} features with depth (min_inliers "
                                      f"{self.params.min_inliers})", features=len(feats.uv))
         self._set_keyframe(feats, stamp)
-        return VoResult(stamp, self._pose.copy(), self._covariance.copy(), OK, "", n_3d, 0, len(feats.uv), True)
+        return VoResult(stamp, self._pose.copy(), self._covariance.copy(), OK, "", n_3d, 0, len(feats.uv), True,
+                        np.zeros((6, 6)))
 
     def _set_keyframe(self, feats: _Features, stamp: float) -> bool:
         """The frame becomes the keyframe at the present pose when it has enough 3D features."""
@@ -323,8 +327,8 @@ class VisualOdometry:
         proj, _ = cv2.projectPoints(obj, rvec, tvec, self.K, None)
         return proj.reshape(-1, 2) - img
 
-    def _covariance_of(self, T: np.ndarray, kf: _Keyframe, obj, img, rvec, tvec) -> np.ndarray:
-        """The pose's covariance (see the module's docstring)."""
+    def _covariance_of(self, T: np.ndarray, kf: _Keyframe, obj, img, rvec, tvec):
+        """The pose's covariance (see the module's docstring) and the PnP fit's part of it."""
         K, R, p_cam = self.K, T[:3, :3], T[:3, 3]
         r = self._residuals(obj, img, rvec, tvec)
         n = len(obj)
@@ -355,7 +359,7 @@ class VisualOdometry:
         A = np.eye(6)
         A[:3, 3:] = -skew(p_cam - kf.T_odom_camera[:3, 3])
         cov = A @ kf.covariance @ A.T + rel
-        return 0.5 * (cov + cov.T)
+        return 0.5 * (cov + cov.T), 0.5 * (rel + rel.T)
 
     def _lost(self, stamp: float, reason: str, features: int = 0, matches: int = 0, inliers: int = 0) -> VoResult:
         return VoResult(stamp, self._pose.copy(), np.eye(6) * LOST_COVARIANCE, LOST, reason, inliers, matches,
