@@ -248,3 +248,25 @@ def test_a_lost_keyframe_view_falls_back_to_the_last_tracked_frame(straight):
     alone = VisualOdometry(K())
     alone.process(straight[0].rgb, straight[0].depth_m, 0.0)
     assert not alone.process(straight[-1].rgb, straight[-1].depth_m, 1.9).ok
+
+
+def test_a_predicted_pose_guides_the_matching(yaw):
+    """A keyframe point is matched only to features within guided_radius_px of its projection at the
+    predicted pose: the view 28.5 deg round is tracked with the true pose predicted, and lost (too
+    few matches) with a prediction 15 deg off, whose projections fall about 80 px away."""
+    first, last = yaw[0], yaw[-1]
+    truth = np.linalg.inv(first.T_world_camera) @ last.T_world_camera
+    off = truth.copy()
+    off[:3, :3] = off[:3, :3] @ _rotation_y_deg(15.0)
+    for predicted, tracked in ((truth, True), (off, False), (None, True)):
+        vo = VisualOdometry(K(), VoParams(guided_radius_px=30.0))
+        vo.process(first.rgb, first.depth_m, 0.0)
+        r = vo.process(last.rgb, last.depth_m, 0.1, predicted=predicted)
+        assert r.ok == tracked, (predicted is None, r.reason)
+        if not tracked:
+            assert r.reason.startswith("too few matches to the keyframe"), r.reason
+
+
+def _rotation_y_deg(deg):
+    c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])

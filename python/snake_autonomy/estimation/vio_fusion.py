@@ -22,6 +22,15 @@ frame the visual odometry tracked adds (vo_factor, config):
   covariance, as independent measurements (their errors are in fact correlated over a keyframe's
   lifetime).
 
+The robot's motion model (velocity_prior_sigma_m_s, height_prior_sigma_m; 0 turns each off):
+every state's velocity is zero within the first (the robot crawls below 0.6 m/s) and the IMU's
+height the first state's within the second (it crawls on the floor): held still in the dark with
+an accelerometer bias the fusion does not know, the IMU alone ran away by metres in 10 s.
+
+The visual odometry is given the camera's pose the IMU predicts (its last good pose moved by the
+fused motion since): it matches a keyframe point only near where that pose projects it
+(VoParams.guided_radius_px), which keeps the fast turns of sidewinding from mismatching.
+
 The IMU gate: the visual pose (relative: the anchor state's estimate moved by the measured motion)
 is refused when it is further from the pose the IMU predicts from the last estimate than gate_m /
 gate_deg plus gate_sigmas times the prediction's std (so that the
@@ -77,8 +86,12 @@ class FusionParams:
     gate_m: float = 0.1                        # visual pose further than this from the IMU's prediction ...
     gate_deg: float = 10.0
     gate_sigmas: float = 3.0                   # ... plus this many of the prediction's std: refused
-    vo_reset_after_lost: int = 5               # restart the visual odometry after this many lost frames (0: never)
+    vo_reset_after_lost: int = 2               # restart the visual odometry after this many lost frames (0: never)
     vo_factor: str = "relative"                # relative: the motion between tracked frames; absolute: the pose
+    # the robot's motion model (0: none): every state's velocity zero within this std (it crawls
+    # below 0.6 m/s; dead-reckoning on the IMU alone otherwise runs away while lost) ...
+    velocity_prior_sigma_m_s: float = 0.5
+    height_prior_sigma_m: float = 0.05         # ... and the IMU's height the first state's within this std
 
     VO_FACTORS = ("relative", "absolute")
 
@@ -89,6 +102,9 @@ class FusionParams:
             if f.name == "vo_reset_after_lost":
                 if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                     out.append(f"{prefix}.{f.name}: must be an integer >= 0, got {v!r}")
+            elif f.name in ("velocity_prior_sigma_m_s", "height_prior_sigma_m"):
+                if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                    out.append(f"{prefix}.{f.name}: must be a finite number >= 0, got {v!r}")
             elif f.name == "vo_factor":
                 if v not in self.VO_FACTORS:
                     out.append(f"{prefix}.{f.name}: must be one of {', '.join(self.VO_FACTORS)}, got {v!r}")
@@ -179,6 +195,7 @@ class VioFusion:
         self._last_imu_t = None
         self._lost_frames = 0
         self._last_vo = None                         # relative: (state index, stamp, T_vo_imu, PnP covariance)
+        self._vo_key = 0                             # the state at the odometry's last good pose
 
     def add_imu(self, t_s: float, gyro_rad_s, accel_m_s2) -> None:
         self._imu.append((float(t_s), np.asarray(gyro_rad_s, float), np.asarray(accel_m_s2, float)))
@@ -196,7 +213,11 @@ class VioFusion:
         values.insert(X(k), predicted.pose())
         values.insert(V(k), predicted.velocity())
         values.insert(B(k), self._bias)
-        vo = self.vo.process(image, depth_m, stamp, mask)
+        for factor in self._motion_priors(k, predicted.pose()):
+            graph.add(factor)
+        vo = self.vo.process(image, depth_m, stamp, mask, self._vo_prediction(predicted.pose()))
+        if vo.ok:
+            self._vo_key = k
         state, reason, T_world_imu, anchoring = OK, "", None, False
         if not vo.ok:
             state, reason = LOST, f"visual odometry lost: {vo.reason}"
@@ -223,15 +244,20 @@ class VioFusion:
             self._k, self._t = k, stamp
             result = self._estimate(stamp, state, reason, vo)
         except RuntimeError as exc:              # GTSAM's IndeterminateLinearSystemException
-            # a new smoother from the visual pose when there is one, else from the IMU's prediction
+            # a new smoother from the visual pose when there is one, else from the IMU's prediction;
+            # its first state X(k), the velocity zero within the prior's sigma (not a prediction
+            # that may have run away)
             start = T_world_imu if state == OK else predicted.pose().matrix()
-            self._start(start, predicted.velocity(), self._bias, stamp)
+            self._k = k - 1
+            self._start(start, np.zeros(3), self._bias, stamp)
+            if self._last_vo is not None and self._last_vo[0] != k:
+                self._last_vo = None
             reason = (reason + "; " if reason else "") + f"smoother restarted: {str(exc).strip().splitlines()[0]}"
             result = self._estimate(stamp, state, reason, vo)
         self._lost_frames = 0 if state == OK or anchoring else self._lost_frames + 1
         if p.vo_reset_after_lost and self._lost_frames >= p.vo_reset_after_lost:
             self.vo.reset(result.T_world_camera, result.marginal_covariance)
-            self._lost_frames, self._last_vo = 0, None
+            self._lost_frames, self._last_vo, self._vo_key = 0, None, self._k
         return result
 
     # ---------------------------------------------------------------------------------------------
@@ -311,6 +337,33 @@ class VioFusion:
         self._smoother.update(graph, values, stamps)
         self._t = stamp
 
+    def _vo_prediction(self, predicted) -> Optional[np.ndarray]:
+        """The camera's pose the IMU predicts now, in the odometry's frame: its last good pose moved
+        by the fused motion since that state (None when the state has left the window)."""
+        estimate = self._smoother.calculateEstimate()
+        if not estimate.exists(X(self._vo_key)):
+            return None
+        T_world_then = estimate.atPose3(X(self._vo_key)).matrix() @ self.T_imu_camera
+        return self.vo.pose @ np.linalg.inv(T_world_then) @ predicted.matrix() @ self.T_imu_camera
+
+    def _motion_priors(self, k: int, predicted):
+        """The motion model's priors on state k (velocity_prior_sigma_m_s, height_prior_sigma_m): the
+        velocity zero; the height the first state's (a pose prior informative along the world's z
+        only, about the predicted pose)."""
+        p, out = self.params, []
+        if p.velocity_prior_sigma_m_s > 0:
+            out.append(gtsam.PriorFactorVector(V(k), np.zeros(3),
+                                               gtsam.noiseModel.Isotropic.Sigma(3, p.velocity_prior_sigma_m_s)))
+        if p.height_prior_sigma_m > 0:
+            R = predicted.rotation().matrix()
+            up = R.T @ np.array([0.0, 0.0, 1.0])       # the world's z in the IMU frame (the tangent's)
+            info = np.eye(6) * 1e-9
+            info[3:, 3:] += np.outer(up, up) / p.height_prior_sigma_m ** 2
+            t = predicted.translation()
+            at = gtsam.Pose3(gtsam.Rot3(R), np.array([t[0], t[1], self._initial[2, 3]]))
+            out.append(gtsam.PriorFactorPose3(X(k), at, gtsam.noiseModel.Gaussian.Information(info)))
+        return out
+
     def _vo_factor(self, k: int, vo: VoResult, T_vo_imu: np.ndarray):
         """(factor, the IMU's pose it puts state k at, whether it is relative to state k - 1) for a
         tracked frame; (None, None, False) when relative and no earlier tracked frame is in the window.
@@ -321,13 +374,13 @@ class VioFusion:
         if p.vo_factor == "absolute":
             noise = self._vo_noise(vo.covariance, vo.T_odom_camera, T_vo_imu)
             return gtsam.PriorFactorPose3(X(k), gtsam.Pose3(T_vo_imu), noise), T_vo_imu, False
-        last = self._last_vo
-        if last is None or vo.stamp - last[1] > 0.5 * p.lag_s:
+        last, estimate = self._last_vo, self._smoother.calculateEstimate()
+        if last is None or vo.stamp - last[1] > 0.5 * p.lag_s or not estimate.exists(X(last[0])):
             return None, None, False
         j, _, T_vo_last, rel_last = last
         T_rel = np.linalg.inv(T_vo_last) @ T_vo_imu
         noise = self._vo_noise(vo.relative_covariance + rel_last, vo.T_odom_camera, T_vo_imu)
-        T_world_imu = self._smoother.calculateEstimate().atPose3(X(j)).matrix() @ T_rel
+        T_world_imu = estimate.atPose3(X(j)).matrix() @ T_rel
         return gtsam.BetweenFactorPose3(X(j), X(k), gtsam.Pose3(T_rel), noise), T_world_imu, j == k - 1
 
     def _vo_noise(self, covariance, T_odom_camera, T_vo_imu):

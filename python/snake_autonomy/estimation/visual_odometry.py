@@ -71,6 +71,8 @@ class VoParams:
     max_step_m: float = 0.3            # a pose further than this from the last good one: lost (gross error)
     max_step_deg: float = 45.0
     min_pixel_sigma_px: float = 1.0    # the covariance's reprojection std is at least this
+    guided_radius_px: float = 30.0     # with a predicted pose: a keyframe point matches only features within
+                                       # this of where the prediction projects it (0: every feature)
 
     def problems(self, prefix: str = "vo") -> List[str]:
         """Every invalid value, each naming its key and value."""
@@ -100,7 +102,7 @@ _LIMITS = {
     "ransac_confidence": (float, 0.5, 0.99999), "min_inliers": (int, 6, 10000),
     "keyframe_min_inliers": (int, 6, 10000), "keyframe_min_overlap": (float, 0.0, 1.0),
     "max_step_m": (float, 1e-3, 100.0), "max_step_deg": (float, 0.1, 180.0),
-    "min_pixel_sigma_px": (float, 0.0, 100.0),
+    "min_pixel_sigma_px": (float, 0.0, 100.0), "guided_radius_px": (float, 0.0, 10000.0),
 }
 assert set(_LIMITS) == {f.name for f in fields(VoParams)}
 
@@ -186,33 +188,35 @@ class VisualOdometry:
         return self._pose.copy()
 
     # ---------------------------------------------------------------------------------------------
-    def process(self, image, depth_m, stamp: float, mask=None) -> VoResult:
+    def process(self, image, depth_m, stamp: float, mask=None, predicted=None) -> VoResult:
         """One frame: image (H, W) grey or (H, W, 3) RGB uint8, depth_m (H, W) metres along the
         optical axis (0 or NaN: no depth), stamp in seconds; mask (H, W), optional: features only
-        where it is non-zero (e.g. not on the robot's own body, which moves with the camera)."""
+        where it is non-zero (e.g. not on the robot's own body, which moves with the camera);
+        predicted (4x4, optional): the camera's pose expected now (e.g. from the IMU): with
+        guided_radius_px > 0 a keyframe point is matched only to features near its projection there."""
         feats = self._features(image, depth_m, mask)
         if self._keyframe is None:
             return self._first_keyframe(feats, stamp)
-        result = self._track(feats, stamp)
+        result = self._track(feats, stamp, predicted)
         previous, self._previous = self._previous, None
         if not result.ok and previous is not None and result.features >= self.params.min_inliers:
             # the keyframe's view is gone: the last tracked frame (at the last good pose) becomes
             # the keyframe and the frame is tried against it
             if self._set_keyframe(previous, stamp):
-                retry = self._track(feats, stamp)
+                retry = self._track(feats, stamp, predicted)
                 result = retry if retry.ok else result
         if result.ok and not result.keyframe:
             self._previous = feats
         return result
 
-    def _track(self, feats: "_Features", stamp: float) -> VoResult:
+    def _track(self, feats: "_Features", stamp: float, predicted=None) -> VoResult:
         """The frame's pose against the keyframe (a new keyframe when the inliers drop), or lost."""
         kf = self._keyframe
         p = self.params
         n_feat = len(feats.uv)
         if feats.descriptors is None or n_feat < p.min_inliers:
             return self._lost(stamp, f"too few features: {n_feat} (min_inliers {p.min_inliers})", features=n_feat)
-        kf_idx, cur_idx = self._match(kf.descriptors, feats.descriptors)
+        kf_idx, cur_idx = self._match(kf.descriptors, feats.descriptors, self._guide(kf, feats, predicted))
         if len(kf_idx) < p.min_inliers:
             return self._lost(stamp, f"too few matches to the keyframe: {len(kf_idx)} (min_inliers "
                                      f"{p.min_inliers})", features=n_feat, matches=len(kf_idx))
@@ -289,10 +293,25 @@ class VisualOdometry:
         self.keyframes += 1
         return True
 
-    def _match(self, kf_desc: np.ndarray, desc: np.ndarray):
-        """Indices (keyframe, frame) of the matches passing the ratio test and max_hamming."""
+    def _guide(self, kf: "_Keyframe", feats: "_Features", predicted) -> Optional[np.ndarray]:
+        """(keyframe points, features) uint8: 1 where the feature lies within guided_radius_px of
+        the point's projection at the predicted pose (None: no prediction, or guiding off)."""
+        r = self.params.guided_radius_px
+        if predicted is None or r <= 0:
+            return None
+        T_cam_kf = np.linalg.inv(np.asarray(predicted, float)) @ kf.T_odom_camera
+        pts = kf.points @ T_cam_kf[:3, :3].T + T_cam_kf[:3, 3]
+        z = pts[:, 2]
+        uv = (pts[:, :2] / np.where(z > 1e-6, z, 1.0)[:, None]) * np.diag(self.K)[:2] + self.K[:2, 2]
+        d2 = np.sum((uv[:, None, :] - feats.uv[None, :, :]) ** 2, axis=2)
+        return ((d2 <= r * r) & (z > 1e-6)[:, None]).astype(np.uint8)
+
+    def _match(self, kf_desc: np.ndarray, desc: np.ndarray, allowed: Optional[np.ndarray] = None):
+        """Indices (keyframe, frame) of the matches passing the ratio test and max_hamming (only
+        the pairs allowed, when given)."""
         p = self.params
-        pairs = self._matcher.knnMatch(kf_desc, desc, k=2)
+        pairs = (self._matcher.knnMatch(kf_desc, desc, k=2) if allowed is None
+                 else self._matcher.knnMatch(kf_desc, desc, k=2, mask=allowed))
         kf_idx, cur_idx, used = [], [], set()
         for pair in pairs:
             if not pair:
