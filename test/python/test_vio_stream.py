@@ -7,7 +7,7 @@ import pytest
 
 from snake_autonomy.estimation.vio_fusion import FusedResult
 from snake_autonomy.estimation.visual_odometry import LOST, LOST_COVARIANCE, OK
-from snake_autonomy.estimation.vio_stream import VioStream
+from snake_autonomy.estimation.vio_stream import VioStream, lost_cause
 
 
 class FakeFusion:
@@ -25,7 +25,8 @@ class FakeFusion:
         T[0, 3] = stamp
         lost = stamp in self.lost_at
         cov = np.eye(6) * (LOST_COVARIANCE if lost else 1e-4)
-        return FusedResult(stamp, T, T, np.zeros(3), cov, cov, LOST if lost else OK, "lost" if lost else "", None)
+        reason = "IMU gate: the visual pose is 0.2 m, 3.0 deg from the IMU's prediction" if lost else ""
+        return FusedResult(stamp, T, T, np.zeros(3), cov, cov, LOST if lost else OK, reason, None)
 
 
 class Clock:
@@ -96,6 +97,12 @@ def test_a_failing_frame_is_counted_and_published_lost_at_the_last_pose(stream):
     assert st.lost_intervals == [(0.2, 0.4)] and not st.lost_now()
     summary = st.summary()
     assert summary["lost_intervals"] == 1 and summary["lost_s_total"] == pytest.approx(0.2)
+    # lost frames counted by cause (the reason without its figures), a failure as "failed"
+    assert st.lost_causes == {"failed": 1, "IMU gate: the visual pose is": 1}
+    assert summary["lost_causes"] in ("1 failed; 1 IMU gate: the visual pose is",
+                                      "1 IMU gate: the visual pose is; 1 failed")
+    assert lost_cause("visual odometry lost: too few inliers: 12 (min_inliers 20)") == \
+        "visual odometry lost: too few inliers"
 
 
 def test_a_failure_before_any_estimate_publishes_nothing(stream):

@@ -16,8 +16,10 @@ The pose published is the IMU's frame (camera_link: x forward, z up; RTAB-Map's 
 frame), T_world_imu; its covariance (geometry_msgs order, about the world's axes) is the fusion's,
 whose origin is the same as the optical frame's (the two differ by a rotation only).
 """
+import re
 import threading
 import time
+from collections import Counter
 from dataclasses import dataclass, field
 from typing import List, Optional, Tuple
 
@@ -50,6 +52,8 @@ class StreamStats:
     last_error: str = ""
     lost_intervals: List[Tuple[float, Optional[float]]] = field(default_factory=list)   # (start, end or None)
     ms: List[float] = field(default_factory=list)        # the last 100 frames' times
+    lost_causes: Counter = field(default_factory=Counter)   # lost frames by cause (lost_cause)
+    restarts: int = 0                 # the fusion's smoother restarted (an indeterminate system)
 
     def lost_now(self) -> bool:
         return bool(self.lost_intervals) and self.lost_intervals[-1][1] is None
@@ -61,7 +65,15 @@ class StreamStats:
         return {"frames": self.frames, "tracked": self.tracked, "lost": self.lost, "failed": self.failed,
                 "dropped": self.dropped, "lost_intervals": len(self.lost_intervals),
                 "lost_s_total": float(total_lost), "ms_median": float(np.median(ms)),
-                "ms_p90": float(np.percentile(ms, 90)), "ms_last": float(ms[-1]), "last_error": self.last_error}
+                "ms_p90": float(np.percentile(ms, 90)), "ms_last": float(ms[-1]), "last_error": self.last_error,
+                "restarts": self.restarts,
+                "lost_causes": "; ".join(f"{n} {cause}" for cause, n in self.lost_causes.most_common())}
+
+
+def lost_cause(reason: str) -> str:
+    """A lost frame's reason without its figures: the text before the first number ("IMU gate: the
+    visual pose is 0.2 m ..." -> "IMU gate: the visual pose is")."""
+    return re.split(r"\d", reason, maxsplit=1)[0].rstrip(" :,(") or "lost"
 
 
 class VioStream:
@@ -151,8 +163,11 @@ class VioStream:
                 s.lost_intervals[-1] = (s.lost_intervals[-1][0], stamp)
         else:
             s.lost += 1
+            s.lost_causes[lost_cause(result.reason) if result is not None else "failed"] += 1
             if not s.lost_now():
                 s.lost_intervals.append((stamp, None))
+        if result is not None and "smoother restarted" in result.reason:
+            s.restarts += 1
         if result is None:              # failed: the last pose, lost (none before the first estimate)
             if self._last is None:
                 return None

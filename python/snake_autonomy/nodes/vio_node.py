@@ -11,8 +11,9 @@ Publishes   odom (nav_msgs/Odometry, one per processed frame: header.frame_id ~o
             zero yaw; pose covariance the smoother's (geometry_msgs order), 9999 on the diagonal while
             lost; twist: the linear velocity in camera_link, no covariance given),
             /diagnostics ("vio: visual-inertial odometry", every second: frames, tracked, lost,
-            failed, dropped, lost intervals and their total, ms per frame median / p90 / last; WARN
-            while lost, ERROR before the first frame or after a failure in the last second).
+            failed, dropped, lost intervals and their total, lost frames by cause, smoother restarts,
+            ms per frame median / p90 / last; WARN while lost, ERROR before the first frame or after a
+            failure in the last second). The log says when tracking is lost and why, and when it resumes.
             No TF: camera_link already hangs from base_link (the URDF), and the pose remapper turns odom
             into base_pose.
 Params      ~config (config/estimation.yaml: vo: and fusion:), ~odom_frame, ~camera_frame,
@@ -58,6 +59,7 @@ class VioNode:
         self.imu_wait_s = float(rospy.get_param("~imu_wait_s", 0.1))
         self.stream = None                   # made on the first camera_info
         self.bad_inputs, self.failed_seen = 0, 0
+        self.was_ok = True
         self._wake = threading.Event()
         self.pub = rospy.Publisher("odom", Odometry, queue_size=20)
         self.updater = diagnostic_updater.Updater()
@@ -118,12 +120,22 @@ class VioNode:
                 if out is not None:
                     self.pub.publish(odometry_msg(out, rospy.Time.from_sec(out.stamp), self.odom_frame,
                                                   self.camera_frame))
+                    self.log_change(out)
                     self._wake.set()         # another frame may be waiting
                 self.updater.update()
             except rospy.ROSException:
                 break
             except Exception as exc:         # noqa: BLE001 - the loop outlives any one frame
                 self.bad_input(f"worker: {type(exc).__name__}: {exc}")
+
+    def log_change(self, out):
+        """The log says when tracking is lost and why, when it resumes, and every smoother restart."""
+        if "smoother restarted" in out.reason:
+            rospy.logwarn(f"vio: {out.reason}")
+        if out.ok != self.was_ok:
+            rospy.loginfo(f"vio: tracking at {out.stamp:.2f}" if out.ok
+                          else f"vio: lost at {out.stamp:.2f}: {out.reason}")
+        self.was_ok = out.ok
 
     def diagnose(self, stat):
         if self.stream is None:
