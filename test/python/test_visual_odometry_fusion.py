@@ -62,9 +62,8 @@ def test_fused_crawl_then_two_seconds_blank_dead_reckons_with_growing_covariance
     for i, f in enumerate(straight):
         r = run.frame(i, f.rgb, f.depth_m)
         assert r.state == OK, r.reason
-        assert run.error_m(r, i) < 0.005                        # measured: at most 3.0 mm
+        assert run.error_m(r, i) < 0.005                        # measured: at most 2.8 mm
         # the motion between frames is measured: the covariance grows as odometry's drift does
-        # (measured: at most 1.0e-4, the yaw's, after 1 s)
         assert np.all(np.diag(r.covariance) < 1e-3) and np.array_equal(r.covariance, r.marginal_covariance)
     seen = r
     black, no_depth = np.zeros_like(straight[0].rgb), np.zeros_like(straight[0].depth_m)
@@ -77,7 +76,7 @@ def test_fused_crawl_then_two_seconds_blank_dead_reckons_with_growing_covariance
         traces.append(np.trace(r.marginal_covariance[:3, :3]))
     assert all(b > a for a, b in zip(traces, traces[1:])), traces
     # dead-reckoned, not held: it moved on about as far as the truth (0.2 m); the error (measured
-    # 5.0 cm) within 3 marginal stds
+    # 2.6 cm) within 3 marginal stds
     moved = np.linalg.norm(r.T_world_camera[:3, 3] - seen.T_world_camera[:3, 3])
     assert 0.1 < moved < 0.3, moved
     err = run.error_m(r, n + 19)
@@ -196,7 +195,7 @@ def test_fused_rectilinear_crawl_of_the_simulated_robot(root):
     """3 s of the rectilinear gait from rest: frames at 10 Hz from the head's camera_link, the IMU
     polled every physics step. The head's path is 19 cm (4.9 cm net: the gait sways it), turning up
     to 12 deg. Neither the odometry nor the fusion loses track; both stay within 2 cm of the truth
-    (measured: the odometry 9.8 mm, the fusion 8.1 mm)."""
+    (measured: the odometry 9.8 mm, the fusion 13.7 mm; 8.1 mm with absolute pose priors)."""
     run = drive_plant(root, "rectilinear", 3.0)
     fused_err, vo_err, path = [], [], 0.0
     for i, (t, r, rv, T) in enumerate(run):
@@ -210,18 +209,19 @@ def test_fused_rectilinear_crawl_of_the_simulated_robot(root):
 
 def test_sidewinding_blank_interval_comes_back_to_the_truth(root):
     """Sidewinding in the odometry room (sim.launch feedback:=vo's) from 4 s into the gait, 1.5 s of
-    blank frames at 5.5 s: the motion between tracked frames (vo_factor relative) bounds the
-    estimate, and once the odometry sees its keyframe's scene again the estimate comes back towards
-    the truth. Measured: the head's path 1.13 m, 22 of 41 frames lost, 35 cm off at the blank's
-    end, 8.6 cm at the end (the odometry's poses as absolute priors: 29 cm at the end)."""
+    blank frames at 5.5 s: the motion between tracked frames (vo_factor relative) and the motion
+    priors bound the estimate, and once the odometry tracks again it stays near the truth.
+    Measured: the head's path 1.13 m, 16 of 41 frames lost, 4.7 cm off at the blank's end, 4.3 cm
+    at the end, 7.6 cm at most (the odometry's poses as absolute priors: 12.6 cm at the end; the
+    earlier defaults, absolute without the priors or the guided matching: 29 cm)."""
     from snake_autonomy.sim.scene import vo_room
     room = vo_room()
     run = drive_plant(root, "sidewind", 8.0, scene=(room.scene_xml, room.assets_xml), start_frames_s=4.0,
                       blank=(5.5, 7.0))
     err = [float(np.linalg.norm(r.T_world_camera[:3, 3] - T[:3, 3])) for _, r, _, T in run]
     assert all(not r.ok for t, r, _, _ in run if 5.5 <= t < 7.0)
-    assert max(err) < 0.5, max(err)
-    assert run[-1][1].ok and err[-1] < 0.15, err[-1]
+    assert max(err) < 0.15, max(err)
+    assert run[-1][1].ok and err[-1] < 0.08, err[-1]
 
 
 def test_motion_priors_hold_a_still_robot_in_the_dark():
