@@ -92,6 +92,12 @@ class FusionParams:
     # below 0.6 m/s; dead-reckoning on the IMU alone otherwise runs away while lost) ...
     velocity_prior_sigma_m_s: float = 0.5
     height_prior_sigma_m: float = 0.05         # ... and the IMU's height the first state's within this std
+    # standing still while lost (every IMU sample since the last frame within these of rest: the gait
+    # turns the head at rad/s, the mission holds the robot while the pose is lost; a constant velocity
+    # without rotation reads the same): the velocity zero within still_sigma_m_s
+    still_gyro_rad_s: float = 0.05             # (0: never taken as still)
+    still_accel_m_s2: float = 0.3              # the specific force's norm within this of gravity
+    still_sigma_m_s: float = 0.01
 
     VO_FACTORS = ("relative", "absolute")
 
@@ -102,7 +108,7 @@ class FusionParams:
             if f.name == "vo_reset_after_lost":
                 if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                     out.append(f"{prefix}.{f.name}: must be an integer >= 0, got {v!r}")
-            elif f.name in ("velocity_prior_sigma_m_s", "height_prior_sigma_m"):
+            elif f.name in ("velocity_prior_sigma_m_s", "height_prior_sigma_m", "still_gyro_rad_s"):
                 if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                     out.append(f"{prefix}.{f.name}: must be a finite number >= 0, got {v!r}")
             elif f.name == "vo_factor":
@@ -206,7 +212,7 @@ class VioFusion:
         if self._k < 0:
             return self._first_frame(image, depth_m, stamp, mask)
         p, k = self.params, self._k + 1
-        pim = self._preintegrate(stamp)
+        pim, still = self._preintegrate(stamp)
         predicted = pim.predict(self._state, self._bias)
         graph, values = gtsam.NonlinearFactorGraph(), gtsam.Values()
         graph.add(gtsam.CombinedImuFactor(X(k - 1), V(k - 1), X(k), V(k), B(k - 1), B(k), pim))
@@ -236,6 +242,9 @@ class VioFusion:
             if p.vo_factor == "relative":   # the next motion is measured from here, even if refused: a
                 # refused pose may be in the odometry's keyframe, and so in every pose after it
                 self._last_vo = (k, stamp, T_vo_imu, vo.relative_covariance)
+        if still and state == LOST:     # standing still while lost (the mission holds the robot)
+            graph.add(gtsam.PriorFactorVector(V(k), np.zeros(3),
+                                              gtsam.noiseModel.Isotropic.Sigma(3, p.still_sigma_m_s)))
         stamps = gtsam.FixedLagSmootherKeyTimestampMap()
         for key in (X(k), V(k), B(k)):
             stamps.insert((key, stamp))
@@ -263,19 +272,23 @@ class VioFusion:
     # ---------------------------------------------------------------------------------------------
     def _preintegrate(self, stamp: float):
         """The IMU samples since the last frame up to stamp (each held over the interval it ends;
-        the last one held up to stamp), consumed."""
+        the last one held up to stamp), consumed; and whether every one of them is at rest
+        (still_gyro_rad_s, still_accel_m_s2)."""
+        p = self.params
         pim = gtsam.PreintegratedCombinedMeasurements(self._pim_params, self._bias)
-        t = self._t
+        t, n, still = self._t, 0, p.still_gyro_rad_s > 0
         for t_s, gyro, accel in self._imu:
             if t_s > stamp:
                 break
             if t_s > t:
                 pim.integrateMeasurement(accel, gyro, t_s - t)
-                t = t_s
+                t, n = t_s, n + 1
+                still = still and (float(np.linalg.norm(gyro)) <= p.still_gyro_rad_s and
+                                   abs(float(np.linalg.norm(accel)) - GRAVITY_M_S2) <= p.still_accel_m_s2)
         if stamp > t and self._imu:
             pim.integrateMeasurement(self._imu[-1][2], self._imu[-1][1], stamp - t)
         self._imu = [s for s in self._imu if s[0] > stamp]
-        return pim
+        return pim, still and n > 0
 
     def _gate(self, T_world_imu, T_pred, pim, dt: float, relative: bool = False) -> str:
         """Why the visual pose is refused ("" when it is not): further from the IMU's prediction than
