@@ -272,3 +272,16 @@ def test_the_published_odometry_is_continuous_through_a_correction(straight):
     smoothed_step = np.linalg.norm(results[13].T_world_imu[:3, 3] - results[12].T_world_imu[:3, 3])
     odom_step = np.linalg.norm(results[13].T_odom_imu[:3, 3] - results[12].T_odom_imu[:3, 3])
     assert smoothed_step > 0.03 and odom_step < 0.02, (smoothed_step, odom_step)
+
+
+def test_the_gate_takes_the_camera_after_refusing_it_gate_max_refused_times(straight):
+    """A state that ran away refuses every visual pose, and the motion the camera measures could
+    never bring it back (seen through ROS: 1.9 m/s dead-reckoned, 31 frames refused in 6.6 s). With
+    a gate that refuses everything, gate_max_refused 3 takes the fourth tracked frame; 0 never."""
+    for max_refused, expected in ((3, [False, False, False, True, False]), (0, [False] * 5)):
+        run = Run(straight, FusionParams(gate_max_refused=max_refused, vo_reset_after_lost=0, still_gyro_rad_s=0.0))
+        for i in range(5):
+            assert run.frame(i, straight[i].rgb, straight[i].depth_m).ok
+        run.vio._gate = lambda *args: "IMU gate: refused (test)"
+        states = [run.frame(i, straight[i].rgb, straight[i].depth_m).ok for i in range(5, 10)]
+        assert states == expected, (max_refused, states)

@@ -86,6 +86,8 @@ class FusionParams:
     gate_m: float = 0.1                        # visual pose further than this from the IMU's prediction ...
     gate_deg: float = 10.0
     gate_sigmas: float = 3.0                   # ... plus this many of the prediction's std: refused
+    gate_max_refused: int = 3                  # after this many tracked frames refused in a row the next one is
+                                               # taken (a runaway state refuses every visual pose; 0: never)
     vo_reset_after_lost: int = 2               # restart the visual odometry after this many lost frames (0: never)
     vo_factor: str = "relative"                # relative: the motion between tracked frames; absolute: the pose
     # the robot's motion model (0: none): every state's velocity zero within this std (it crawls
@@ -105,7 +107,7 @@ class FusionParams:
         out = []
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name == "vo_reset_after_lost":
+            if f.name in ("vo_reset_after_lost", "gate_max_refused"):
                 if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                     out.append(f"{prefix}.{f.name}: must be an integer >= 0, got {v!r}")
             elif f.name in ("velocity_prior_sigma_m_s", "height_prior_sigma_m", "still_gyro_rad_s"):
@@ -206,6 +208,7 @@ class VioFusion:
         self._last_vo = None                         # relative: (state index, stamp, T_vo_imu, PnP covariance)
         self._vo_key = 0                             # the state at the odometry's last good pose
         self._odom = self._last_pose = None          # the continuous odometry; the last state's estimate
+        self._refused = 0                            # tracked frames the gate refused in a row
 
     def add_imu(self, t_s: float, gyro_rad_s, accel_m_s2) -> None:
         self._imu.append((float(t_s), np.asarray(gyro_rad_s, float), np.asarray(accel_m_s2, float)))
@@ -239,6 +242,9 @@ class VioFusion:
                 reason = "visual odometry: no earlier tracked frame to measure the motion from"
             else:
                 reason = self._gate(T_world_imu, predicted.pose().matrix(), pim, stamp - self._t, relative)
+                if reason and self._refused >= p.gate_max_refused > 0:
+                    reason = ""                 # the camera agreed with itself that long: the IMU's state is off
+                self._refused = self._refused + 1 if reason else 0
                 if reason:
                     state = LOST
                 else:
