@@ -228,7 +228,8 @@ class VioFusion:
         values.insert(B(k), self._bias)
         for factor in self._motion_priors(k, predicted.pose()):
             graph.add(factor)
-        vo = self.vo.process(image, depth_m, stamp, mask, self._vo_prediction(predicted.pose()))
+        before = self._smoother.calculateEstimate()     # the states so far (before this frame's update)
+        vo = self.vo.process(image, depth_m, stamp, mask, self._vo_prediction(before, predicted.pose()))
         if vo.ok:
             self._vo_key = k
         state, reason, T_world_imu, anchoring = OK, "", None, False
@@ -236,7 +237,7 @@ class VioFusion:
             state, reason = LOST, f"visual odometry lost: {vo.reason}"
         else:
             T_vo_imu = vo.T_odom_camera @ self.T_camera_imu
-            factor, T_world_imu, relative = self._vo_factor(k, vo, T_vo_imu)
+            factor, T_world_imu, relative = self._vo_factor(before, k, vo, T_vo_imu)
             if factor is None:              # tracked again: the next frame's motion is measured from it
                 state, anchoring = LOST, True
                 reason = "visual odometry: no earlier tracked frame to measure the motion from"
@@ -360,10 +361,9 @@ class VioFusion:
         self._smoother.update(graph, values, stamps)
         self._t = stamp
 
-    def _vo_prediction(self, predicted) -> Optional[np.ndarray]:
+    def _vo_prediction(self, estimate, predicted) -> Optional[np.ndarray]:
         """The camera's pose the IMU predicts now, in the odometry's frame: its last good pose moved
         by the fused motion since that state (None when the state has left the window)."""
-        estimate = self._smoother.calculateEstimate()
         if not estimate.exists(X(self._vo_key)):
             return None
         T_world_then = estimate.atPose3(X(self._vo_key)).matrix() @ self.T_imu_camera
@@ -387,7 +387,7 @@ class VioFusion:
             out.append(gtsam.PriorFactorPose3(X(k), at, gtsam.noiseModel.Gaussian.Information(info)))
         return out
 
-    def _vo_factor(self, k: int, vo: VoResult, T_vo_imu: np.ndarray):
+    def _vo_factor(self, estimate, k: int, vo: VoResult, T_vo_imu: np.ndarray):
         """(factor, the IMU's pose it puts state k at, whether it is relative to state k - 1) for a
         tracked frame; (None, None, False) when relative and no earlier tracked frame is in the window.
         absolute: a prior on X(k) at the odometry's pose, with its covariance; relative: the motion
@@ -397,7 +397,7 @@ class VioFusion:
         if p.vo_factor == "absolute":
             noise = self._vo_noise(vo.covariance, vo.T_odom_camera, T_vo_imu)
             return gtsam.PriorFactorPose3(X(k), gtsam.Pose3(T_vo_imu), noise), T_vo_imu, False
-        last, estimate = self._last_vo, self._smoother.calculateEstimate()
+        last = self._last_vo
         if last is None or vo.stamp - last[1] > 0.5 * p.lag_s or not estimate.exists(X(last[0])):
             return None, None, False
         j, _, T_vo_last, rel_last = last
