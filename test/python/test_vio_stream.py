@@ -26,7 +26,7 @@ class FakeFusion:
         lost = stamp in self.lost_at
         cov = np.eye(6) * (LOST_COVARIANCE if lost else 1e-4)
         reason = "IMU gate: the visual pose is 0.2 m, 3.0 deg from the IMU's prediction" if lost else ""
-        return FusedResult(stamp, T, T, np.zeros(3), cov, cov, LOST if lost else OK, reason, None, T)
+        return FusedResult(stamp, T, T, np.zeros(3), cov, cov, LOST if lost else OK, reason, None)
 
 
 class Clock:

@@ -138,9 +138,6 @@ class FusedResult:
     state: str                         # OK or LOST
     reason: str
     vo: VoResult
-    #: the IMU's pose as continuous odometry (REP 105's odom): the last one moved by the smoothed motion
-    #: between the last two states, so that a correction of earlier states does not jump it
-    T_odom_imu: Optional[np.ndarray] = None
 
     @property
     def ok(self) -> bool:
@@ -207,7 +204,6 @@ class VioFusion:
         self._lost_frames = 0
         self._last_vo = None                         # relative: (state index, stamp, T_vo_imu, PnP covariance)
         self._vo_key = 0                             # the state at the odometry's last good pose
-        self._odom = self._last_pose = None          # the continuous odometry; the last state's estimate
         self._refused = 0                            # tracked frames the gate refused in a row
 
     def add_imu(self, t_s: float, gyro_rad_s, accel_m_s2) -> None:
@@ -428,11 +424,4 @@ class VioFusion:
         T_world_camera = T_world_imu @ self.T_imu_camera
         marginal = base_covariance(cov_imu, T_world_imu, self.T_imu_camera)
         published = marginal if state == OK else np.eye(6) * LOST_COVARIANCE
-        if self._odom is None:
-            self._odom = T_world_imu
-        else:       # the previous state's estimate now (smoothed), or as it was (a restarted smoother)
-            previous = est.atPose3(X(k - 1)).matrix() if est.exists(X(k - 1)) else self._last_pose
-            self._odom = self._odom @ np.linalg.inv(previous) @ T_world_imu
-        self._last_pose = T_world_imu
-        return FusedResult(stamp, T_world_camera, T_world_imu, velocity, published, marginal, state, reason, vo,
-                           self._odom.copy())
+        return FusedResult(stamp, T_world_camera, T_world_imu, velocity, published, marginal, state, reason, vo)

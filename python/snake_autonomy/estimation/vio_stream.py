@@ -13,10 +13,8 @@ most `imu_wait_s`; then it is processed with the samples there are. A newer imag
 not processed yet (counted as dropped): the odometry keeps up with the newest frame.
 
 The pose published is the IMU's frame (camera_link: x forward, z up; RTAB-Map's odometry child
-frame) as continuous odometry, FusedResult.T_odom_imu (a correction of earlier states moves later
-poses, never the published one at once: the pose remapper refuses jumps); its covariance
-(geometry_msgs order, about the world's axes) is the fusion's, whose origin is the same as the
-optical frame's (the two differ by a rotation only).
+frame), T_world_imu; its covariance (geometry_msgs order, about the world's axes) is the fusion's,
+whose origin is the same as the optical frame's (the two differ by a rotation only).
 """
 import re
 import threading
@@ -176,9 +174,7 @@ class VioStream:
             out = StreamOutput(stamp, self._last.T_world_link, self._last.velocity_m_s,
                                np.eye(6) * LOST_COVARIANCE, False, "failed: " + s.last_error, ms)
         else:
-            # continuous odometry; the velocity turned from the smoothed estimate's frame into it
-            v = result.T_odom_imu[:3, :3] @ result.T_world_imu[:3, :3].T @ np.asarray(result.velocity_m_s, float)
-            out = StreamOutput(stamp, result.T_odom_imu, v,
+            out = StreamOutput(stamp, result.T_world_imu, np.asarray(result.velocity_m_s, float),
                                np.asarray(result.covariance, float), ok, result.reason or ("" if ok else "lost"), ms)
         self._last = out
         return out
