@@ -194,6 +194,26 @@ def test_layered_planner_backs_off_from_a_wall():
     assert "back off" in r.reason
 
 
+def test_the_12_link_robots_tightest_arcs_leave_its_cameras_view_beyond_its_seen_floor_band(root):
+    from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
+    from snake_autonomy.planning.rectilinear.config import T_ground_camera
+    chang = NavConfig.from_yaml(root / "config" / "nav_chang_layered.yaml")
+    T_gc = T_ground_camera(chang.mount, 0.0255)     # the head's camera 2.55 cm above the floor
+
+    def replan(known_free_m):
+        cfg = dataclasses.replace(chang, sampler=dataclasses.replace(chang.sampler, known_free_m=known_free_m),
+                                  local_map=dataclasses.replace(chang.local_map, start_free_m=0.0))
+        f = RecedingHorizonFollower(dataclasses.replace(cfg.follower, kappa_rate_per_m_s=0.0))
+        pl = LayeredPlanner(K, 0.051, cfg, f, BodyGeometry(0.42, 0.051))
+        return pl.replan(0.0, drawn_mask(), T_gc, (0.0, 0.0, 0.0), (0.1, 0.45), 0.2)     # the goal beside it
+    cut = replan(0.3).selection
+    assert max(a.free_m for a in cut.arcs if abs(a.curvature_per_m) >= 3.0) < 0.25      # left the view at ~0.2 m
+    assert cut.arc.curvature_per_m < 3.0
+    assert chang.sampler.known_free_m <= 0.2
+    r = replan(chang.sampler.known_free_m)
+    assert r.selection.arc.curvature_per_m == pytest.approx(3.6, abs=0.01)   # the tightest, into the goal's disc
+
+
 def test_nav_config_validates_the_layered_sections():
     with pytest.raises(NavConfigError) as e:
         NavConfig.from_dict({"planner": {"kind": "dwa"}, "critics": {"route": -1.0},
