@@ -205,6 +205,7 @@ class VioFusion:
         self._last_vo = None                         # relative: (state index, stamp, T_vo_imu, PnP covariance)
         self._vo_key = 0                             # the state at the odometry's last good pose
         self._refused = 0                            # tracked frames the gate refused in a row
+        self._est = None                             # the smoother's estimate, None once it was updated since
 
     def add_imu(self, t_s: float, gyro_rad_s, accel_m_s2) -> None:
         self._imu.append((float(t_s), np.asarray(gyro_rad_s, float), np.asarray(accel_m_s2, float)))
@@ -224,7 +225,7 @@ class VioFusion:
         values.insert(B(k), self._bias)
         for factor in self._motion_priors(k, predicted.pose()):
             graph.add(factor)
-        before = self._smoother.calculateEstimate()     # the states so far (before this frame's update)
+        before = self._est if self._est is not None else self._smoother.calculateEstimate()   # the states so far
         vo = self.vo.process(image, depth_m, stamp, mask, self._vo_prediction(before, predicted.pose()))
         if vo.ok:
             self._vo_key = k
@@ -256,6 +257,7 @@ class VioFusion:
         for key in (X(k), V(k), B(k)):
             stamps.insert((key, stamp))
         try:
+            self._est = None
             self._smoother.update(graph, values, stamps)
             self._k, self._t = k, stamp
             result = self._estimate(stamp, state, reason, vo)
@@ -354,6 +356,7 @@ class VioFusion:
         stamps = gtsam.FixedLagSmootherKeyTimestampMap()
         for key in (X(k), V(k), B(k)):
             stamps.insert((key, stamp))
+        self._est = None
         self._smoother.update(graph, values, stamps)
         self._t = stamp
 
@@ -412,7 +415,7 @@ class VioFusion:
 
     def _estimate(self, stamp, state, reason, vo) -> FusedResult:
         k = self._k
-        est = self._smoother.calculateEstimate()
+        est = self._est = self._smoother.calculateEstimate()     # kept: the next frame's states so far
         pose = est.atPose3(X(k))
         self._bias = est.atConstantBias(B(k))
         velocity = np.asarray(est.atVector(V(k)), float)
