@@ -10,6 +10,11 @@ noise and invalid pixels); None renders perfect depth.
 
 The camera's model (intrinsics, mount, frame, labels) is perception/camera_model.py.
 
+Only what a real camera would see is drawn: MuJoCo's debug visuals (sites, frames, labels, geoms of
+groups 3-5, contact points and forces, rangefinder rays, ...) are off in the camera's mjvOption
+(`HeadCamera.scene_option`, see `camera_scene_option`); base_link's site sphere 15 cm ahead of the
+odometry camera had drawn about two thirds of its ORB features.
+
 Rendering sets MuJoCo's GL frustum from the intrinsics directly, so any fx, fy, cx, cy work. MuJoCo
 picks its GL backend when first imported: snake_autonomy's __init__ sets MUJOCO_GL=egl (headless)
 unless it is set.
@@ -23,6 +28,33 @@ from ..perception.camera_model import (GROUND_GEOMS, LABEL_BACKGROUND, LABEL_GRO
                                        OBSTACLE_PREFIX, R_LINK_OPTICAL, CameraFrame, CameraIntrinsics, CameraMount)
 
 NEAR_CLIP_M = 0.01                  # the head camera's near clip (rendering)
+#: geom groups a camera draws (MuJoCo's default: 0-2; 3-5 hold debug-only geoms by convention)
+VISIBLE_GEOM_GROUPS = (0, 1, 2)
+#: MuJoCo's visualisation flags that draw debug-only things (the others draw the scene: textures,
+#: tendons, skins, flexes, static bodies)
+_DEBUG_VIS_FLAGS = ("mjVIS_CONVEXHULL", "mjVIS_JOINT", "mjVIS_CAMERA", "mjVIS_ACTUATOR", "mjVIS_ACTIVATION",
+                    "mjVIS_LIGHT", "mjVIS_CONSTRAINT", "mjVIS_INERTIA", "mjVIS_SCLINERTIA", "mjVIS_PERTFORCE",
+                    "mjVIS_PERTOBJ", "mjVIS_CONTACTPOINT", "mjVIS_ISLAND", "mjVIS_CONTACTFORCE",
+                    "mjVIS_CONTACTSPLIT", "mjVIS_AUTOCONNECT", "mjVIS_COM", "mjVIS_SELECT", "mjVIS_RANGEFINDER",
+                    "mjVIS_BODYBVH", "mjVIS_MESHBVH", "mjVIS_SDFITER", "mjVIS_FLEXVERT")
+
+
+def camera_scene_option(mujoco):
+    """The mjvOption of a simulated camera: no site group, no frames or labels, only the geoms of
+    VISIBLE_GEOM_GROUPS and none of MuJoCo's debug visualisations (flags missing from an older
+    MuJoCo are skipped)."""
+    opt = mujoco.MjvOption()
+    opt.sitegroup[:] = 0
+    opt.geomgroup[:] = 0
+    for g in VISIBLE_GEOM_GROUPS:
+        opt.geomgroup[g] = 1
+    opt.frame = int(mujoco.mjtFrame.mjFRAME_NONE)
+    opt.label = int(mujoco.mjtLabel.mjLABEL_NONE)
+    for name in _DEBUG_VIS_FLAGS:
+        flag = getattr(mujoco.mjtVisFlag, name, None)
+        if flag is not None:
+            opt.flags[int(flag)] = 0
+    return opt
 
 
 @dataclass
@@ -60,6 +92,7 @@ class HeadCamera:
         # rows had no depth and the region grown from the bottom was empty
         model.vis.map.znear = min(float(model.vis.map.znear), NEAR_CLIP_M / max(1e-9, float(model.stat.extent)))
         self._renderer = mujoco.Renderer(model, k.height, k.width)
+        self.scene_option = camera_scene_option(mujoco)
         self._free = mujoco.MjvCamera()
         self._free.type = mujoco.mjtCamera.mjCAMERA_FREE
         # geom id -> label (segmentation objid is a geom id for objtype mjOBJ_GEOM)
@@ -83,7 +116,7 @@ class HeadCamera:
         return np.asarray(T_world_base, float) @ self.T_base_optical
 
     def _set_camera(self, data, T_world_cam: np.ndarray) -> None:
-        self._renderer.update_scene(data, self._free)
+        self._renderer.update_scene(data, self._free, self.scene_option)
         k = self.intrinsics
         for i in range(2):
             g = self._renderer.scene.camera[i]
