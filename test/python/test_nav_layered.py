@@ -197,7 +197,7 @@ def test_layered_planner_backs_off_from_a_wall():
 def test_the_12_link_robots_tightest_arcs_leave_its_cameras_view_beyond_its_seen_floor_band(root):
     from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
     from snake_autonomy.planning.rectilinear.config import T_ground_camera
-    chang = NavConfig.from_yaml(root / "config" / "nav_chang_layered.yaml")
+    chang = NavConfig.from_yaml(root / "config" / "nav_chang_rectilinear.yaml")
     T_gc = T_ground_camera(chang.mount, 0.0255)     # the head's camera 2.55 cm above the floor
 
     def replan(known_free_m):
@@ -241,7 +241,7 @@ def test_body_sweep_lets_a_modelled_station_inside_an_obstacle_move_but_not_deep
     assert sweep.check(sweep.sweep(0.0, 0.0, 0.3), m2, np.eye(4)).free_m < 0.3
 
 
-@pytest.mark.parametrize("name", ["nav_layered.yaml", "nav_chang_layered.yaml"])
+@pytest.mark.parametrize("name", ["nav_layered.yaml", "nav_chang_rectilinear.yaml"])
 def test_the_loop_runs_the_layered_planner_its_config_names(root, name):
     from snake_autonomy.planning.rectilinear.nav_loop import FOLLOWING, NO_FREE_ARC, NavLoop
     cfg = NavConfig.from_yaml(root / "config" / name)
