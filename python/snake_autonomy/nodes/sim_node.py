@@ -9,7 +9,8 @@ Publishes   base_pose (geometry_msgs/PoseWithCovarianceStamped, motion capture o
             odom (nav_msgs/Odometry, the simulated RTAB-Map: camera pose, 30 Hz, null pose with
             covariance 9999 while lost; feedback vio: pose_remap_node turns it into base_pose)
             neither with feedback vo: vio_node estimates odom from the head camera, rendered then
-            from the IMU's camera_link in an obstacle-free textured room (sim/scene.vo_room) at
+            from the IMU's camera_link in an obstacle-free textured room around the camera's start
+            (sim/scene.vo_room_around_camera: the odometry frame's origin, and a mission's) at
             ~vo_camera_rate_hz (10) and ~vo_camera_width x ~vo_camera_height (320x240) on the
             camera/* topics below, with ground_truth/camera_pose (camera_link) per frame
             camera/imu (sensor_msgs/Imu, the head camera's IMU: MuJoCo's gyro and accelerometer at
@@ -54,6 +55,7 @@ a sphere where the link touched, text "LINK touched OBSTACLE"; planner_display.c
 each new episode, and sim/contact_markers (visualization_msgs/MarkerArray, latched: every episode so
 far, as rviz/nav.rviz shows them).
 """
+import dataclasses
 import math
 import threading
 import time
@@ -79,7 +81,7 @@ from snake_autonomy.sim.collisions import CollisionMonitor
 from snake_autonomy.sim.depth_noise import named_depth_model
 from snake_autonomy.sim.realtime import RealTimeSim, SimSetup
 from snake_autonomy.sim.mjcf import camera_link_in_base
-from snake_autonomy.sim.scene import vo_room, world_plant_fields
+from snake_autonomy.sim.scene import vo_room_around_camera, world_plant_fields
 from snake_autonomy.sim.world_file import load_world
 from snake_autonomy.transforms import matrix_to_quat
 
@@ -122,9 +124,6 @@ class SimNode:
         if self.vo and self.world_file:
             raise ValueError("~feedback vo with a world: not supported (the planner's camera is nav.yaml's "
                              "mount, the odometry's is the IMU's camera_link, and one render stream serves one)")
-        if self.vo:
-            room = vo_room()
-            extra = {"scene_xml": room.scene_xml, "assets_xml": room.assets_xml}
         if self.world_file:
             self.nav_cfg = NavConfig.from_yaml(rospy.get_param("~nav_config", str(config / "nav.yaml")))
             self.world = load_world(self.world_file)
@@ -137,6 +136,9 @@ class SimNode:
                          robot=rospy.get_param("~robot_config", str(config / "robots" / "cobra.yaml")),
                          tracker_config=rospy.get_param("~tracker_config", str(config / "tracker.yaml")),
                          mission=rospy.get_param("~mission", ""), **extra)
+        if self.vo:     # the room around the odometry frame's origin: the camera's start
+            room = vo_room_around_camera(setup)
+            setup = dataclasses.replace(setup, scene_xml=room.scene_xml, assets_xml=room.assets_xml)
         self.world_frame = rospy.get_param("~world_frame", "odom")
         self.camera_frame = rospy.get_param("~camera_frame", "camera")
         self.rate_hz = float(rospy.get_param("~rate_hz", 200.0))

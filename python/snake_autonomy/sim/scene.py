@@ -13,11 +13,12 @@ Appearance (textures, colours, light) is separate from the world so that the cla
 renders can vary it (`random_appearance(rng)`) over the same geometry.
 """
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import List, Optional, Tuple
 
 import numpy as np
 
+from .world import SimWorld, WorldSpec
 from .world_file import FLOOR_TEXTURES, World
 
 #: floor texture presets: (MuJoCo builtin, mark, rgb1, rgb2, random fraction, texrepeat per m)
@@ -121,18 +122,23 @@ def world_plant_fields(world: World, flat_belly_fraction: Optional[float]) -> di
             "flat_belly_fraction": flat_belly_fraction}
 
 
-#: the visual odometry's room (sim_node ~feedback vo without a world): walls this far from the origin
-#: on each side and this high, so that the level head camera sees texture wherever it turns
-VO_ROOM_HALF_M, VO_ROOM_HEIGHT_M = 2.5, 2.0
+#: the visual odometry's room (sim_node ~feedback vo without a world): walls this far from the room's
+#: centre on each side and this high, so that the level head camera sees texture wherever it turns.
+#: The star mission (1.5 m around the odometry frame's origin) flown from the room's centre keeps
+#: the centre of mass 1.7 m and COBRA's body (0.8 m from its centre of mass) 0.86 m from every wall.
+VO_ROOM_HALF_M, VO_ROOM_HEIGHT_M = 3.2, 2.0
 _VO_WALL_COLOURS = [((0.8, 0.7, 0.3), (0.2, 0.1, 0.4)), ((0.3, 0.6, 0.8), (0.6, 0.1, 0.1)),
                     ((0.7, 0.4, 0.6), (0.1, 0.3, 0.1)), ((0.6, 0.8, 0.5), (0.3, 0.2, 0.5))]
 
 
-def vo_room() -> Scene:
-    """An obstacle-free room for the visual odometry: a random-dot floor (texels of about 2 cm) and four
-    random-dot walls (about 4 cm), VO_ROOM_HALF_M from the origin. The walls are obstacles to the
-    contacts' count (obstacle_<k>) but stand beyond a short run's reach."""
-    half, h = VO_ROOM_HALF_M, 0.5 * VO_ROOM_HEIGHT_M
+def vo_room(centre_xy: Tuple[float, float] = (0.0, 0.0), half_m: float = VO_ROOM_HALF_M) -> Scene:
+    """An obstacle-free room for the visual odometry: a random-dot floor (texels of about 2.4 cm) and
+    four random-dot walls (about 5 cm), half_m from centre_xy. The walls are obstacles to the
+    contacts' count (obstacle_<k>)."""
+    if not half_m > 0:
+        raise ValueError(f"vo_room: half_m must be > 0, got {half_m!r}")
+    cx, cy = (float(v) for v in centre_xy)
+    half, h = float(half_m), 0.5 * VO_ROOM_HEIGHT_M
     assets = ['    <texture name="floor_tex" type="2d" builtin="flat" mark="random" random="0.5" '
               'rgb1="0.55 0.5 0.45" rgb2="0.55 0.5 0.45" markrgb="0.25 0.2 0.2" width="256" height="256"/>',
               '    <material name="floor_mat" texture="floor_tex" texrepeat="1 1"/>']
@@ -141,10 +147,10 @@ def vo_room() -> Scene:
     scene = [f'    <light name="scene_light_{k}" dir="{_v(d)}" directional="true" diffuse="0.35 0.35 0.35" '
              f'ambient="{"0.25 0.25 0.25" if k == 0 else "0 0 0"}" castshadow="false"/>'
              for k, d in enumerate([(1, 0.2, -1), (-1, -0.2, -1), (-0.2, 1, -1), (0.2, -1, -1)])]
-    scene += [f'    <geom name="floor_visual" type="plane" pos="0 0 0.0002" size="{half:.6g} {half:.6g} 0.1" '
-             'material="floor_mat" contype="0" conaffinity="0"/>']
-    walls = [((half, 0.0), (0.02, half)), ((-half, 0.0), (0.02, half)), ((0.0, half), (half, 0.02)),
-             ((0.0, -half), (half, 0.02))]
+    scene += [f'    <geom name="floor_visual" type="plane" pos="{_v((cx, cy))} 0.0002" '
+              f'size="{half:.6g} {half:.6g} 0.1" material="floor_mat" contype="0" conaffinity="0"/>']
+    walls = [((cx + half, cy), (0.02, half)), ((cx - half, cy), (0.02, half)), ((cx, cy + half), (half, 0.02)),
+             ((cx, cy - half), (half, 0.02))]
     for k, (((x, y), (sx, sy)), (rgb, mark)) in enumerate(zip(walls, _VO_WALL_COLOURS)):
         assets += [f'    <texture name="wall_tex_{k}" type="2d" builtin="flat" mark="random" random="0.5" '
                    f'rgb1="{_v(rgb)}" rgb2="{_v(rgb)}" markrgb="{_v(mark)}" width="128" height="128"/>',
@@ -152,3 +158,12 @@ def vo_room() -> Scene:
         scene.append(f'    <geom name="obstacle_{k}" type="box" pos="{_v((x, y, h))}" size="{_v((sx, sy, h))}" '
                      f'material="wall_mat_{k}" contype="2" conaffinity="1"/>')
     return Scene("\n".join(scene) + "\n", "\n".join(assets) + "\n")
+
+
+def vo_room_around_camera(spec: WorldSpec, half_m: float = VO_ROOM_HALF_M) -> Scene:
+    """vo_room centred on the odometry camera's (camera_link's) position at the start of the world
+    `spec` describes (its start, robot, calibration; its scene is ignored): the odometry frame, and
+    with it a mission flown in it, starts there."""
+    probe = SimWorld(replace(spec, scene_xml="", assets_xml="", sensors=("mocap", "imu"), mission=""))
+    T = probe.plant.frame_transform("head_link") @ probe.camera_in_head
+    return vo_room((float(T[0, 3]), float(T[1, 3])), half_m)
