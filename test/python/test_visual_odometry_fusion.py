@@ -132,8 +132,7 @@ def test_config_matches_the_simulated_imu_and_errors_name_the_field(root, tmp_pa
     for text, message in {"fusion: {lag_s: 0}": "fusion.lag_s: must be a finite number > 0, got 0.0",
                           "fusion: {vo_reset_after_lost: -1}": "fusion.vo_reset_after_lost: must be an integer >= 0, "
                                                                "got -1",
-                          "fusion: {vo_factor: loose}": "fusion.vo_factor: must be one of relative, absolute, "
-                                                        "got 'loose'",
+                          "fusion: {vo_factor: absolute}": "fusion.vo_factor: unknown key (value 'absolute')",
                           "fusion: {gate: 1}": "fusion.gate: unknown key (value 1)"}.items():
         path.write_text(text)
         with pytest.raises(ValueError) as exc:
@@ -197,7 +196,7 @@ def test_fused_rectilinear_crawl_of_the_simulated_robot(root):
     """3 s of the rectilinear gait from rest: frames at 10 Hz from the head's camera_link, the IMU
     polled every physics step. The head's path is 19 cm (4.9 cm net: the gait sways it), turning up
     to 12 deg. Neither the odometry nor the fusion loses track; both stay within 2 cm of the truth
-    (measured: the odometry 9.8 mm, the fusion 13.7 mm; 8.1 mm with absolute pose priors)."""
+    (measured: the odometry 9.8 mm, the fusion 13.7 mm)."""
     run = drive_plant(root, "rectilinear", 3.0)
     fused_err, vo_err, path = [], [], 0.0
     for i, (t, r, rv, T) in enumerate(run):
@@ -212,7 +211,7 @@ def test_fused_rectilinear_crawl_of_the_simulated_robot(root):
 def test_sidewinding_blank_interval_comes_back_to_the_truth(root):
     """Sidewinding in the odometry room (sim.launch feedback:=vo's, here centred 0.67 m from the
     camera's start) from 4 s into the gait, 1.5 s of blank frames at 5.5 s: the motion between
-    tracked frames (vo_factor relative) and the motion priors bound the estimate, and once the
+    tracked frames and the motion priors bound the estimate, and once the
     odometry tracks again it stays near the truth. Measured: the head's path 1.13 m, 19 of 41 frames
     lost (16 blank), 14.1 cm off at most (at the blank's end), 2.9 cm at the end; the last frame's
     visual pose, 0.16 m from the IMU's prediction, is refused by the IMU gate (with the room's

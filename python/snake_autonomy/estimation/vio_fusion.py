@@ -10,17 +10,13 @@ fixed-lag smoother (GTSAM), ROS-free.
 One state per camera frame: the IMU's pose X(k) in a gravity-aligned world frame (z up), its
 velocity V(k) and the IMU biases B(k). Consecutive states are tied by a CombinedImuFactor (the
 preintegrated gyro and accelerometer samples between the frames, with the bias random walk). A
-frame the visual odometry tracked adds (vo_factor, config):
-- relative (the default): a between factor from the last tracked frame's state (within half the
-  smoother's window) to X(k): the motion the odometry measured between the two, its covariance the
-  two PnP fits' (the keyframe's own error drops out). The odometry's frame never enters the world:
-  a drifted or restarted odometry frame moves nothing. The first tracked frame after a gap only
-  anchors the next one (it is reported lost). On the simulated star mission (sidewinding) this
-  kept the estimate within metres where the absolute priors ran away (a study; docs/estimation.md).
-- absolute: a pose prior on X(k), the odometry's camera pose (its frame set to the world frame:
-  its initial pose is the first camera pose in the world) moved to the IMU, with the odometry's
-  covariance, as independent measurements (their errors are in fact correlated over a keyframe's
-  lifetime).
+frame the visual odometry tracked adds a between factor from the last tracked frame's state (within
+half the smoother's window) to X(k): the motion the odometry measured between the two, its
+covariance the two PnP fits' (the keyframe's own error drops out). The odometry's frame never
+enters the world: a drifted or restarted odometry frame moves nothing. The first tracked frame
+after a gap only anchors the next one (it is reported lost). On the simulated star mission
+(sidewinding) this kept the estimate within metres where the odometry's poses taken as absolute
+priors ran away (a study; docs/estimation.md).
 
 The robot's motion model (velocity_prior_sigma_m_s, height_prior_sigma_m; 0 turns each off):
 every state's velocity is zero within the first (the robot crawls below 0.6 m/s) and the IMU's
@@ -89,7 +85,6 @@ class FusionParams:
     gate_max_refused: int = 3                  # after this many tracked frames refused in a row the next one is
                                                # taken (a runaway state refuses every visual pose; 0: never)
     vo_reset_after_lost: int = 2               # restart the visual odometry after this many lost frames (0: never)
-    vo_factor: str = "relative"                # relative: the motion between tracked frames; absolute: the pose
     # the robot's motion model (0: none): every state's velocity zero within this std (it crawls
     # below 0.6 m/s; dead-reckoning on the IMU alone otherwise runs away while lost) ...
     velocity_prior_sigma_m_s: float = 0.5
@@ -101,8 +96,6 @@ class FusionParams:
     still_accel_m_s2: float = 0.3              # the specific force's norm within this of gravity
     still_sigma_m_s: float = 0.01
 
-    VO_FACTORS = ("relative", "absolute")
-
     def problems(self, prefix: str = "fusion") -> List[str]:
         out = []
         for f in fields(self):
@@ -113,9 +106,6 @@ class FusionParams:
             elif f.name in ("velocity_prior_sigma_m_s", "height_prior_sigma_m", "still_gyro_rad_s"):
                 if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                     out.append(f"{prefix}.{f.name}: must be a finite number >= 0, got {v!r}")
-            elif f.name == "vo_factor":
-                if v not in self.VO_FACTORS:
-                    out.append(f"{prefix}.{f.name}: must be one of {', '.join(self.VO_FACTORS)}, got {v!r}")
             elif isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 out.append(f"{prefix}.{f.name}: must be a finite number > 0, got {v!r}")
         return out
@@ -202,7 +192,7 @@ class VioFusion:
         self._imu: List[tuple] = []                  # samples since the last frame: (t, gyro, accel)
         self._last_imu_t = None
         self._lost_frames = 0
-        self._last_vo = None                         # relative: (state index, stamp, T_vo_imu, PnP covariance)
+        self._last_vo = None                         # (state index, stamp, T_vo_imu, PnP covariance)
         self._vo_key = 0                             # the state at the odometry's last good pose
         self._refused = 0                            # tracked frames the gate refused in a row
         self._est = None                             # the smoother's estimate, None once it was updated since
@@ -247,9 +237,9 @@ class VioFusion:
                     state = LOST
                 else:
                     graph.add(factor)
-            if p.vo_factor == "relative":   # the next motion is measured from here, even if refused: a
-                # refused pose may be in the odometry's keyframe, and so in every pose after it
-                self._last_vo = (k, stamp, T_vo_imu, vo.relative_covariance)
+            # the next motion is measured from here, even if refused: a refused pose may be in the
+            # odometry's keyframe, and so in every pose after it
+            self._last_vo = (k, stamp, T_vo_imu, vo.relative_covariance)
         if still and state == LOST:     # standing still while lost (the mission holds the robot)
             graph.add(gtsam.PriorFactorVector(V(k), np.zeros(3),
                                               gtsam.noiseModel.Isotropic.Sigma(3, p.still_sigma_m_s)))
@@ -332,7 +322,7 @@ class VioFusion:
         self.vo.reset(self._initial @ self.T_imu_camera)
         vo = self.vo.process(image, depth_m, stamp, mask)
         state, reason = (OK, "") if vo.ok else (LOST, f"visual odometry lost: {vo.reason}")
-        if vo.ok and self.params.vo_factor == "relative":
+        if vo.ok:
             self._last_vo = (self._k, stamp, vo.T_odom_camera @ self.T_camera_imu, vo.relative_covariance)
         return self._estimate(stamp, state, reason, vo)
 
@@ -388,14 +378,10 @@ class VioFusion:
 
     def _vo_factor(self, estimate, k: int, vo: VoResult, T_vo_imu: np.ndarray):
         """(factor, the IMU's pose it puts state k at, whether it is relative to state k - 1) for a
-        tracked frame; (None, None, False) when relative and no earlier tracked frame is in the window.
-        absolute: a prior on X(k) at the odometry's pose, with its covariance; relative: the motion
-        from the last tracked frame's state (within half the window) as a between factor, with the
-        two frames' PnP covariances (the keyframe's own error drops out of the motion)."""
+        tracked frame: the motion from the last tracked frame's state (within half the window) as a
+        between factor, with the two frames' PnP covariances (the keyframe's own error drops out of the
+        motion); (None, None, False) when no earlier tracked frame is in the window."""
         p = self.params
-        if p.vo_factor == "absolute":
-            noise = self._vo_noise(vo.covariance, vo.T_odom_camera, T_vo_imu)
-            return gtsam.PriorFactorPose3(X(k), gtsam.Pose3(T_vo_imu), noise), T_vo_imu, False
         last = self._last_vo
         if last is None or vo.stamp - last[1] > 0.5 * p.lag_s or not estimate.exists(X(last[0])):
             return None, None, False
