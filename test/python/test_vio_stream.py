@@ -12,7 +12,7 @@ from snake_autonomy.estimation.vio_stream import VioStream, lost_cause
 
 class FakeFusion:
     def __init__(self):
-        self.calls, self.fail_at, self.lost_at = [], set(), set()
+        self.calls, self.fail_at, self.lost_at, self.restart_at = [], set(), set(), set()
 
     def add_imu(self, t, g, a):
         self.calls.append(("imu", t))
@@ -26,7 +26,8 @@ class FakeFusion:
         lost = stamp in self.lost_at
         cov = np.eye(6) * (LOST_COVARIANCE if lost else 1e-4)
         reason = "IMU gate: the visual pose is 0.2 m, 3.0 deg from the IMU's prediction" if lost else ""
-        return FusedResult(stamp, T, T, np.zeros(3), cov, cov, LOST if lost else OK, reason, None)
+        return FusedResult(stamp, T, T, np.zeros(3), cov, cov, LOST if lost else OK, reason, None,
+                           smoother_restarted=stamp in self.restart_at)
 
 
 class Clock:
@@ -122,3 +123,18 @@ def test_a_first_frame_without_imu_samples_before_it_is_dropped_not_failed(strea
     s.add_imu(1.1, np.zeros(3), np.zeros(3))
     frame(s, 1.05)
     assert s.step().ok and s.fusion.calls == [("imu", 1.0), ("frame", 1.05)]
+
+
+def test_smoother_restarts_are_counted_by_the_results_flag_not_its_reason(stream):
+    s, clock = stream
+    s.add_imu(0.0, np.zeros(3), np.zeros(3))
+    s.add_imu(10.0, np.zeros(3), np.zeros(3))
+    s.fusion.restart_at = {0.2, 0.4}
+    s.fusion.lost_at = {0.3}                     # lost, its reason not about a restart
+    outs = []
+    for t in (0.1, 0.2, 0.3, 0.4):
+        frame(s, t)
+        outs.append(s.step())
+    assert [o.smoother_restarted for o in outs] == [False, True, False, True]
+    assert s.stats.restarts == 2
+    assert s.stats.summary()["restarts"] == 2

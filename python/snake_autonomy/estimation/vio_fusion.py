@@ -5,7 +5,8 @@ fixed-lag smoother (GTSAM), ROS-free.
     vio.add_imu(t_s, gyro_rad_s, accel_m_s2)          # every IMU sample, in time order
     result = vio.add_frame(image, depth_m, stamp_s)    # every camera frame (after its IMU samples)
     result.T_world_camera, result.covariance (what to publish: LOST_COVARIANCE when lost),
-    result.marginal_covariance (the smoother's, always), result.state, result.reason, result.vo
+    result.marginal_covariance (the smoother's, always), result.state, result.reason, result.vo,
+    result.smoother_restarted
 
 One state per camera frame: the IMU's pose X(k) in a gravity-aligned world frame (z up), its
 velocity V(k) and the IMU biases B(k). Consecutive states are tied by a CombinedImuFactor (the
@@ -128,6 +129,7 @@ class FusedResult:
     state: str                         # OK or LOST
     reason: str
     vo: VoResult
+    smoother_restarted: bool = False   # the smoother failed on this frame and a new one started
 
     @property
     def ok(self) -> bool:
@@ -262,6 +264,7 @@ class VioFusion:
                 self._last_vo = None
             reason = (reason + "; " if reason else "") + f"smoother restarted: {str(exc).strip().splitlines()[0]}"
             result = self._estimate(stamp, state, reason, vo)
+            result.smoother_restarted = True
         self._lost_frames = 0 if state == OK or anchoring else self._lost_frames + 1
         if p.vo_reset_after_lost and self._lost_frames >= p.vo_reset_after_lost:
             self.vo.reset(result.T_world_camera, result.marginal_covariance)

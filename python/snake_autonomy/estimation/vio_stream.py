@@ -40,6 +40,7 @@ class StreamOutput:
     ok: bool
     reason: str
     ms: float                         # the frame's processing time (wall clock)
+    smoother_restarted: bool = False  # the fusion's smoother restarted on this frame
 
 
 @dataclass
@@ -166,7 +167,7 @@ class VioStream:
             s.lost_causes[lost_cause(result.reason) if result is not None else "failed"] += 1
             if not s.lost_now():
                 s.lost_intervals.append((stamp, None))
-        if result is not None and "smoother restarted" in result.reason:
+        if result is not None and result.smoother_restarted:
             s.restarts += 1
         if result is None:              # failed: the last pose, lost (none before the first estimate)
             if self._last is None:
@@ -175,6 +176,7 @@ class VioStream:
                                np.eye(6) * LOST_COVARIANCE, False, "failed: " + s.last_error, ms)
         else:
             out = StreamOutput(stamp, result.T_world_imu, np.asarray(result.velocity_m_s, float),
-                               np.asarray(result.covariance, float), ok, result.reason or ("" if ok else "lost"), ms)
+                               np.asarray(result.covariance, float), ok, result.reason or ("" if ok else "lost"), ms,
+                               result.smoother_restarted)
         self._last = out
         return out

@@ -130,7 +130,7 @@ class VioNode:
 
     def log_change(self, out):
         """The log says when tracking is lost and why, when it resumes, and every smoother restart."""
-        if "smoother restarted" in out.reason:
+        if out.smoother_restarted:
             rospy.logwarn(f"vio: {out.reason}")
         if out.ok != self.was_ok:
             rospy.loginfo(f"vio: tracking at {out.stamp:.2f}" if out.ok
