@@ -38,6 +38,7 @@ from typing import List, Optional
 
 import cv2
 import numpy as np
+from scipy.spatial.distance import cdist
 
 from .config_section import load_section
 from .pose_remap import skew
@@ -319,12 +320,10 @@ class VisualOdometry:
         if predicted is None or r <= 0:
             return None
         T_cam_kf = np.linalg.inv(np.asarray(predicted, float)) @ kf.T_odom_camera
-        pts = kf.points @ T_cam_kf[:3, :3].T + T_cam_kf[:3, 3]
-        z = pts[:, 2]
-        uv = (pts[:, :2] / np.where(z > 1e-6, z, 1.0)[:, None]) * np.diag(self.K)[:2] + self.K[:2, 2]
-        f = feats.uv
-        d2 = np.sum(uv * uv, axis=1)[:, None] + np.sum(f * f, axis=1)[None, :] - 2.0 * (uv @ f.T)
-        return (d2 <= r * r) & (z > 1e-6)[:, None]
+        rvec, tvec = cv2.Rodrigues(T_cam_kf[:3, :3])[0], T_cam_kf[:3, 3]
+        in_front = kf.points @ T_cam_kf[2, :3] + T_cam_kf[2, 3] > 1e-6     # depth at the predicted pose
+        uv = self._project(kf.points, rvec, tvec)
+        return (cdist(uv, feats.uv, "sqeuclidean") <= r * r) & in_front[:, None]
 
     def _match(self, kf_desc: np.ndarray, desc: np.ndarray, allowed: Optional[np.ndarray] = None):
         """Indices (keyframe, frame) of the matches passing the ratio test and max_hamming (only
@@ -362,9 +361,13 @@ class VisualOdometry:
         inl = np.nonzero(np.hypot(residual[:, 0], residual[:, 1]) <= p.ransac_reprojection_px)[0]
         return rvec, tvec, inl
 
+    def _project(self, obj, rvec, tvec) -> np.ndarray:
+        """(N, 2) pixels of the points obj (N, 3) seen from the pose rvec, tvec (OpenCV's)."""
+        proj, _ = cv2.projectPoints(np.asarray(obj, np.float64), rvec, np.asarray(tvec, np.float64), self.K, None)
+        return proj.reshape(-1, 2)
+
     def _residuals(self, obj, img, rvec, tvec) -> np.ndarray:
-        proj, _ = cv2.projectPoints(obj, rvec, tvec, self.K, None)
-        return proj.reshape(-1, 2) - img
+        return self._project(obj, rvec, tvec) - img
 
     def _covariance_of(self, T: np.ndarray, kf: _Keyframe, obj, img, rvec, tvec):
         """The pose's covariance (see the module's docstring) and the PnP fit's part of it."""
