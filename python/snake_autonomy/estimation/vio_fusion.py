@@ -19,10 +19,8 @@ after a gap only anchors the next one (it is reported lost). On the simulated st
 (sidewinding) this kept the estimate within metres where the odometry's poses taken as absolute
 priors ran away (a study; docs/estimation.md).
 
-The robot's motion model (velocity_prior_sigma_m_s, height_prior_sigma_m; 0 turns each off):
-every state's velocity is zero within the first (the robot crawls below 0.6 m/s) and the IMU's
-height the first state's within the second (it crawls on the floor): held still in the dark with
-an accelerometer bias the fusion does not know, the IMU alone ran away by metres in 10 s.
+The robot's motion model (motion_model.py: velocity_prior_sigma_m_s, height_prior_sigma_m, and
+standing still while lost: still_*) adds priors on every state.
 
 The visual odometry is given the camera's pose the IMU predicts (its last good pose moved by the
 fused motion since): it matches a keyframe point only near where that pose projects it
@@ -52,10 +50,10 @@ import numpy as np
 from gtsam.symbol_shorthand import B, V, X
 
 from .config_section import load_section
+from .motion_model import GRAVITY_M_S2, MotionModel
 from .pose_remap import base_covariance
 from .visual_odometry import LOST, LOST_COVARIANCE, OK, VisualOdometry, VoParams, VoResult, rotation_angle_deg
 
-GRAVITY_M_S2 = 9.80665
 
 
 @dataclass
@@ -198,6 +196,8 @@ class VioFusion:
         self._vo_key = 0                             # the state at the odometry's last good pose
         self._refused = 0                            # tracked frames the gate refused in a row
         self._est = None                             # the smoother's estimate, None once it was updated since
+        self._motion = MotionModel(p.velocity_prior_sigma_m_s, p.height_prior_sigma_m, p.still_gyro_rad_s,
+                                   p.still_accel_m_s2, p.still_sigma_m_s)
 
     def add_imu(self, t_s: float, gyro_rad_s, accel_m_s2) -> None:
         self._imu.append((float(t_s), np.asarray(gyro_rad_s, float), np.asarray(accel_m_s2, float)))
@@ -215,7 +215,7 @@ class VioFusion:
         values.insert(X(k), predicted.pose())
         values.insert(V(k), predicted.velocity())
         values.insert(B(k), self._bias)
-        for factor in self._motion_priors(k, predicted.pose()):
+        for factor in self._motion.priors(k, predicted.pose(), self._initial[2, 3]):
             graph.add(factor)
         before = self._est if self._est is not None else self._smoother.calculateEstimate()   # the states so far
         vo = self.vo.process(image, depth_m, stamp, mask, self._vo_prediction(before, predicted.pose()))
@@ -243,8 +243,7 @@ class VioFusion:
             # odometry's keyframe, and so in every pose after it
             self._last_vo = (k, stamp, T_vo_imu, vo.relative_covariance)
         if still and state == LOST:     # standing still while lost (the mission holds the robot)
-            graph.add(gtsam.PriorFactorVector(V(k), np.zeros(3),
-                                              gtsam.noiseModel.Isotropic.Sigma(3, p.still_sigma_m_s)))
+            graph.add(self._motion.still_factor(k))
         stamps = gtsam.FixedLagSmootherKeyTimestampMap()
         for key in (X(k), V(k), B(k)):
             stamps.insert((key, stamp))
@@ -276,17 +275,15 @@ class VioFusion:
         """The IMU samples since the last frame up to stamp (each held over the interval it ends;
         the last one held up to stamp), consumed; and whether every one of them is at rest
         (still_gyro_rad_s, still_accel_m_s2)."""
-        p = self.params
         pim = gtsam.PreintegratedCombinedMeasurements(self._pim_params, self._bias)
-        t, n, still = self._t, 0, p.still_gyro_rad_s > 0
+        t, n, still = self._t, 0, True
         for t_s, gyro, accel in self._imu:
             if t_s > stamp:
                 break
             if t_s > t:
                 pim.integrateMeasurement(accel, gyro, t_s - t)
                 t, n = t_s, n + 1
-                still = still and (float(np.linalg.norm(gyro)) <= p.still_gyro_rad_s and
-                                   abs(float(np.linalg.norm(accel)) - GRAVITY_M_S2) <= p.still_accel_m_s2)
+                still = still and self._motion.at_rest(gyro, accel)
         if stamp > t and self._imu:
             pim.integrateMeasurement(self._imu[-1][2], self._imu[-1][1], stamp - t)
         self._imu = [s for s in self._imu if s[0] > stamp]
@@ -360,24 +357,6 @@ class VioFusion:
             return None
         T_world_then = estimate.atPose3(X(self._vo_key)).matrix() @ self.T_imu_camera
         return self.vo.pose @ np.linalg.inv(T_world_then) @ predicted.matrix() @ self.T_imu_camera
-
-    def _motion_priors(self, k: int, predicted):
-        """The motion model's priors on state k (velocity_prior_sigma_m_s, height_prior_sigma_m): the
-        velocity zero; the height the first state's (a pose prior informative along the world's z
-        only, about the predicted pose)."""
-        p, out = self.params, []
-        if p.velocity_prior_sigma_m_s > 0:
-            out.append(gtsam.PriorFactorVector(V(k), np.zeros(3),
-                                               gtsam.noiseModel.Isotropic.Sigma(3, p.velocity_prior_sigma_m_s)))
-        if p.height_prior_sigma_m > 0:
-            R = predicted.rotation().matrix()
-            up = R.T @ np.array([0.0, 0.0, 1.0])       # the world's z in the IMU frame (the tangent's)
-            info = np.eye(6) * 1e-9
-            info[3:, 3:] += np.outer(up, up) / p.height_prior_sigma_m ** 2
-            t = predicted.translation()
-            at = gtsam.Pose3(gtsam.Rot3(R), np.array([t[0], t[1], self._initial[2, 3]]))
-            out.append(gtsam.PriorFactorPose3(X(k), at, gtsam.noiseModel.Gaussian.Information(info)))
-        return out
 
     def _vo_factor(self, estimate, k: int, vo: VoResult, T_vo_imu: np.ndarray):
         """(factor, the IMU's pose it puts state k at, whether it is relative to state k - 1) for a
