@@ -270,3 +270,20 @@ def test_a_predicted_pose_guides_the_matching(yaw):
 def _rotation_y_deg(deg):
     c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def test_features_are_detected_again_where_there_is_depth(straight):
+    """ORB's strongest corners on a far wall beyond max_depth_m (here: the left three quarters, depth
+    6 m, full contrast) took all 600 features and none had depth; detected again within the pixels
+    with depth (the right quarter, a quarter of the contrast) the frame becomes the keyframe."""
+    first = straight[0]
+    rgb, depth = first.rgb.copy(), first.depth_m.copy()
+    depth[:, : 3 * WIDTH // 4] = 6.0
+    rgb[:, 3 * WIDTH // 4:] = rgb[:, 3 * WIDTH // 4:] // 4 + 96
+    never = VisualOdometry(K(), VoParams(depth_redetect_below=0)).process(rgb, depth, 0.0)
+    assert never.state == LOST and "no keyframe yet: 0 features with depth" in never.reason
+    vo = VisualOdometry(K())
+    r = vo.process(rgb, depth, 0.0)
+    assert r.ok and r.keyframe and r.inliers >= 20, r.reason
+    u = vo._keyframe.points[:, 0] / vo._keyframe.points[:, 2] * FOCAL_PX + WIDTH / 2
+    assert u.min() >= 3 * WIDTH // 4 - 0.5

@@ -74,6 +74,9 @@ class VoParams:
     min_pixel_sigma_px: float = 1.0    # the covariance's reprojection std is at least this
     guided_radius_px: float = 30.0     # with a predicted pose: a keyframe point matches only features within
                                        # this of where the prediction projects it (0: every feature)
+    depth_redetect_below: int = 50     # a frame with fewer features with depth than this is detected again
+                                       # within the pixels that have depth (0: never); a far wall's strong
+                                       # texture beyond max_depth_m took every feature
 
     def problems(self, prefix: str = "vo") -> List[str]:
         """Every invalid value, each naming its key and value."""
@@ -104,6 +107,7 @@ _LIMITS = {
     "keyframe_min_inliers": (int, 6, 10000), "keyframe_min_overlap": (float, 0.0, 1.0),
     "max_step_m": (float, 1e-3, 100.0), "max_step_deg": (float, 0.1, 180.0),
     "min_pixel_sigma_px": (float, 0.0, 100.0), "guided_radius_px": (float, 0.0, 10000.0),
+    "depth_redetect_below": (int, 0, 20000),
 }
 assert set(_LIMITS) == {f.name for f in fields(VoParams)}
 
@@ -281,6 +285,21 @@ class VisualOdometry:
             if mask.shape != grey.shape:
                 raise ValueError(f"mask: shape {mask.shape} differs from the image's {grey.shape}")
             mask = (mask != 0).astype(np.uint8)
+        feats = self._detect(grey, depth, mask)
+        if int(np.count_nonzero(feats.depth > 0)) < self.params.depth_redetect_below:
+            # ORB's strongest corners lie where there is no depth (a textured wall beyond max_depth_m):
+            # detect again where there is, and keep whichever set has more 3D points
+            with_depth = self._usable(depth).astype(np.uint8)
+            again = self._detect(grey, depth, with_depth if mask is None else with_depth & mask)
+            if np.count_nonzero(again.depth > 0) > np.count_nonzero(feats.depth > 0):
+                feats = again
+        return feats
+
+    def _usable(self, z: np.ndarray) -> np.ndarray:
+        with np.errstate(invalid="ignore"):
+            return np.isfinite(z) & (z >= self.params.min_depth_m) & (z <= self.params.max_depth_m)
+
+    def _detect(self, grey, depth, mask) -> _Features:
         kps, desc = self._orb.detectAndCompute(grey, mask)
         uv = np.array([k.pt for k in kps], np.float64).reshape(-1, 2)
         if len(uv) == 0:
@@ -288,8 +307,7 @@ class VisualOdometry:
         col = np.clip(np.rint(uv[:, 0]).astype(int), 0, depth.shape[1] - 1)
         row = np.clip(np.rint(uv[:, 1]).astype(int), 0, depth.shape[0] - 1)
         z = depth[row, col].astype(np.float64)
-        usable = np.isfinite(z) & (z >= self.params.min_depth_m) & (z <= self.params.max_depth_m)
-        return _Features(uv, desc, np.where(usable, z, 0.0))
+        return _Features(uv, desc, np.where(self._usable(z), z, 0.0))
 
     def _first_keyframe(self, feats: _Features, stamp: float) -> VoResult:
         n_3d = int(np.count_nonzero(feats.depth > 0))
