@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from snake_autonomy.sim.scene import VO_ROOM_CEILING_M, vo_room, vo_room_around_camera
+from snake_autonomy.sim.scene import vo_room, vo_room_around_camera
 from snake_autonomy.sim.world import SimWorld, WorldSpec
 
 WALL_MARGIN_M = 0.8
@@ -64,9 +64,6 @@ def test_the_room_is_centred_where_the_camera_starts(star_in_room):
     for axis in (0, 1):
         lo, hi = sorted(centre for a, centre, _ in walls if a == axis)
         assert 0.5 * (lo + hi) == pytest.approx(T0[axis, 3], abs=0.01)
-    # with the ceiling (VO_ROOM_CEILING_M) the walls reach up to it
-    ceiling = world.plant.model.geom("ceiling_visual")
-    assert ceiling.pos[2] - ceiling.size[2] == pytest.approx(VO_ROOM_CEILING_M, abs=1e-6)
 
 
 def test_walls_and_floor_are_textured():
@@ -78,50 +75,3 @@ def test_walls_and_floor_are_textured():
 def test_a_room_without_size_is_refused():
     with pytest.raises(ValueError, match="half_m.*-1"):
         vo_room(half_m=-1.0)
-
-
-def _camera_view(room, xy, yaw_rad=0.0):
-    """The depth a level 320x240 camera 4.5 cm above the floor at xy, looking along yaw_rad, renders in
-    the room (perfect depth)."""
-    mujoco = pytest.importorskip("mujoco")
-    from snake_autonomy.perception.camera_model import CameraIntrinsics
-    from snake_autonomy.sim.camera import HeadCamera, LinkMount
-    model = mujoco.MjModel.from_xml_string(f"<mujoco><asset>{room.assets_xml}</asset>"
-                                           f"<worldbody>{room.scene_xml}</worldbody></mujoco>")
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)
-    cam = HeadCamera(model, CameraIntrinsics(320, 240, 307.5, 307.5, 159.5, 119.5), mount=LinkMount(np.eye(4)))
-    T = np.eye(4)
-    T[:3, :3] = [[math.cos(yaw_rad), -math.sin(yaw_rad), 0], [math.sin(yaw_rad), math.cos(yaw_rad), 0], [0, 0, 1]]
-    T[:3, 3] = (xy[0], xy[1], 0.045)
-    try:
-        return cam.render(data, T, colour=False, labels=False).depth_m
-    finally:
-        cam.close()
-
-
-def test_the_ceiling_gives_depth_within_range_where_the_far_wall_has_none():
-    """Across the room the wall is 4.3 m away, beyond the D435i's 4 m: the upper half of the image has
-    nothing within range without the ceiling; the ceiling 0.8 m up fills its upper part."""
-    far_from_wall = (-1.06, 1.01)                       # looking along +x: the wall 4.26 m ahead
-    open_room = _camera_view(vo_room(), far_from_wall)
-    upper = slice(0, 100)
-    assert open_room[upper].min() > 4.0
-    with_ceiling = _camera_view(vo_room(ceiling_m=0.8), far_from_wall)
-    within = (with_ceiling[upper] > 0) & (with_ceiling[upper] <= 4.0)
-    assert within.mean() > 0.3, within.mean()
-
-
-def test_the_ceiling_is_visual_only_and_the_walls_reach_it():
-    room = vo_room(ceiling_m=0.8)
-    assert 'name="ceiling_visual"' in room.scene_xml
-    mujoco = pytest.importorskip("mujoco")
-    model = mujoco.MjModel.from_xml_string(f"<mujoco><asset>{room.assets_xml}</asset>"
-                                           f"<worldbody>{room.scene_xml}</worldbody></mujoco>")
-    g = model.geom("ceiling_visual")
-    assert g.contype[0] == 0 and g.conaffinity[0] == 0
-    assert g.pos[2] - g.size[2] == pytest.approx(0.8, abs=1e-6)
-    wall = model.geom("obstacle_0")
-    assert wall.pos[2] + wall.size[2] == pytest.approx(0.8, abs=1e-6)
-    with pytest.raises(ValueError, match="ceiling_m.*0"):
-        vo_room(ceiling_m=0.0)

@@ -127,26 +127,18 @@ def world_plant_fields(world: World, flat_belly_fraction: Optional[float]) -> di
 #: The star mission (1.5 m around the odometry frame's origin) flown from the room's centre keeps
 #: the centre of mass 1.7 m and COBRA's body (0.8 m from its centre of mass) 0.86 m from every wall.
 VO_ROOM_HALF_M, VO_ROOM_HEIGHT_M = 3.2, 2.0
-#: vo_room_around_camera's ceiling: the level camera 4.5 cm above the floor sees a wall 4.3-4.7 m away
-#: across the room (beyond the D435i's 4 m: no depth there) and the floor only at grazing angles;
-#: a ceiling this high is within 4 m of the image's upper third
-VO_ROOM_CEILING_M = 0.8
 _VO_WALL_COLOURS = [((0.8, 0.7, 0.3), (0.2, 0.1, 0.4)), ((0.3, 0.6, 0.8), (0.6, 0.1, 0.1)),
                     ((0.7, 0.4, 0.6), (0.1, 0.3, 0.1)), ((0.6, 0.8, 0.5), (0.3, 0.2, 0.5))]
 
 
-def vo_room(centre_xy: Tuple[float, float] = (0.0, 0.0), half_m: float = VO_ROOM_HALF_M,
-            ceiling_m: Optional[float] = None) -> Scene:
+def vo_room(centre_xy: Tuple[float, float] = (0.0, 0.0), half_m: float = VO_ROOM_HALF_M) -> Scene:
     """An obstacle-free room for the visual odometry: a random-dot floor (texels of about 2.4 cm) and
     four random-dot walls (about 5 cm), half_m from centre_xy. The walls are obstacles to the
-    contacts' count (obstacle_<k>). ceiling_m: a random-dot ceiling this high (visual only; the walls
-    as high), lit from below; None: none."""
+    contacts' count (obstacle_<k>)."""
     if not half_m > 0:
         raise ValueError(f"vo_room: half_m must be > 0, got {half_m!r}")
-    if ceiling_m is not None and not ceiling_m > 0:
-        raise ValueError(f"vo_room: ceiling_m must be > 0 or None, got {ceiling_m!r}")
     cx, cy = (float(v) for v in centre_xy)
-    half, h = float(half_m), 0.5 * (VO_ROOM_HEIGHT_M if ceiling_m is None else float(ceiling_m))
+    half, h = float(half_m), 0.5 * VO_ROOM_HEIGHT_M
     assets = ['    <texture name="floor_tex" type="2d" builtin="flat" mark="random" random="0.5" '
               'rgb1="0.55 0.5 0.45" rgb2="0.55 0.5 0.45" markrgb="0.25 0.2 0.2" width="256" height="256"/>',
               '    <material name="floor_mat" texture="floor_tex" texrepeat="1 1"/>']
@@ -157,14 +149,6 @@ def vo_room(centre_xy: Tuple[float, float] = (0.0, 0.0), half_m: float = VO_ROOM
              for k, d in enumerate([(1, 0.2, -1), (-1, -0.2, -1), (-0.2, 1, -1), (0.2, -1, -1)])]
     scene += [f'    <geom name="floor_visual" type="plane" pos="{_v((cx, cy))} 0.0002" '
               f'size="{half:.6g} {half:.6g} 0.1" material="floor_mat" contype="0" conaffinity="0"/>']
-    if ceiling_m is not None:
-        assets += ['    <texture name="ceiling_tex" type="2d" builtin="flat" mark="random" random="0.5" '
-                   'rgb1="0.75 0.75 0.8" rgb2="0.75 0.75 0.8" markrgb="0.2 0.25 0.35" width="256" height="256"/>',
-                   '    <material name="ceiling_mat" texture="ceiling_tex" texrepeat="1 1"/>']
-        scene += ['    <light name="ceiling_light" dir="0.1 0.2 1" directional="true" diffuse="0.45 0.45 0.45" '
-                  'castshadow="false"/>',
-                  f'    <geom name="ceiling_visual" type="box" pos="{_v((cx, cy, 2 * h + 0.01))}" '
-                  f'size="{_v((half, half, 0.01))}" material="ceiling_mat" contype="0" conaffinity="0"/>']
     walls = [((cx + half, cy), (0.02, half)), ((cx - half, cy), (0.02, half)), ((cx, cy + half), (half, 0.02)),
              ((cx, cy - half), (half, 0.02))]
     for k, (((x, y), (sx, sy)), (rgb, mark)) in enumerate(zip(walls, _VO_WALL_COLOURS)):
@@ -176,11 +160,10 @@ def vo_room(centre_xy: Tuple[float, float] = (0.0, 0.0), half_m: float = VO_ROOM
     return Scene("\n".join(scene) + "\n", "\n".join(assets) + "\n")
 
 
-def vo_room_around_camera(spec: WorldSpec, half_m: float = VO_ROOM_HALF_M,
-                          ceiling_m: Optional[float] = VO_ROOM_CEILING_M) -> Scene:
+def vo_room_around_camera(spec: WorldSpec, half_m: float = VO_ROOM_HALF_M) -> Scene:
     """vo_room centred on the odometry camera's (camera_link's) position at the start of the world
     `spec` describes (its start, robot, calibration; its scene is ignored): the odometry frame, and
     with it a mission flown in it, starts there."""
     probe = SimWorld(replace(spec, scene_xml="", assets_xml="", sensors=("mocap", "imu"), mission=""))
     T = probe.plant.frame_transform("head_link") @ probe.camera_in_head
-    return vo_room((float(T[0, 3]), float(T[1, 3])), half_m, ceiling_m)
+    return vo_room((float(T[0, 3]), float(T[1, 3])), half_m)
