@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -233,4 +234,47 @@ TEST(Cpg, LagsGlideWhileMovingAndJumpAtRest) {
   EXPECT_GT(cpg.lags()(3), 0.19);  // still near the old lag: gliding, not jumping
   for (int k = 0; k < 1000; ++k) cpg.step(0.01);
   EXPECT_NEAR(cpg.lags()(3), -0.2, 1e-6);
+}
+
+TEST(Cpg, StopKeepsTheLagsWhileTheWaveDecaysAndAGaitResumesFromThem) {
+  // Tracking lost for 1 s while sidewinding: the mission sends `hold` (amplitudes, frequency and
+  // lags 0), then sidewinding again. The lags must stay the sidewinding ones throughout: gliding to
+  // 0 while the waves are still large, and resumed from there, swings the joints nearly in phase
+  // with pitch and yaw 90 deg apart, which rolled the simulated COBRA over.
+  const RobotModel model = cobra();
+  const GaitLibrary lib = GaitLibrary::from_yaml_file(source_path("config/gaits.yaml"));
+  const GaitParameters sidewind = lib.parameters("sidewind", model);
+  const GaitParameters hold = lib.parameters("hold", model);
+  Cpg cpg(model);
+  cpg.set_parameters(sidewind);
+  for (int k = 0; k < 1000; ++k) cpg.step(0.01);
+  const Eigen::VectorXd moving_lags = cpg.lags();
+  cpg.set_parameters(hold);
+  double worst_lag_change = 0.0;
+  for (int k = 0; k < 100; ++k) {
+    cpg.step(0.01);
+    worst_lag_change = std::max(worst_lag_change, (cpg.lags() - moving_lags).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(worst_lag_change, 1e-9);
+  EXPECT_GT(cpg.amplitudes()(1), 0.1) << "still moving after 1 s: the stop is a decay, not a jump";
+  EXPECT_LT(cpg.amplitudes()(1), 0.5 * 45.0 * M_PI / 180.0);
+  cpg.set_parameters(sidewind);
+  for (int k = 0; k < 300; ++k) {
+    cpg.step(0.01);
+    worst_lag_change = std::max(worst_lag_change, (cpg.lags() - moving_lags).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(worst_lag_change, 1e-9);
+}
+
+TEST(Cpg, StopTakesItsLagsOnceAtRest) {
+  const RobotModel model = cobra();
+  const GaitLibrary lib = GaitLibrary::from_yaml_file(source_path("config/gaits.yaml"));
+  Cpg cpg(model);
+  cpg.set_parameters(lib.parameters("sidewind", model));
+  for (int k = 0; k < 500; ++k) cpg.step(0.01);
+  const GaitParameters hold = lib.parameters("hold", model);
+  cpg.set_parameters(hold);
+  for (int k = 0; k < 1500; ++k) cpg.step(0.01);  // 15 s: the waves have decayed
+  cpg.set_parameters(hold);                        // the mission repeats its command every tick
+  EXPECT_NEAR(cpg.lags().cwiseAbs().maxCoeff(), 0.0, 1e-12);
 }

@@ -60,6 +60,22 @@ def nav_config_over(tmp_path):
 
 
 @pytest.fixture
+def sim_config_vio(tmp_path):
+    """sim_config_vio(**keys) writes tmp_path/sim.yaml: config/sim.yaml with the given keys of its
+    vio: section replaced (the camera calibration made absolute), and returns its path as a str."""
+    import yaml
+
+    def write(**vio) -> str:
+        raw = yaml.safe_load((ROOT / "config" / "sim.yaml").read_text())
+        raw["vio"].update(vio)
+        raw["vio"]["calibration"] = str(ROOT / "config" / "camera.yaml")
+        path = tmp_path / "sim.yaml"
+        path.write_text(yaml.safe_dump(raw))
+        return str(path)
+    return write
+
+
+@pytest.fixture
 def paper_sampler_params():
     """SamplerParams of the paper's planner (Chang et al. III): the longest free arc, every option
     config/nav.yaml (and so SamplerParams()) turns on off, curvatures within 2 /m. Tests of the

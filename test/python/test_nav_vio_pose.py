@@ -5,7 +5,6 @@ import math
 
 import numpy as np
 import pytest
-import yaml
 
 from snake_autonomy.paths import config_path
 from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
@@ -16,18 +15,8 @@ def one_obstacle():
     return load_world(str(config_path("worlds") / "one_obstacle.yaml"))
 
 
-def sim_config_with(tmp_path, **vio) -> str:
-    """config/sim.yaml with the vio: keys given replaced."""
-    raw = yaml.safe_load(config_path("sim.yaml").read_text())
-    raw["vio"].update(vio)
-    raw["vio"]["calibration"] = str(config_path("camera.yaml"))
-    path = tmp_path / "sim.yaml"
-    path.write_text(yaml.safe_dump(raw))
-    return str(path)
-
-
-def test_a_short_vio_run_has_a_pose_error_that_is_nonzero_and_bounded(tmp_path):
-    sim = sim_config_with(tmp_path, loss_rate_per_min=0.0)
+def test_a_short_vio_run_has_a_pose_error_that_is_nonzero_and_bounded(sim_config_vio):
+    sim = sim_config_vio(loss_rate_per_min=0.0)
     result = NavRun(NavRunSpec(one_obstacle(), pose_source="vio", time_limit_s=20.0, keep_frames=False,
                                sim_config=sim)).run()
     m = result.metrics
@@ -46,10 +35,10 @@ def test_mocap_error_is_far_below_vio(tmp_path):
     assert 0.0 < m["pose_error_xy_rmse_m"] < 0.002 and m["tracking_lost_s"] == 0.0
 
 
-def test_the_loop_holds_while_tracking_is_lost_and_moves_again_after(tmp_path):
+def test_the_loop_holds_while_tracking_is_lost_and_moves_again_after(sim_config_vio):
     """Tracking lost from 6 to 10 s: no pose reaches the loop; after its pose_timeout_s (1 s) every
     tick holds (state stale, the stop gait) until poses come again."""
-    sim = sim_config_with(tmp_path, loss_rate_per_min=0.0, loss_episodes=[[6.0, 4.0]])
+    sim = sim_config_vio(loss_rate_per_min=0.0, loss_episodes=[[6.0, 4.0]])
     run = NavRun(NavRunSpec(one_obstacle(), pose_source="vio", time_limit_s=16.0, keep_frames=False,
                             sim_config=sim))
     result = run.run()

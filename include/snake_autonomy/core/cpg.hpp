@@ -13,6 +13,9 @@
 // unwrapped to the nearest equivalent of the current lag (same sin θ, no needless full turns).
 // When the oscillators are at rest (r and dr/dt about zero) q does not depend on θ, and the lags
 // take their new targets at once.
+// A stop (every amplitude target zero) keeps the current lag targets until the oscillators are at
+// rest: the wave decays in its own shape, and a gait resumed during the decay starts from its lags
+// instead of from nearly equal phases (a rolling gait for sidewinding, see Cpg::apply).
 //
 // Both linear systems are integrated exactly (eigen-decomposition of the symmetric A, closed-form
 // critically damped response), the filtered lags entering the phase step at their mid-step value,
