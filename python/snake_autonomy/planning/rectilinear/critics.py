@@ -35,6 +35,7 @@ class CriticParams:
     comfort_m: float = 0.15          # clearance: sweeps passing nearer than this (beyond half the width) cost
     route_inflation_m: float = 0.25  # route (grid_route.py): cells nearer an obstacle than this cost more
     route_inflated_cost: float = 20.0
+    route_dead_end_cost: float = 0.0  # route: each recovery adds this to the cost of the cells round it
 
     def validate(self) -> List[str]:
         p = [f"{k}: must be >= 0, got {getattr(self, k)}" for k in CRITICS if not getattr(self, k) >= 0]
@@ -42,6 +43,8 @@ class CriticParams:
             p.append(f"comfort_m: must be > 0, got {self.comfort_m}")
         if not self.route_inflation_m > 0:
             p.append(f"route_inflation_m: must be > 0, got {self.route_inflation_m}")
+        if not self.route_dead_end_cost >= 0:
+            p.append(f"route_dead_end_cost: must be >= 0, got {self.route_dead_end_cost}")
         if not self.route_inflated_cost >= 1:
             p.append(f"route_inflated_cost: must be >= 1, got {self.route_inflated_cost}")
         return p

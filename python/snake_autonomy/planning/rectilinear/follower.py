@@ -114,6 +114,7 @@ class RecedingHorizonFollower:
         self._v = 0.0
         self._kappa = 0.0
         self._bounds = None
+        self._back_kappa: Optional[float] = None
 
     @property
     def kappa_per_m(self) -> float:
@@ -139,10 +140,12 @@ class RecedingHorizonFollower:
         self.turn_direction = 1.0 if direction >= 0 else -1.0
         self._turn_kappa = self.params.kappa_turn_per_m if kappa_per_m is None else abs(float(kappa_per_m))
 
-    def back_off_now(self) -> None:
-        """No free arc: back off tail first, the body's curvature held (its own track)."""
+    def back_off_now(self, kappa_per_m: Optional[float] = None) -> None:
+        """No free arc: back off tail first with kappa_per_m (reached at the rate limit), or the body's
+        curvature held (its own track)."""
         self.path = None
         self.mode = BACK_OFF
+        self._back_kappa = None if kappa_per_m is None else float(kappa_per_m)
 
     def update(self, t_s: float, pose=None) -> Command:
         """pose: a fresh (x, y, theta) estimate, or None to predict from the last command."""
@@ -160,8 +163,9 @@ class RecedingHorizonFollower:
             return Command(TURN_IN_PLACE, self._limit(self.turn_direction * self._turn_kappa, elapsed),
                            reason=f"no collision-free arc: stopped, turning in place {side}")
         if self.mode == BACK_OFF:
-            self._v, self._omega = -p.speed_m_s, -p.omega(self._kappa)
-            return Command(BACK_OFF, self._limit(self._kappa, elapsed),
+            kappa = self._limit(self._kappa if self._back_kappa is None else self._back_kappa, elapsed)
+            self._v, self._omega = -p.speed_m_s, -p.omega(kappa)
+            return Command(BACK_OFF, kappa,
                            reason="no collision-free arc: backing off along the track")
         if self.mode != FOLLOW or self.path is None or self.pose is None:
             self._v, self._omega = 0.0, 0.0

@@ -8,6 +8,10 @@ width), `inflated_cost` nearer, `lethal_cost` within `lethal_m` (passable, so th
 exists, even from inside an obstacle's inflation); unknown cells cost 1 (optimistic: what no view
 showed is seen before the robot gets there). A goal outside the window is reached through the window
 cell nearest to it, plus the straight line from there.
+Dead ends (`mark`): the cells within `mark_radius_m` of a place the robot recovered at cost
+`mark_cost` more per mark for the rest of the run, in the world frame: a way the map shows open but
+the body cannot take grows dearer with every failure until another way is cheaper, as learning
+real-time search (LRTA*) raises the estimate of the states it leaves.
 """
 import functools
 import math
@@ -43,11 +47,21 @@ def _edges(shape, cell_m: float):
 
 class GridRoute:
     def __init__(self, route_cell_m: float, inflation_m: float, lethal_m: float, inflated_cost: float = 20.0,
-                 lethal_cost: float = 1000.0):
+                 lethal_cost: float = 1000.0, mark_cost: float = 0.0, mark_radius_m: float = 0.3):
         self.route_cell_m, self.inflation_m, self.lethal_m = route_cell_m, inflation_m, lethal_m
         self.inflated_cost, self.lethal_cost = inflated_cost, lethal_cost
+        self.mark_cost, self.mark_radius_m = mark_cost, mark_radius_m
+        self.marks = np.zeros((0, 2))       # world points of the places marked, one row per mark
         self.path = None                    # (K, 2) world points, robot to goal, of the last update
         self._field = None
+
+    def mark(self, xy) -> None:
+        """The robot recovered at xy (world): the cells within mark_radius_m cost mark_cost more."""
+        self.marks = np.vstack([self.marks, np.asarray(xy, float)[:2].reshape(1, 2)])
+
+    def marks_near(self, xy) -> int:
+        """How many marks lie within mark_radius_m of xy."""
+        return int((np.hypot(*(self.marks - np.asarray(xy, float)[:2]).T) <= self.mark_radius_m).sum())
 
     def update(self, local_map, start_xy, goal_xy) -> None:
         """The cost-to-go field on the map's window to goal_xy, and the route from start_xy."""
@@ -63,6 +77,12 @@ class GridRoute:
         cost = np.where(d < self.lethal_m, self.lethal_cost, np.where(d < self.inflation_m, self.inflated_cost, 1.0))
         cell = f * local_map.params.cell_m
         self._lo = local_map.origin + 0.5 * (f - 1) * local_map.params.cell_m
+        if self.mark_cost > 0 and len(self.marks):
+            x = self._lo[0] + cell * np.arange(cost.shape[0])
+            y = self._lo[1] + cell * np.arange(cost.shape[1])
+            near = np.hypot(x[:, None, None] - self.marks[None, None, :, 0],
+                            y[None, :, None] - self.marks[None, None, :, 1]) <= self.mark_radius_m
+            cost = cost + self.mark_cost * near.sum(axis=2)
         self._cell, self._shape = cell, cost.shape
         g_idx = self._index(self._goal[None])[0]
         g_cell = self._lo + cell * np.array(g_idx)

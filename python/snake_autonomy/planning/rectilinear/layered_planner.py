@@ -5,7 +5,8 @@
       -> candidate arcs (the head's unicycle arcs, Chang et al. III)
       -> body sweep (body_sweep.py: the one validity check, the measured body of each robot)
       -> critics (critics.py: weighted scores, the least wins)
-      -> recovery (recovery.py: back off / turn / wait, with a progress checker)
+      -> recovery (recovery.py: back off / turn / wait, with a progress checker; a dead end: an escape
+         backing off replan after replan, the place made dearer for the route)
       -> the follower (follower.py: receding-horizon pursuit of the chosen arc, its curvature bounded to
          the run of candidates whose reshape the sweep found clear)
 
@@ -47,7 +48,10 @@ class LayeredPlanner:
         self.sweep = BodySweep(body, follower.params, cfg.body_sweep)
         lm = cfg.local_map
         cp = cfg.critics
-        self.route = GridRoute(2 * lm.cell_m, cp.route_inflation_m, 0.5 * body.width_m, cp.route_inflated_cost)
+        rp = cfg.recovery
+        self.route = GridRoute(2 * lm.cell_m, cp.route_inflation_m, 0.5 * body.width_m, cp.route_inflated_cost,
+                               mark_cost=cp.route_dead_end_cost, mark_radius_m=rp.dead_end_radius_m)
+        self._escape = None                  # (x, y): the dead end being backed out of
         self.recovery = Recovery(cfg.recovery)
         self.progress = ProgressChecker(cfg.recovery.progress_m, cfg.recovery.progress_window_s)
         self.holding = False                 # the last replan chose to wait (the loop holds)
@@ -78,6 +82,10 @@ class LayeredPlanner:
             self.route.update(self.map, pose[:2], goal_xy)
             route_path = self.route.path
         cands = [self._candidate(c, poses, s, kappa_now, T_world_g) for c, poses, s in self._arcs]
+        if self._escape is not None:
+            out = self._escaping(t_s, pose, cands, T_world_g, route_path)
+            if out is not None:
+                return out
         need = max(self.sp.min_free_m, self.sp.resume_free_m) if self.recovery.active else self.sp.min_free_m
         valid = [i for i, c in enumerate(cands) if c.free_m >= need]
         sel = Selection([Arc(c.curvature_per_m, c.poses, c.s_m, c.free_m) for c in cands], None)
@@ -139,16 +147,22 @@ class LayeredPlanner:
         rp = self.cfg.recovery
         kappa_now = self.follower.kappa_per_m
         self.progress.reset()
+        self.route.mark(pose[:2])
         if self.recovery.side is None:
             self.recovery.side = self._turn_side(cands, T_world_g, goal_xy)
-        back = self.sweep.check(self.sweep.sweep(kappa_now, kappa_now, -rp.back_off_m), self.map, T_world_g,
-                                rp.known_only)
+        if rp.escape_after and self.route.marks_near(pose[:2]) >= rp.escape_after:
+            self._escape = (float(pose[0]), float(pose[1]))
+            out = self._escaping(t_s, pose, cands, T_world_g, route_path)
+            if out is not None:
+                return out
+        back = self._free_back_off(kappa_now, T_world_g)
         turn = self._free_turn(kappa_now, T_world_g)
-        b = self.recovery.next({BACK_OFF: back.free_m >= rp.back_off_m - 1e-9, TURN: turn is not None})
+        b = self.recovery.next({BACK_OFF: back is not None, TURN: turn is not None})
         self.holding = b == WAIT
         if b == BACK_OFF:
-            self.follower.back_off_now()
-            why = f"{cause}: back off along the track"
+            self.follower.back_off_now(back)
+            why = (f"{cause}: back off along the track" if back == kappa_now else
+                   f"{cause}: back off steering (kappa {back:+.2f} /m)")
         elif b == TURN:
             self.follower.stop_and_turn(turn, abs(turn))
             why = f"{cause}: turn in place (kappa {turn:+.2f} /m)"
@@ -167,6 +181,44 @@ class LayeredPlanner:
         left = sum(c.free_m for c in cands if c.curvature_per_m > 0)
         right = sum(c.free_m for c in cands if c.curvature_per_m < 0)
         return 1.0 if left >= right else -1.0
+
+    def _escaping(self, t_s, pose, cands, T_world_g, route_path) -> Optional[Replan]:
+        """Back off out of the dead end at self._escape while base_link is nearer it than escape_m and
+        a back-off is clear (its own track first); None (the escape over) otherwise."""
+        d = math.hypot(pose[0] - self._escape[0], pose[1] - self._escape[1])
+        back = None
+        if d < self.cfg.recovery.escape_m:
+            back = self._free_back_off(self.follower.kappa_per_m, T_world_g, track_first=True)
+        if back is None:
+            self._escape = None
+            return None
+        self.holding = False
+        self.follower.back_off_now(back)
+        sel = Selection([Arc(c.curvature_per_m, c.poses, c.s_m, c.free_m) for c in cands], None)
+        return Replan(t_s, tuple(pose), sel, None, f"dead end: back off (kappa {back:+.2f} /m, {d:.2f} of "
+                      f"{self.cfg.recovery.escape_m:.2f} m)", route_path)
+
+    def _free_back_off(self, kappa_now: float, T_world_g, track_first: bool = False) -> Optional[float]:
+        """The body curvature to back off with, whose reshape and recovery.back_off_m of backwards crawl
+        the body sweep finds clear; None if none is. With back_off_steer: against the recovery's side
+        first (backing, the body turns the other way round: a car's multi-point turn, so a back-off
+        does not undo the turn in place before it), kappa_turn_per_m then half of it, then straight,
+        then the curvature held (the body's own track); without it the curvature held only. track_first
+        (an escape): the curvature held first, then straight (then the steered ones)."""
+        fp, rp = self.follower.params, self.cfg.recovery
+        k = fp.kappa_turn_per_m
+        side = self.recovery.side or 1.0
+        steer = (-side * k, -side * 0.5 * k) if rp.back_off_steer else ()
+        if track_first:
+            order = (kappa_now, 0.0) + steer[::-1]
+        else:
+            order = steer + ((0.0, kappa_now) if rp.back_off_steer else (kappa_now,))
+        for kappa in order:
+            chk = self.sweep.check(self.sweep.sweep(kappa_now, kappa, -rp.back_off_m), self.map, T_world_g,
+                                   rp.known_only)
+            if chk.free_m >= rp.back_off_m - 1e-9:
+                return kappa
+        return None
 
     def _free_turn(self, kappa_now: float, T_world_g) -> Optional[float]:
         """A turn in place whose reshape and crawl (recovery.turn_crawl_m) the body sweep finds clear:

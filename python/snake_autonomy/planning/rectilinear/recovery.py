@@ -6,8 +6,15 @@ subtree runs its behaviours in turn (round robin): back_off (tail first along th
 for one replan; possible when the body sweep of the way back is clear), turn (in place, towards the
 route's side, with a reshape the body sweep finds clear), wait (hold one replan: the views may clear a
 misjudged cell). With `known_only` backing off and turning keep the body on cells the local map knows
-(seen as floor or lain on): the camera never saw what lies beside or behind the body. A behaviour
-that is not possible now is skipped; none possible: wait. A valid arc ends the recovery (the next one
+(seen as floor or lain on): the camera never saw what lies beside or behind the body.
+With `back_off_steer` a back-off steers against the turning side when the body sweep finds that
+clear (backing, the body turns the other way round: a car's multi-point turn; holding the curvature,
+each back-off undid the turn in place before it), else straight, else along the track. A behaviour
+that is not possible now is skipped; none possible: wait.
+Dead ends: after `escape_after` recoveries within `dead_end_radius_m` of one place the robot escapes:
+it backs off, replan after replan, until base_link is `escape_m` from that place (Nav2's BackUp with
+its distance), and the route (grid_route.py) makes that place dearer for the rest of the run, so that
+the same arcs do not lead it straight back in. A valid arc ends the recovery (the next one
 starts from the sequence's beginning).
 Progress checker (Nav2's SimpleProgressChecker): the robot must move `progress_m` within
 `progress_window_s` while it follows; if it does not, the planner recovers as if no arc were valid.
@@ -30,6 +37,10 @@ class RecoveryParams:
     progress_m: float = 0.05
     progress_window_s: float = 120.0
     known_only: bool = True           # back off / turn only over cells seen or lain on
+    back_off_steer: bool = False      # back off steering against the turn's side when its sweep is clear
+    escape_after: int = 0             # recoveries within dead_end_radius_m of one place before escaping (0: never)
+    escape_m: float = 0.4             # an escape backs off until base_link is this far from that place
+    dead_end_radius_m: float = 0.3
 
     def validate(self) -> List[str]:
         p = []
@@ -37,9 +48,12 @@ class RecoveryParams:
                 any(b not in BEHAVIOURS for b in self.sequence):
             p.append(f"sequence: expected a non-empty list of {', '.join(BEHAVIOURS)}, got {self.sequence!r}")
         p += [f"{k}: must be > 0, got {getattr(self, k)}" for k in
-              ("back_off_m", "turn_crawl_m", "progress_m", "progress_window_s") if not getattr(self, k) > 0]
-        if not isinstance(self.known_only, bool):
-            p.append(f"known_only: must be true or false, got {self.known_only!r}")
+              ("back_off_m", "turn_crawl_m", "progress_m", "progress_window_s", "escape_m", "dead_end_radius_m")
+              if not getattr(self, k) > 0]
+        if isinstance(self.escape_after, bool) or not isinstance(self.escape_after, int) or self.escape_after < 0:
+            p.append(f"escape_after: must be an integer >= 0, got {self.escape_after!r}")
+        p += [f"{k}: must be true or false, got {getattr(self, k)!r}" for k in ("known_only", "back_off_steer")
+              if not isinstance(getattr(self, k), bool)]
         return p
 
 
