@@ -26,7 +26,9 @@ from driver_test_helpers import wait_for
 MOVE_S = 12.0
 WITHHELD_S = 2.0
 RECOVER_S = 3.0
-MAX_ERROR_M = 0.05           # measured: 13.0 and 23.2 mm on two runs of 0.28-0.30 m camera path
+MAX_ERROR_M = 0.065          # measured on 0.30 m of camera path (the room around the camera, debug visuals
+                             # hidden): 27-44 mm in 8 runs, 2 of 11 runs over 50 mm; the runaways this
+                             # guards against went 68-330 mm
 LOST = 1000.0                # the pose remapper's lost_covariance
 
 
