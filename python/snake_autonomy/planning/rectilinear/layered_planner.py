@@ -52,7 +52,7 @@ class LayeredPlanner:
         self.route = GridRoute(2 * lm.cell_m, cp.route_inflation_m, 0.5 * body.width_m, cp.route_inflated_cost,
                                mark_cost=cp.route_dead_end_cost, mark_radius_m=rp.dead_end_radius_m)
         self._escape = None                  # (x, y): the dead end being backed out of
-        self.recovery = Recovery(cfg.recovery)
+        self.recovery = Recovery(rp)
         self.progress = ProgressChecker(cfg.recovery.progress_m, cfg.recovery.progress_window_s)
         self.holding = False                 # the last replan chose to wait (the loop holds)
         self.obstacle_map = None             # the loop's diagnostic map (map.source truth): not used here
@@ -82,13 +82,13 @@ class LayeredPlanner:
             self.route.update(self.map, pose[:2], goal_xy)
             route_path = self.route.path
         cands = [self._candidate(c, poses, s, kappa_now, T_world_g) for c, poses, s in self._arcs]
+        sel = Selection([Arc(c.curvature_per_m, c.poses, c.s_m, c.free_m) for c in cands], None)
         if self._escape is not None:
-            out = self._escaping(t_s, pose, cands, T_world_g, route_path)
+            out = self._escaping(t_s, pose, sel, T_world_g, route_path)
             if out is not None:
                 return out
         need = max(self.sp.min_free_m, self.sp.resume_free_m) if self.recovery.active else self.sp.min_free_m
         valid = [i for i, c in enumerate(cands) if c.free_m >= need]
-        sel = Selection([Arc(c.curvature_per_m, c.poses, c.s_m, c.free_m) for c in cands], None)
         stuck = bool(valid) and self.progress.stuck(t_s, pose[:2])
         if not valid or stuck:
             return self._recover(t_s, pose, sel, cands, T_world_g, goal_xy, route_path,
@@ -152,7 +152,7 @@ class LayeredPlanner:
             self.recovery.side = self._turn_side(cands, T_world_g, goal_xy)
         if rp.escape_after and self.route.marks_near(pose[:2]) >= rp.escape_after:
             self._escape = (float(pose[0]), float(pose[1]))
-            out = self._escaping(t_s, pose, cands, T_world_g, route_path)
+            out = self._escaping(t_s, pose, sel, T_world_g, route_path)
             if out is not None:
                 return out
         back = self._free_back_off(kappa_now, T_world_g)
@@ -182,7 +182,7 @@ class LayeredPlanner:
         right = sum(c.free_m for c in cands if c.curvature_per_m < 0)
         return 1.0 if left >= right else -1.0
 
-    def _escaping(self, t_s, pose, cands, T_world_g, route_path) -> Optional[Replan]:
+    def _escaping(self, t_s, pose, sel, T_world_g, route_path) -> Optional[Replan]:
         """Back off out of the dead end at self._escape while base_link is nearer it than escape_m and
         a back-off is clear (its own track first); None (the escape over) otherwise."""
         d = math.hypot(pose[0] - self._escape[0], pose[1] - self._escape[1])
@@ -194,7 +194,6 @@ class LayeredPlanner:
             return None
         self.holding = False
         self.follower.back_off_now(back)
-        sel = Selection([Arc(c.curvature_per_m, c.poses, c.s_m, c.free_m) for c in cands], None)
         return Replan(t_s, tuple(pose), sel, None, f"dead end: back off (kappa {back:+.2f} /m, {d:.2f} of "
                       f"{self.cfg.recovery.escape_m:.2f} m)", route_path)
 
