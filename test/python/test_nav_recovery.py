@@ -99,6 +99,22 @@ def test_the_route_leaves_a_gap_marked_as_a_dead_end_for_the_other_one():
     assert _crossing(unmarked) == pytest.approx(0.5, abs=0.15)     # mark_cost 0: marks cost nothing
 
 
+def test_each_route_cell_costs_its_count_of_marks_within_the_radius_however_far_the_marks_lie():
+    m = _wall_with_two_gaps()
+    r = GridRoute(0.08, 0.12, 0.045, mark_cost=1.0, mark_radius_m=0.3)
+    r.update(m, (0.0, 0.0), (2.0, 0.0))
+    rng = np.random.default_rng(3)
+    lo, hi = r._lo, r._lo + r._cell * (np.array(r._shape) - 1)
+    marks = rng.uniform(lo - 1.0, hi + 1.0, size=(60, 2))        # some outside the window
+    marks[:5] = lo + r._cell * np.array([[0, 0], [3, 3], [3, 3], [7.5, 2.0], [0.0, 3.75]])  # on cells, between
+    r.marks = marks
+    x = lo[0] + r._cell * np.arange(r._shape[0])
+    y = lo[1] + r._cell * np.arange(r._shape[1])
+    brute = (np.hypot(x[:, None, None] - marks[None, None, :, 0], y[None, :, None] - marks[None, None, :, 1])
+             <= 0.3).sum(axis=2)
+    assert brute.max() >= 2 and np.array_equal(r._mark_counts(r._shape, r._cell), brute)
+
+
 def test_a_dead_end_makes_the_robot_back_off_replan_after_replan_until_it_is_out():
     cfg = dataclasses.replace(LAYERED, recovery=dataclasses.replace(LAYERED.recovery, escape_after=3,
                                                                     escape_m=0.3, dead_end_radius_m=0.2))

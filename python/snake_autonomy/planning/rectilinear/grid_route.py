@@ -78,11 +78,7 @@ class GridRoute:
         cell = f * local_map.params.cell_m
         self._lo = local_map.origin + 0.5 * (f - 1) * local_map.params.cell_m
         if self.mark_cost > 0 and len(self.marks):
-            x = self._lo[0] + cell * np.arange(cost.shape[0])
-            y = self._lo[1] + cell * np.arange(cost.shape[1])
-            near = np.hypot(x[:, None, None] - self.marks[None, None, :, 0],
-                            y[None, :, None] - self.marks[None, None, :, 1]) <= self.mark_radius_m
-            cost = cost + self.mark_cost * near.sum(axis=2)
+            cost = cost + self.mark_cost * self._mark_counts(cost.shape, cell)
         self._cell, self._shape = cell, cost.shape
         g_idx = self._index(self._goal[None])[0]
         g_cell = self._lo + cell * np.array(g_idx)
@@ -98,6 +94,22 @@ class GridRoute:
         cells = np.array(cells)
         pts = self._lo + cell * np.column_stack([cells // ny, cells % ny])
         self.path = np.vstack([start, pts[1:], self._goal])
+
+    def _mark_counts(self, shape, cell: float) -> np.ndarray:
+        """(nx, ny) how many marks lie within mark_radius_m of each cell's centre. Only the marks
+        within reach of the window count, each over the block of cells its disc covers: the cost
+        stays that of the cells near marks however many the run has made."""
+        counts = np.zeros(shape)
+        r = self.mark_radius_m
+        hi = self._lo + cell * (np.array(shape) - 1)
+        inside = np.all((self.marks >= self._lo - r) & (self.marks <= hi + r), axis=1)
+        for m in self.marks[inside]:
+            i0, j0 = np.maximum(np.floor((m - r - self._lo) / cell).astype(int), 0)
+            i1, j1 = np.minimum(np.ceil((m + r - self._lo) / cell).astype(int), np.array(shape) - 1)
+            x = self._lo[0] + cell * np.arange(i0, i1 + 1)
+            y = self._lo[1] + cell * np.arange(j0, j1 + 1)
+            counts[i0:i1 + 1, j0:j1 + 1] += np.hypot(x[:, None] - m[0], y[None, :] - m[1]) <= r
+        return counts
 
     def _index(self, xy: np.ndarray) -> np.ndarray:
         ij = np.rint((np.asarray(xy, float).reshape(-1, 2) - self._lo) / self._cell).astype(np.int64)

@@ -147,7 +147,8 @@ class LayeredPlanner:
         rp = self.cfg.recovery
         kappa_now = self.follower.kappa_per_m
         self.progress.reset()
-        self.route.mark(pose[:2])
+        if self.cfg.critics.route_dead_end_cost > 0 or rp.escape_after:
+            self.route.mark(pose[:2])     # dead ends: only where the route's cost or the escape counts them
         if self.recovery.side is None:
             self.recovery.side = self._turn_side(cands, T_world_g, goal_xy)
         if rp.escape_after and self.route.marks_near(pose[:2]) >= rp.escape_after:
