@@ -250,6 +250,35 @@ def test_a_lost_keyframe_view_falls_back_to_the_last_tracked_frame(straight):
     assert not alone.process(straight[-1].rgb, straight[-1].depth_m, 1.9).ok
 
 
+def test_each_pose_names_the_keyframe_it_was_measured_against(straight):
+    """A tracked frame reports its keyframe's stamp and camera pose (a fusion measures the motion from
+    there); after the fallback the last tracked frame is that keyframe, at its own stamp and pose."""
+    vo = VisualOdometry(K(), VoParams(keyframe_min_inliers=20, keyframe_min_overlap=0.0))
+    results = [vo.process(f.rgb, f.depth_m, f.t_s) for f in straight]
+    assert results[0].keyframe_stamp is None                    # the first keyframe: measured against none
+    by_stamp = {r.stamp: r for r in results}
+    for r in results[1:]:
+        assert r.ok, r.reason
+        keyframe = by_stamp[r.keyframe_stamp]
+        assert keyframe.stamp < r.stamp
+        assert np.allclose(r.T_odom_keyframe, keyframe.T_odom_camera)
+    assert len({r.keyframe_stamp for r in results[1:]}) >= 2    # the fallback switched the keyframe
+
+
+def test_the_keyframe_depth_noise_widens_the_covariance(straight):
+    """The keyframe points' depth noise (std depth_sigma_1m_m z^2 along each point's ray) propagated
+    into the PnP fit's covariance: the noisier the depth, the wider; the pose itself is the same."""
+    traces, poses = [], []
+    for sigma in (0.0, 0.005, 0.05):
+        vo = VisualOdometry(K(), VoParams(depth_sigma_1m_m=sigma))
+        r = [vo.process(f.rgb, f.depth_m, f.t_s) for f in straight[:6]][-1]
+        assert r.ok and not r.keyframe
+        traces.append(np.trace(r.relative_covariance[:3, :3]))
+        poses.append(r.T_odom_camera)
+    assert traces[0] < traces[1] < traces[2], traces
+    assert np.allclose(poses[0], poses[2])
+
+
 def test_a_predicted_pose_guides_the_matching(yaw):
     """A keyframe point is matched only to features within guided_radius_px of its projection at the
     predicted pose: the view 28.5 deg round is tracked with the true pose predicted, and lost (too

@@ -7,6 +7,7 @@ and the camera rendered at the IMU's camera_link.
 """
 import math
 
+import gtsam
 import numpy as np
 import pytest
 
@@ -133,7 +134,11 @@ def test_config_matches_the_simulated_imu_and_errors_name_the_field(root, tmp_pa
                           "fusion: {vo_reset_after_lost: -1}": "fusion.vo_reset_after_lost: must be an integer >= 0, "
                                                                "got -1",
                           "fusion: {vo_factor: absolute}": "fusion.vo_factor: unknown key (value 'absolute')",
-                          "fusion: {gate: 1}": "fusion.gate: unknown key (value 1)"}.items():
+                          "fusion: {gate: 1}": "fusion.gate: unknown key (value 1)",
+                          "fusion: {vo_robust_loss: tukey}": "fusion.vo_robust_loss: must be one of none, huber, "
+                                                             "cauchy, got 'tukey'",
+                          "fusion: {vo_from_keyframe: 1}": "fusion.vo_from_keyframe: must be true or false, "
+                                                           "got 1"}.items():
         path.write_text(text)
         with pytest.raises(ValueError) as exc:
             load_fusion_params(path)
@@ -266,3 +271,32 @@ def test_the_gate_takes_the_camera_after_refusing_it_gate_max_refused_times(stra
         run.vio._gate = lambda *args: "IMU gate: refused (test)"
         states = [run.frame(i, straight[i].rgb, straight[i].depth_m).ok for i in range(5, 10)]
         assert states == expected, (max_refused, states)
+
+
+def _between_spans(vio):
+    """How many states each visual between factor in the smoother's graph spans (X(j) -> X(k): k - j)."""
+    graph = vio._smoother.getFactors()
+    spans = []
+    for i in range(graph.size()):
+        f = graph.at(i)
+        keys = [gtsam.Symbol(key) for key in f.keys()] if f is not None else []
+        if len(keys) == 2 and all(key.chr() == ord("x") for key in keys):
+            spans.append(keys[1].index() - keys[0].index())
+    return spans
+
+
+@pytest.mark.parametrize("loss", ["none", "huber", "cauchy"])
+def test_motions_are_measured_from_the_keyframes_state(straight, loss):
+    """With vo_from_keyframe a tracked frame's motion is a between factor from the state of the frame
+    its keyframe was taken at (the crawl keeps its first keyframe for several frames); without it,
+    from the previous state. Either way, with or without a robust loss, the crawl fuses within 1 cm."""
+    spans = {}
+    for from_keyframe in (True, False):
+        run = Run(straight, FusionParams(still_gyro_rad_s=0.0, vo_from_keyframe=from_keyframe, vo_robust_loss=loss))
+        for i in range(8):
+            r = run.frame(i, straight[i].rgb, straight[i].depth_m)
+            assert r.ok or i == 0, r.reason
+            assert run.error_m(r, i) < 0.01
+        spans[from_keyframe] = _between_spans(run.vio)
+    assert max(spans[True]) > 1, spans
+    assert set(spans[False]) == {1}, spans

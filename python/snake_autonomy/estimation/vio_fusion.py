@@ -11,9 +11,12 @@ fixed-lag smoother (GTSAM), ROS-free.
 One state per camera frame: the IMU's pose X(k) in a gravity-aligned world frame (z up), its
 velocity V(k) and the IMU biases B(k). Consecutive states are tied by a CombinedImuFactor (the
 preintegrated gyro and accelerometer samples between the frames, with the bias random walk). A
-frame the visual odometry tracked adds a between factor from the last tracked frame's state (within
-half the smoother's window) to X(k): the motion the odometry measured between the two, its
-covariance the two PnP fits' (the keyframe's own error drops out). The odometry's frame never
+frame the visual odometry tracked adds a between factor to X(k) from the state of the frame its
+keyframe was taken at (vo_from_keyframe; that frame's visual pose taken, its state in the window):
+the PnP fit's motion from the keyframe, with that fit's covariance, so that the frames measured
+against one keyframe share its error instead of adding up their own; else from the last tracked
+frame's state (within half the smoother's window), the two PnP fits' covariances summed (the
+keyframe's own error drops out). A robust loss (vo_robust_loss) can weigh those factors down. The odometry's frame never
 enters the world: a drifted or restarted odometry frame moves nothing. The first tracked frame
 after a gap only anchors the next one (it is reported lost). On the simulated star mission
 (sidewinding) this kept the estimate within metres where the odometry's poses taken as absolute
@@ -56,6 +59,10 @@ from .visual_odometry import LOST, LOST_COVARIANCE, OK, VisualOdometry, VoParams
 
 
 
+#: the robust losses the visual between factors can take (FusionParams.vo_robust_loss)
+ROBUST_LOSSES = ("none", "huber", "cauchy")
+
+
 @dataclass
 class FusionParams:
     """The fusion: section of config/estimation.yaml. The IMU's noise figures are sim/imu.py's
@@ -78,6 +85,15 @@ class FusionParams:
     vo_min_sigma_m: float = 1e-3               # the visual pose's std is at least this ...
     vo_min_sigma_deg: float = 0.5              # ... and this (lower: the fused tilt follows the visual one
                                                # and gravity leaks into the dead-reckoning when tracking is lost)
+    # a robust loss on the visual between factors ("none", "huber" or "cauchy"), its threshold in
+    # whitened sigmas: a motion the odometry got grossly wrong weighs less, as a SLAM back end's
+    # robust kernel does (weighted at the IMU's prediction, where ISAM2 linearises the new factor)
+    vo_robust_loss: str = "none"
+    # the visual motion is measured from the state of the frame the odometry's keyframe was taken
+    # at (its PnP fit's own error only; the keyframe's error shared by the frames against it), else
+    # (false, or that state out of the window) from the last tracked frame's
+    vo_from_keyframe: bool = True
+    vo_robust_k: float = 1.345
     gate_m: float = 0.1                        # visual pose further than this from the IMU's prediction ...
     gate_deg: float = 10.0
     gate_sigmas: float = 3.0                   # ... plus this many of the prediction's std: refused
@@ -99,7 +115,13 @@ class FusionParams:
         out = []
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name in ("vo_reset_after_lost", "gate_max_refused"):
+            if f.name == "vo_from_keyframe":
+                if not isinstance(v, bool):
+                    out.append(f"{prefix}.{f.name}: must be true or false, got {v!r}")
+            elif f.name == "vo_robust_loss":
+                if v not in ROBUST_LOSSES:
+                    out.append(f"{prefix}.{f.name}: must be one of {', '.join(ROBUST_LOSSES)}, got {v!r}")
+            elif f.name in ("vo_reset_after_lost", "gate_max_refused"):
                 if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                     out.append(f"{prefix}.{f.name}: must be an integer >= 0, got {v!r}")
             elif f.name in ("velocity_prior_sigma_m_s", "height_prior_sigma_m", "still_gyro_rad_s"):
@@ -195,6 +217,7 @@ class VioFusion:
         self._last_vo = None                         # (state index, stamp, T_vo_imu, PnP covariance)
         self._vo_key = 0                             # the state at the odometry's last good pose
         self._refused = 0                            # tracked frames the gate refused in a row
+        self._keys = {}                              # frame stamp -> its state's index, within the window
         self._est = None                             # the smoother's estimate, None once it was updated since
         self._motion = MotionModel(p.velocity_prior_sigma_m_s, p.height_prior_sigma_m, p.still_gyro_rad_s,
                                    p.still_accel_m_s2, p.still_sigma_m_s)
@@ -264,6 +287,7 @@ class VioFusion:
             reason = (reason + "; " if reason else "") + f"smoother restarted: {str(exc).strip().splitlines()[0]}"
             result = self._estimate(stamp, state, reason, vo)
             result.smoother_restarted = True
+        self._remember(stamp, state == OK or anchoring)
         self._lost_frames = 0 if state == OK or anchoring else self._lost_frames + 1
         if p.vo_reset_after_lost and self._lost_frames >= p.vo_reset_after_lost:
             self.vo.reset(result.T_world_camera, result.marginal_covariance)
@@ -324,7 +348,16 @@ class VioFusion:
         state, reason = (OK, "") if vo.ok else (LOST, f"visual odometry lost: {vo.reason}")
         if vo.ok:
             self._last_vo = (self._k, stamp, vo.T_odom_camera @ self.T_camera_imu, vo.relative_covariance)
+        self._remember(stamp, vo.ok)
         return self._estimate(stamp, state, reason, vo)
+
+    def _remember(self, stamp: float, taken: bool) -> None:
+        """The frame's state index by its stamp, when its visual pose was taken (a keyframe's state,
+        for the motions measured from it): a refused pose the odometry made its keyframe would
+        carry its error into every motion measured from it, so those are measured frame to frame."""
+        self._keys = {t: k for t, k in self._keys.items() if t >= stamp - self.params.lag_s}
+        if taken:
+            self._keys[stamp] = self._k
 
     def _start(self, T_world_imu: np.ndarray, velocity, bias, stamp: float) -> None:
         """A new smoother whose first state is this pose, velocity and bias, with the prior_ sigmas."""
@@ -360,16 +393,22 @@ class VioFusion:
 
     def _vo_factor(self, estimate, k: int, vo: VoResult, T_vo_imu: np.ndarray):
         """(factor, the IMU's pose it puts state k at, whether it is relative to state k - 1) for a
-        tracked frame: the motion from the last tracked frame's state (within half the window) as a
-        between factor, with the two frames' PnP covariances (the keyframe's own error drops out of the
-        motion); (None, None, False) when no earlier tracked frame is in the window."""
+        tracked frame: the motion from its keyframe's state (vo_from_keyframe, when that state is in
+        the window) with the PnP fit's covariance, else from the last tracked frame's state (within
+        half the window) with the two frames' PnP covariances (the keyframe's own error drops out of
+        the motion); (None, None, False) when no earlier tracked frame is in the window."""
         p = self.params
-        last = self._last_vo
-        if last is None or vo.stamp - last[1] > 0.5 * p.lag_s or not estimate.exists(X(last[0])):
-            return None, None, False
-        j, _, T_vo_last, rel_last = last
-        T_rel = np.linalg.inv(T_vo_last) @ T_vo_imu
-        noise = self._vo_noise(vo.relative_covariance + rel_last, vo.T_odom_camera, T_vo_imu)
+        j = self._keys.get(vo.keyframe_stamp) if p.vo_from_keyframe else None
+        if j is not None and j < k and estimate.exists(X(j)):
+            T_rel = np.linalg.inv(vo.T_odom_keyframe @ self.T_camera_imu) @ T_vo_imu
+            noise = self._vo_noise(vo.relative_covariance, vo.T_odom_camera, T_vo_imu)
+        else:
+            last = self._last_vo
+            if last is None or vo.stamp - last[1] > 0.5 * p.lag_s or not estimate.exists(X(last[0])):
+                return None, None, False
+            j, _, T_vo_last, rel_last = last
+            T_rel = np.linalg.inv(T_vo_last) @ T_vo_imu
+            noise = self._vo_noise(vo.relative_covariance + rel_last, vo.T_odom_camera, T_vo_imu)
         T_world_imu = estimate.atPose3(X(j)).matrix() @ T_rel
         return gtsam.BetweenFactorPose3(X(j), X(k), gtsam.Pose3(T_rel), noise), T_world_imu, j == k - 1
 
@@ -379,7 +418,12 @@ class VioFusion:
         p = self.params
         floor = np.diag([p.vo_min_sigma_m ** 2] * 3 + [math.radians(p.vo_min_sigma_deg) ** 2] * 3)
         cov_imu = base_covariance(covariance, T_odom_camera, self.T_camera_imu) + floor
-        return gtsam.noiseModel.Gaussian.Covariance(ros_to_local(cov_imu, T_vo_imu[:3, :3]))
+        gaussian = gtsam.noiseModel.Gaussian.Covariance(ros_to_local(cov_imu, T_vo_imu[:3, :3]))
+        if p.vo_robust_loss == "huber":
+            return gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(p.vo_robust_k), gaussian)
+        if p.vo_robust_loss == "cauchy":
+            return gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Cauchy.Create(p.vo_robust_k), gaussian)
+        return gaussian
 
     def _estimate(self, stamp, state, reason, vo) -> FusedResult:
         k = self._k

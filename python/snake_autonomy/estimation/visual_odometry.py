@@ -25,12 +25,15 @@ keyframe again: tracking resumes when the camera sees the keyframe's scene again
 
 Covariance (x, y, z, then small rotations about the odometry frame's fixed x, y, z axes, as in
 geometry_msgs/PoseWithCovariance): the Gauss-Newton covariance of the PnP fit,
-sigma^2 (J^T J)^-1, J the inliers' reprojection Jacobian with respect to the camera's pose and
-sigma^2 the inliers' residual variance (sum r^2 / (2N - 6), at least min_pixel_sigma_px^2), added to
-the keyframe's covariance carried over the lever arm from the keyframe to the camera. The keyframe's
-3D points count as exact (their depth noise is not propagated), so covariance grows with each
-keyframe change, as odometry drift does. The first keyframe's pose is the odometry frame's origin,
-with zero covariance.
+(sum_i J_i^T W_i J_i)^-1, J_i an inlier's reprojection Jacobian with respect to the camera's pose
+and W_i the inverse of its image-space covariance: min_pixel_sigma_px^2 I plus, with
+depth_sigma_1m_m > 0, its keyframe point's depth noise (std depth_sigma_1m_m z^2 along its ray, an
+active stereo camera's) seen from this camera (RTAB-Map propagates its points' 3D covariance so);
+scaled by the fit's variance factor (the residuals' chi^2 per degree of freedom) when above 1. Added
+to the keyframe's covariance carried over the lever arm from the keyframe to the camera, so
+covariance grows with each keyframe change, as odometry drift does. The first keyframe's pose is the
+odometry frame's origin, with zero covariance. Each tracked result names the keyframe it was
+measured against (keyframe_stamp, T_odom_keyframe).
 """
 import math
 from dataclasses import dataclass, field, fields
@@ -72,6 +75,9 @@ class VoParams:
     max_step_m: float = 0.3            # a pose further than this from the last good one: lost (gross error)
     max_step_deg: float = 45.0
     min_pixel_sigma_px: float = 1.0    # the covariance's reprojection std is at least this
+    # the depth's std at 1 m (it grows with z^2, an active stereo camera's: z^2 x subpixel / (focal x
+    # baseline)); propagated from the keyframe's points into the PnP covariance (0: points exact)
+    depth_sigma_1m_m: float = 0.0
     guided_radius_px: float = 30.0     # with a predicted pose: a keyframe point matches only features within
                                        # this of where the prediction projects it (0: every feature)
     depth_redetect_below: int = 50     # a frame with fewer features with depth than this is detected again
@@ -107,6 +113,7 @@ _LIMITS = {
     "keyframe_min_inliers": (int, 6, 10000), "keyframe_min_overlap": (float, 0.0, 1.0),
     "max_step_m": (float, 1e-3, 100.0), "max_step_deg": (float, 0.1, 180.0),
     "min_pixel_sigma_px": (float, 0.0, 100.0), "guided_radius_px": (float, 0.0, 10000.0),
+    "depth_sigma_1m_m": (float, 0.0, 1.0),
     "depth_redetect_below": (int, 0, 20000),
 }
 assert set(_LIMITS) == {f.name for f in fields(VoParams)}
@@ -132,6 +139,10 @@ class VoResult:
     #: the PnP fit's own covariance against the keyframe (the keyframe's not added; same axes): the
     #: error of the motion since the keyframe; zero for a first keyframe, None when lost
     relative_covariance: Optional[np.ndarray] = None
+    #: the keyframe the pose was measured against: its stamp and its camera pose in the odometry
+    #: frame (None when lost or for a first keyframe)
+    keyframe_stamp: Optional[float] = None
+    T_odom_keyframe: Optional[np.ndarray] = None
 
     @property
     def ok(self) -> bool:
@@ -204,6 +215,7 @@ class VisualOdometry:
         self._covariance = np.zeros((6, 6)) if covariance is None else np.array(covariance, float)
         self._keyframe: Optional[_Keyframe] = None
         self._previous: Optional[_Features] = None   # the last tracked frame's features, unless the keyframe
+        self._previous_stamp = 0.0
         self.keyframes = 0             # keyframes taken since the reset
 
     @property
@@ -223,14 +235,15 @@ class VisualOdometry:
             return self._first_keyframe(feats, stamp)
         result = self._track(feats, stamp, predicted)
         previous, self._previous = self._previous, None
+        previous_stamp = self._previous_stamp
         if not result.ok and previous is not None and result.features >= self.params.min_inliers:
             # the keyframe's view is gone: the last tracked frame (at the last good pose) becomes
             # the keyframe and the frame is tried against it
-            if self._set_keyframe(previous, stamp):
+            if self._set_keyframe(previous, previous_stamp):
                 retry = self._track(feats, stamp, predicted)
                 result = retry if retry.ok else result
         if result.ok and not result.keyframe:
-            self._previous = feats
+            self._previous, self._previous_stamp = feats, stamp
         return result
 
     def _track(self, feats: "_Features", stamp: float, predicted=None) -> VoResult:
@@ -269,7 +282,8 @@ class VisualOdometry:
         new_kf = len(inl) < p.keyframe_min_inliers or len(inl) < p.keyframe_min_overlap * len(kf.points)
         if new_kf:
             new_kf = self._set_keyframe(feats, stamp)
-        return VoResult(stamp, T.copy(), cov.copy(), OK, "", len(inl), len(kf_idx), n_feat, new_kf, rel)
+        return VoResult(stamp, T.copy(), cov.copy(), OK, "", len(inl), len(kf_idx), n_feat, new_kf, rel,
+                        kf.stamp, kf.T_odom_camera.copy())
 
     # ---------------------------------------------------------------------------------------------
     def _features(self, image, depth_m, mask=None) -> _Features:
@@ -392,7 +406,6 @@ class VisualOdometry:
         K, R, p_cam = self.K, T[:3, :3], T[:3, 3]
         r = self._residuals(obj, img, rvec, tvec)
         n = len(obj)
-        sigma2 = max(float(np.sum(r * r)) / max(2 * n - 6, 1), self.params.min_pixel_sigma_px ** 2)
         X_w = obj @ kf.T_odom_camera[:3, :3].T + kf.T_odom_camera[:3, 3]
         d = X_w - p_cam
         x_c = d @ R                                     # R^T d, the points in the camera
@@ -410,10 +423,24 @@ class VisualOdometry:
         skews[:, 0, 1], skews[:, 0, 2], skews[:, 1, 2] = -d[:, 2], d[:, 1], -d[:, 0]
         skews[:, 1, 0], skews[:, 2, 0], skews[:, 2, 1] = d[:, 2], -d[:, 1], d[:, 0]
         J_pose[:, :, 3:] = R.T @ skews
-        J = (Ju @ J_pose).reshape(2 * n, 6)
-        info = J.T @ J
+        J = Ju @ J_pose                                 # (N, 2, 6)
+        # each point's image-space covariance: the pixel noise plus its keyframe depth's noise, which
+        # moves the point along its keyframe ray (std depth_sigma_1m_m z^2), seen from this camera
+        px2 = self.params.min_pixel_sigma_px ** 2
+        W = np.broadcast_to(np.eye(2) / max(px2, 1e-12), (n, 2, 2))
+        if self.params.depth_sigma_1m_m > 0:
+            z_kf = obj[:, 2]
+            ray = obj / z_kf[:, None]
+            s_z = self.params.depth_sigma_1m_m * z_kf ** 2
+            R_cam_kf = R.T @ kf.T_odom_camera[:3, :3]
+            g = (Ju @ (ray @ R_cam_kf.T)[:, :, None])[:, :, 0] * s_z[:, None]      # (N, 2) the ray's image
+            W = np.linalg.inv(px2 * np.eye(2) + g[:, :, None] * g[:, None, :])
+        info = np.einsum("nai,nab,nbj->ij", J, W, J)
+        # the fit's variance factor (its normalised residuals' chi^2 per degree of freedom), at least 1
+        chi2 = float(np.einsum("na,nab,nb->", r, W, r))
+        scale = max(chi2 / max(2 * n - 6, 1), 1.0)
         try:
-            rel = sigma2 * np.linalg.inv(info)
+            rel = scale * np.linalg.inv(info)
         except np.linalg.LinAlgError:
             rel = np.eye(6) * LOST_COVARIANCE
         A = np.eye(6)
