@@ -150,6 +150,9 @@ class FusedResult:
     reason: str
     vo: VoResult
     smoother_restarted: bool = False   # the smoother failed on this frame and a new one started
+    #: the visual motion this frame measured (gated or not), None without one: (the stamp of the frame
+    #: it is measured from, the IMU's motion 4x4, its 6x6 covariance in GTSAM's tangent: rotation, translation)
+    measured_motion: Optional[tuple] = None
 
     @property
     def ok(self) -> bool:
@@ -244,12 +247,12 @@ class VioFusion:
         vo = self.vo.process(image, depth_m, stamp, mask, self._vo_prediction(before, predicted.pose()))
         if vo.ok:
             self._vo_key = k
-        state, reason, T_world_imu, anchoring = OK, "", None, False
+        state, reason, T_world_imu, anchoring, motion = OK, "", None, False, None
         if not vo.ok:
             state, reason = LOST, f"visual odometry lost: {vo.reason}"
         else:
             T_vo_imu = vo.T_odom_camera @ self.T_camera_imu
-            factor, T_world_imu, relative = self._vo_factor(before, k, vo, T_vo_imu)
+            factor, T_world_imu, relative, motion = self._vo_factor(before, k, vo, T_vo_imu)
             if factor is None:              # tracked again: the next frame's motion is measured from it
                 state, anchoring = LOST, True
                 reason = "visual odometry: no earlier tracked frame to measure the motion from"
@@ -287,6 +290,7 @@ class VioFusion:
             reason = (reason + "; " if reason else "") + f"smoother restarted: {str(exc).strip().splitlines()[0]}"
             result = self._estimate(stamp, state, reason, vo)
             result.smoother_restarted = True
+        result.measured_motion = motion
         self._remember(stamp, state == OK or anchoring)
         self._lost_frames = 0 if state == OK or anchoring else self._lost_frames + 1
         if p.vo_reset_after_lost and self._lost_frames >= p.vo_reset_after_lost:
@@ -392,33 +396,41 @@ class VioFusion:
         return self.vo.pose @ np.linalg.inv(T_world_then) @ predicted.matrix() @ self.T_imu_camera
 
     def _vo_factor(self, estimate, k: int, vo: VoResult, T_vo_imu: np.ndarray):
-        """(factor, the IMU's pose it puts state k at, whether it is relative to state k - 1) for a
-        tracked frame: the motion from its keyframe's state (vo_from_keyframe, when that state is in
-        the window) with the PnP fit's covariance, else from the last tracked frame's state (within
-        half the window) with the two frames' PnP covariances (the keyframe's own error drops out of
-        the motion); (None, None, False) when no earlier tracked frame is in the window."""
+        """(factor, the IMU's pose it puts state k at, whether it is relative to state k - 1, the
+        measured motion: FusedResult.measured_motion) for a tracked frame: the motion from its
+        keyframe's state (vo_from_keyframe, when that state is in the window) with the PnP fit's
+        covariance, else from the last tracked frame's state (within half the window) with the two
+        frames' PnP covariances (the keyframe's own error drops out of the motion); all None (and
+        False) when no earlier tracked frame is in the window."""
         p = self.params
         j = self._keys.get(vo.keyframe_stamp) if p.vo_from_keyframe else None
         if j is not None and j < k and estimate.exists(X(j)):
+            since = vo.keyframe_stamp
             T_rel = np.linalg.inv(vo.T_odom_keyframe @ self.T_camera_imu) @ T_vo_imu
-            noise = self._vo_noise(vo.relative_covariance, vo.T_odom_camera, T_vo_imu)
+            cov = self._vo_covariance(vo.relative_covariance, vo.T_odom_camera, T_vo_imu)
         else:
             last = self._last_vo
             if last is None or vo.stamp - last[1] > 0.5 * p.lag_s or not estimate.exists(X(last[0])):
-                return None, None, False
-            j, _, T_vo_last, rel_last = last
+                return None, None, False, None
+            j, since, T_vo_last, rel_last = last
             T_rel = np.linalg.inv(T_vo_last) @ T_vo_imu
-            noise = self._vo_noise(vo.relative_covariance + rel_last, vo.T_odom_camera, T_vo_imu)
+            cov = self._vo_covariance(vo.relative_covariance + rel_last, vo.T_odom_camera, T_vo_imu)
         T_world_imu = estimate.atPose3(X(j)).matrix() @ T_rel
-        return gtsam.BetweenFactorPose3(X(j), X(k), gtsam.Pose3(T_rel), noise), T_world_imu, j == k - 1
+        factor = gtsam.BetweenFactorPose3(X(j), X(k), gtsam.Pose3(T_rel), self._vo_noise(cov))
+        return factor, T_world_imu, j == k - 1, (since, T_rel, cov)
 
-    def _vo_noise(self, covariance, T_odom_camera, T_vo_imu):
+    def _vo_covariance(self, covariance, T_odom_camera, T_vo_imu) -> np.ndarray:
         """The odometry's camera covariance (its frame's axes) at the IMU, with the floors, in the
-        tangent of the IMU's pose."""
+        tangent of the IMU's pose (GTSAM's: rotation, translation)."""
         p = self.params
         floor = np.diag([p.vo_min_sigma_m ** 2] * 3 + [math.radians(p.vo_min_sigma_deg) ** 2] * 3)
         cov_imu = base_covariance(covariance, T_odom_camera, self.T_camera_imu) + floor
-        gaussian = gtsam.noiseModel.Gaussian.Covariance(ros_to_local(cov_imu, T_vo_imu[:3, :3]))
+        return ros_to_local(cov_imu, T_vo_imu[:3, :3])
+
+    def _vo_noise(self, cov: np.ndarray):
+        """The between factor's noise model: Gaussian, within a robust loss if vo_robust_loss says so."""
+        p = self.params
+        gaussian = gtsam.noiseModel.Gaussian.Covariance(cov)
         if p.vo_robust_loss == "huber":
             return gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(p.vo_robust_k), gaussian)
         if p.vo_robust_loss == "cauchy":
