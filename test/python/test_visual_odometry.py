@@ -265,6 +265,25 @@ def test_each_pose_names_the_keyframe_it_was_measured_against(straight):
     assert len({r.keyframe_stamp for r in results[1:]}) >= 2    # the fallback switched the keyframe
 
 
+def test_a_view_that_comes_back_is_placed_against_its_earlier_keyframe(yaw):
+    """The camera turns 28.5 deg and back: with keyframe_memory the turn back is measured against the
+    keyframes taken on the way out (the last frame, the first view again, against the first
+    keyframe), so fewer keyframes are taken and no new error is added; without it, new keyframes."""
+    there_and_back = list(yaw) + list(yaw[::-1])
+    taken, last = {}, {}
+    for memory in (0, 4):
+        # keyframes switched early (below 150 inliers), so that the turn takes several
+        vo = VisualOdometry(K(), VoParams(keyframe_memory=memory, keyframe_min_inliers=150))
+        for i, f in enumerate(there_and_back):
+            r = vo.process(f.rgb, f.depth_m, 0.1 * i)
+            assert r.ok, r.reason
+        taken[memory], last[memory] = vo.keyframes, r
+    assert taken[4] < taken[0], taken
+    assert last[4].keyframe_stamp == 0.0                        # the first keyframe, its view again
+    e_m, e_deg = errors(last[4], yaw[0], yaw[0])
+    assert e_m < MAX_POSITION_ERROR_M and e_deg < MAX_ANGLE_ERROR_DEG
+
+
 def test_the_keyframe_depth_noise_widens_the_covariance(straight):
     """The keyframe points' depth noise (std depth_sigma_1m_m z^2 along each point's ray) propagated
     into the PnP fit's covariance: the noisier the depth, the wider; the pose itself is the same."""

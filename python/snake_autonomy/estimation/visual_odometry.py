@@ -36,8 +36,9 @@ odometry frame's origin, with zero covariance. Each tracked result names the key
 measured against (keyframe_stamp, T_odom_keyframe).
 """
 import math
+from collections import deque
 from dataclasses import dataclass, field, fields
-from typing import List, Optional
+from typing import Deque, List, Optional
 
 import cv2
 import numpy as np
@@ -78,6 +79,10 @@ class VoParams:
     # the depth's std at 1 m (it grows with z^2, an active stereo camera's: z^2 x subpixel / (focal x
     # baseline)); propagated from the keyframe's points into the PnP covariance (0: points exact)
     depth_sigma_1m_m: float = 0.0
+    # earlier keyframes kept: when the keyframe's inliers drop, the one of them with the most inliers
+    # (at least keyframe_min_inliers) becomes the keyframe again before the frame becomes a new one
+    # (0: none); the head yawing back and forth while sidewinding sees them again
+    keyframe_memory: int = 4
     guided_radius_px: float = 30.0     # with a predicted pose: a keyframe point matches only features within
                                        # this of where the prediction projects it (0: every feature)
     depth_redetect_below: int = 50     # a frame with fewer features with depth than this is detected again
@@ -113,7 +118,7 @@ _LIMITS = {
     "keyframe_min_inliers": (int, 6, 10000), "keyframe_min_overlap": (float, 0.0, 1.0),
     "max_step_m": (float, 1e-3, 100.0), "max_step_deg": (float, 0.1, 180.0),
     "min_pixel_sigma_px": (float, 0.0, 100.0), "guided_radius_px": (float, 0.0, 10000.0),
-    "depth_sigma_1m_m": (float, 0.0, 1.0),
+    "depth_sigma_1m_m": (float, 0.0, 1.0), "keyframe_memory": (int, 0, 100),
     "depth_redetect_below": (int, 0, 20000),
 }
 assert set(_LIMITS) == {f.name for f in fields(VoParams)}
@@ -214,6 +219,7 @@ class VisualOdometry:
         self._pose = np.eye(4) if T_odom_camera is None else np.array(T_odom_camera, float)
         self._covariance = np.zeros((6, 6)) if covariance is None else np.array(covariance, float)
         self._keyframe: Optional[_Keyframe] = None
+        self._earlier: Deque[_Keyframe] = deque(maxlen=max(self.params.keyframe_memory, 1))   # older keyframes
         self._previous: Optional[_Features] = None   # the last tracked frame's features, unless the keyframe
         self._previous_stamp = 0.0
         self.keyframes = 0             # keyframes taken since the reset
@@ -247,8 +253,40 @@ class VisualOdometry:
         return result
 
     def _track(self, feats: "_Features", stamp: float, predicted=None) -> VoResult:
-        """The frame's pose against the keyframe (a new keyframe when the inliers drop), or lost."""
+        """The frame's pose against the keyframe; when its inliers drop, against the earlier keyframe
+        (the last keyframe_memory) with the most inliers, if one has enough, which becomes the
+        keyframe again; else the frame becomes the keyframe. Lost when none places it."""
         kf = self._keyframe
+        placed = self._place(kf, feats, stamp, predicted)
+        if self._earlier and self._degraded(placed, kf):
+            best = None
+            for old in reversed(self._earlier):
+                other = self._place(old, feats, stamp, predicted)
+                if not self._degraded(other, old) and (best is None or other[3] > best[1][3]):
+                    best = (old, other)
+            if best is not None:        # the view came back: its keyframe's error, not a new one's
+                kept = [k for k in self._earlier if k is not best[0]] + [kf]
+                self._earlier = deque(kept, maxlen=self._earlier.maxlen)
+                kf, placed = best
+                self._keyframe = kf
+        if isinstance(placed, VoResult):
+            return placed
+        T, cov, rel, n_inliers, n_matches = placed
+        self._pose, self._covariance = T, cov
+        new_kf = self._degraded(placed, kf) and self._set_keyframe(feats, stamp)
+        return VoResult(stamp, T.copy(), cov.copy(), OK, "", n_inliers, n_matches, len(feats.uv), new_kf, rel,
+                        kf.stamp, kf.T_odom_camera.copy())
+
+    def _degraded(self, placed, kf: "_Keyframe") -> bool:
+        """Lost against kf, or too few inliers (keyframe_min_inliers, keyframe_min_overlap) to keep it."""
+        if isinstance(placed, VoResult):
+            return True
+        p = self.params
+        return placed[3] < p.keyframe_min_inliers or placed[3] < p.keyframe_min_overlap * len(kf.points)
+
+    def _place(self, kf: "_Keyframe", feats: "_Features", stamp: float, predicted=None):
+        """(pose, its covariance, the PnP fit's covariance, inliers, matches) of the frame against kf,
+        or a lost VoResult saying why not."""
         p = self.params
         n_feat = len(feats.uv)
         if feats.descriptors is None or n_feat < p.min_inliers:
@@ -278,12 +316,7 @@ class VisualOdometry:
                                      f"(max_step_m {p.max_step_m:g}, max_step_deg {p.max_step_deg:g})",
                               features=n_feat, matches=len(kf_idx), inliers=len(inl))
         cov, rel = self._covariance_of(T, kf, obj[inl], img[inl], rvec, tvec)
-        self._pose, self._covariance = T, cov
-        new_kf = len(inl) < p.keyframe_min_inliers or len(inl) < p.keyframe_min_overlap * len(kf.points)
-        if new_kf:
-            new_kf = self._set_keyframe(feats, stamp)
-        return VoResult(stamp, T.copy(), cov.copy(), OK, "", len(inl), len(kf_idx), n_feat, new_kf, rel,
-                        kf.stamp, kf.T_odom_camera.copy())
+        return T, cov, rel, len(inl), len(kf_idx)
 
     # ---------------------------------------------------------------------------------------------
     def _features(self, image, depth_m, mask=None) -> _Features:
@@ -340,6 +373,8 @@ class VisualOdometry:
         K, z = self.K, feats.depth[has]
         uv = feats.uv[has]
         pts = np.column_stack([(uv[:, 0] - K[0, 2]) * z / K[0, 0], (uv[:, 1] - K[1, 2]) * z / K[1, 1], z])
+        if self._keyframe is not None and self.params.keyframe_memory > 0:
+            self._earlier.append(self._keyframe)
         self._keyframe = _Keyframe(self._pose.copy(), self._covariance.copy(), pts,
                                    feats.descriptors[has], stamp)
         self.keyframes += 1
