@@ -11,8 +11,10 @@ are dropped); every new frame's ORB features are matched to them (Hamming distan
 test) and the camera's pose relative to the keyframe is PnP-RANSAC (OpenCV) on those 3D-2D matches,
 EPnP in the RANSAC loop, refined by Levenberg-Marquardt on the inliers. The current frame replaces
 the keyframe when the inliers fall below keyframe_min_inliers or below keyframe_min_overlap of the
-keyframe's 3D points; when a frame cannot be placed against the keyframe (its view is gone at once:
-a fast turn), the last tracked frame becomes the keyframe and the frame is tried against it.
+keyframe's 3D points, unless one of the last keyframe_memory keyframes places it with enough
+inliers: that one is the keyframe again (a view seen before adds no new keyframe error); when a
+frame cannot be placed against the keyframe (its view is gone at once: a fast turn), the last
+tracked frame becomes the keyframe and the frame is tried against it.
 
 Frames: the camera frame is OpenCV's optical frame (x right, y down, z forward); the odometry frame
 is the first keyframe's camera frame unless an initial pose is given.
