@@ -16,11 +16,10 @@ keyframe was taken at (vo_from_keyframe; that frame's visual pose taken, its sta
 the PnP fit's motion from the keyframe, with that fit's covariance, so that the frames measured
 against one keyframe share its error instead of adding up their own; else from the last tracked
 frame's state (within half the smoother's window), the two PnP fits' covariances summed (the
-keyframe's own error drops out). A robust loss (vo_robust_loss) can weigh those factors down. The odometry's frame never
-enters the world: a drifted or restarted odometry frame moves nothing. The first tracked frame
-after a gap only anchors the next one (it is reported lost). On the simulated star mission
-(sidewinding) this kept the estimate within metres where the odometry's poses taken as absolute
-priors ran away (a study; docs/estimation.md).
+keyframe's own error drops out). The odometry's frame never enters the world: a drifted or
+restarted odometry frame moves nothing. The first tracked frame after a gap only anchors the next
+one (it is reported lost). On the simulated star mission (sidewinding) this kept the estimate within
+metres where the odometry's poses taken as absolute priors ran away (a study; docs/estimation.md).
 
 The robot's motion model (motion_model.py: velocity_prior_sigma_m_s, height_prior_sigma_m, and
 standing still while lost: still_*) adds priors on every state.
@@ -58,11 +57,6 @@ from .pose_remap import base_covariance
 from .visual_odometry import LOST, LOST_COVARIANCE, OK, VisualOdometry, VoParams, VoResult, rotation_angle_deg
 
 
-
-#: the robust losses the visual between factors can take (FusionParams.vo_robust_loss)
-ROBUST_LOSSES = ("none", "huber", "cauchy")
-
-
 @dataclass
 class FusionParams:
     """The fusion: section of config/estimation.yaml. The IMU's noise figures are sim/imu.py's
@@ -85,15 +79,10 @@ class FusionParams:
     vo_min_sigma_m: float = 1e-3               # the visual pose's std is at least this ...
     vo_min_sigma_deg: float = 0.5              # ... and this (lower: the fused tilt follows the visual one
                                                # and gravity leaks into the dead-reckoning when tracking is lost)
-    # a robust loss on the visual between factors ("none", "huber" or "cauchy"), its threshold in
-    # whitened sigmas: a motion the odometry got grossly wrong weighs less, as a SLAM back end's
-    # robust kernel does (weighted at the IMU's prediction, where ISAM2 linearises the new factor)
-    vo_robust_loss: str = "none"
     # the visual motion is measured from the state of the frame the odometry's keyframe was taken
     # at (its PnP fit's own error only; the keyframe's error shared by the frames against it), else
     # (false, or that state out of the window) from the last tracked frame's
     vo_from_keyframe: bool = True
-    vo_robust_k: float = 1.345
     gate_m: float = 0.1                        # visual pose further than this from the IMU's prediction ...
     gate_deg: float = 10.0
     gate_sigmas: float = 3.0                   # ... plus this many of the prediction's std: refused
@@ -118,9 +107,6 @@ class FusionParams:
             if f.name == "vo_from_keyframe":
                 if not isinstance(v, bool):
                     out.append(f"{prefix}.{f.name}: must be true or false, got {v!r}")
-            elif f.name == "vo_robust_loss":
-                if v not in ROBUST_LOSSES:
-                    out.append(f"{prefix}.{f.name}: must be one of {', '.join(ROBUST_LOSSES)}, got {v!r}")
             elif f.name in ("vo_reset_after_lost", "gate_max_refused"):
                 if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                     out.append(f"{prefix}.{f.name}: must be an integer >= 0, got {v!r}")
@@ -416,7 +402,7 @@ class VioFusion:
             T_rel = np.linalg.inv(T_vo_last) @ T_vo_imu
             cov = self._vo_covariance(vo.relative_covariance + rel_last, vo.T_odom_camera, T_vo_imu)
         T_world_imu = estimate.atPose3(X(j)).matrix() @ T_rel
-        factor = gtsam.BetweenFactorPose3(X(j), X(k), gtsam.Pose3(T_rel), self._vo_noise(cov))
+        factor = gtsam.BetweenFactorPose3(X(j), X(k), gtsam.Pose3(T_rel), gtsam.noiseModel.Gaussian.Covariance(cov))
         return factor, T_world_imu, j == k - 1, (since, T_rel, cov)
 
     def _vo_covariance(self, covariance, T_odom_camera, T_vo_imu) -> np.ndarray:
@@ -426,16 +412,6 @@ class VioFusion:
         floor = np.diag([p.vo_min_sigma_m ** 2] * 3 + [math.radians(p.vo_min_sigma_deg) ** 2] * 3)
         cov_imu = base_covariance(covariance, T_odom_camera, self.T_camera_imu) + floor
         return ros_to_local(cov_imu, T_vo_imu[:3, :3])
-
-    def _vo_noise(self, cov: np.ndarray):
-        """The between factor's noise model: Gaussian, within a robust loss if vo_robust_loss says so."""
-        p = self.params
-        gaussian = gtsam.noiseModel.Gaussian.Covariance(cov)
-        if p.vo_robust_loss == "huber":
-            return gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Huber.Create(p.vo_robust_k), gaussian)
-        if p.vo_robust_loss == "cauchy":
-            return gtsam.noiseModel.Robust.Create(gtsam.noiseModel.mEstimator.Cauchy.Create(p.vo_robust_k), gaussian)
-        return gaussian
 
     def _estimate(self, stamp, state, reason, vo) -> FusedResult:
         k = self._k

@@ -28,10 +28,8 @@ keyframe again: tracking resumes when the camera sees the keyframe's scene again
 Covariance (x, y, z, then small rotations about the odometry frame's fixed x, y, z axes, as in
 geometry_msgs/PoseWithCovariance): the Gauss-Newton covariance of the PnP fit,
 (sum_i J_i^T W_i J_i)^-1, J_i an inlier's reprojection Jacobian with respect to the camera's pose
-and W_i the inverse of its image-space covariance: min_pixel_sigma_px^2 I plus, with
-depth_sigma_1m_m > 0, its keyframe point's depth noise (std depth_sigma_1m_m z^2 along its ray, an
-active stereo camera's) seen from this camera (RTAB-Map propagates its points' 3D covariance so);
-scaled by the fit's variance factor (the residuals' chi^2 per degree of freedom) when above 1. Added
+and W_i the inverse of its image-space covariance, min_pixel_sigma_px^2 I (the keyframe's points
+taken as exact); scaled by the fit's variance factor (the residuals' chi^2 per degree of freedom) when above 1. Added
 to the keyframe's covariance carried over the lever arm from the keyframe to the camera, so
 covariance grows with each keyframe change, as odometry drift does. The first keyframe's pose is the
 odometry frame's origin, with zero covariance. Each tracked result names the keyframe it was
@@ -78,9 +76,6 @@ class VoParams:
     max_step_m: float = 0.3            # a pose further than this from the last good one: lost (gross error)
     max_step_deg: float = 45.0
     min_pixel_sigma_px: float = 1.0    # the covariance's reprojection std is at least this
-    # the depth's std at 1 m (it grows with z^2, an active stereo camera's: z^2 x subpixel / (focal x
-    # baseline)); propagated from the keyframe's points into the PnP covariance (0: points exact)
-    depth_sigma_1m_m: float = 0.0
     # earlier keyframes kept: when the keyframe's inliers drop, the one of them with the most inliers
     # (at least keyframe_min_inliers) becomes the keyframe again before the frame becomes a new one
     # (0: none); the head yawing back and forth while sidewinding sees them again
@@ -120,7 +115,7 @@ _LIMITS = {
     "keyframe_min_inliers": (int, 6, 10000), "keyframe_min_overlap": (float, 0.0, 1.0),
     "max_step_m": (float, 1e-3, 100.0), "max_step_deg": (float, 0.1, 180.0),
     "min_pixel_sigma_px": (float, 0.0, 100.0), "guided_radius_px": (float, 0.0, 10000.0),
-    "depth_sigma_1m_m": (float, 0.0, 1.0), "keyframe_memory": (int, 0, 100),
+    "keyframe_memory": (int, 0, 100),
     "depth_redetect_below": (int, 0, 20000),
 }
 assert set(_LIMITS) == {f.name for f in fields(VoParams)}
@@ -461,17 +456,9 @@ class VisualOdometry:
         skews[:, 1, 0], skews[:, 2, 0], skews[:, 2, 1] = d[:, 2], -d[:, 1], d[:, 0]
         J_pose[:, :, 3:] = R.T @ skews
         J = Ju @ J_pose                                 # (N, 2, 6)
-        # each point's image-space covariance: the pixel noise plus its keyframe depth's noise, which
-        # moves the point along its keyframe ray (std depth_sigma_1m_m z^2), seen from this camera
+        # each point's image-space information: the inverse of the pixel noise's variance
         px2 = self.params.min_pixel_sigma_px ** 2
         W = np.broadcast_to(np.eye(2) / max(px2, 1e-12), (n, 2, 2))
-        if self.params.depth_sigma_1m_m > 0:
-            z_kf = obj[:, 2]
-            ray = obj / z_kf[:, None]
-            s_z = self.params.depth_sigma_1m_m * z_kf ** 2
-            R_cam_kf = R.T @ kf.T_odom_camera[:3, :3]
-            g = (Ju @ (ray @ R_cam_kf.T)[:, :, None])[:, :, 0] * s_z[:, None]      # (N, 2) the ray's image
-            W = np.linalg.inv(px2 * np.eye(2) + g[:, :, None] * g[:, None, :])
         info = np.einsum("nai,nab,nbj->ij", J, W, J)
         # the fit's variance factor (its normalised residuals' chi^2 per degree of freedom), at least 1
         chi2 = float(np.einsum("na,nab,nb->", r, W, r))
