@@ -147,13 +147,6 @@ class MissionNode:
             types.update(standard_topic_types())
             for topic, msg_type in types.items():
                 self._rec_subs.append(rospy.Subscriber(topic, msg_type, self._recorder(topic), queue_size=100))
-        rospy.Service("mission/load", LoadMission, self.srv_load)
-        rospy.Service("mission/start", Trigger, self.srv_start)
-        rospy.Service("mission/abort", Trigger, self.srv_abort)
-        rospy.Service("mission/resume", Trigger, self.srv_resume)
-        self.action = actionlib.SimpleActionServer("mission/run", RunMissionAction, execute_cb=self.execute,
-                                                   auto_start=False)
-        self.action.start()
         self.state_text = "idle"
         self.last_status = None
         self.updater = diagnostic_updater.Updater()
@@ -163,6 +156,15 @@ class MissionNode:
         self.status_freq = diagnostic_updater.HeaderlessTopicDiagnostic(
             "tracking_status", self.updater, diagnostic_updater.FrequencyStatusParam(self._rate, 0.0, 10))
         self.gains = TrackerGains(self)   # the ~tracker Server, "tracker gains" on /diagnostics
+        # the services and the action last: a call may come the moment they are advertised, and the
+        # handlers need every part above (the gains' Server takes a while to start)
+        rospy.Service("mission/load", LoadMission, self.srv_load)
+        rospy.Service("mission/start", Trigger, self.srv_start)
+        rospy.Service("mission/abort", Trigger, self.srv_abort)
+        rospy.Service("mission/resume", Trigger, self.srv_resume)
+        self.action = actionlib.SimpleActionServer("mission/run", RunMissionAction, execute_cb=self.execute,
+                                                   auto_start=False)
+        self.action.start()
         rospy.Timer(rospy.Duration(1.0), lambda _e: self.updater.update())
         self.set_state("idle")
 
