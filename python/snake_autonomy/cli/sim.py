@@ -54,8 +54,9 @@ def add_arguments(parser):
     run = sub.add_parser("run", help="one mission on the simulated robot")
     run.add_argument("--mission", required=True, help="mission file or provided mission name (config/missions)")
     run.add_argument("--seed", type=int, default=0, help="randomised physics and sensor noise")
-    run.add_argument("--feedback", choices=("mocap", "vio"), default="mocap",
-                     help="base pose from motion capture or the simulated RTAB-Map")
+    run.add_argument("--feedback", choices=("mocap", "vio", "vo"), default="mocap",
+                     help="base pose from motion capture, the simulated RTAB-Map (a noise model), or the "
+                          "visual-inertial odometry on the rendered head camera and the IMU (in the odometry room)")
     run.add_argument("--out", required=True, metavar="DIR", help="results folder")
     run.add_argument("--start", default="0,0,0", metavar="X,Y,HEADING_DEG",
                      help="centre of mass of a straight body and its heading (direction of travel)")

@@ -31,7 +31,7 @@ those through its move_base action, on the ROS path only; the batch run has no s
 import json
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Tuple
 
@@ -51,7 +51,8 @@ from snake_autonomy.sim.feedback import make_feedback
 from snake_autonomy.sim.mujoco_servo_backend import MujocoServoBackend
 from snake_autonomy.sim.plant import Plant
 from snake_autonomy.sim.servo_backend import ShaftUnits
-from snake_autonomy.sim.world import CONFIG, SimWorld, WorldSpec
+from snake_autonomy.sim.scene import vo_room
+from snake_autonomy.sim.world import CONFIG, FEEDBACK_SENSORS, SimWorld, WorldSpec
 
 DRIVER_RATE_HZ = 100.0
 TRAJECTORY_RATE_HZ = 10.0
@@ -73,8 +74,8 @@ class RunSpec(WorldSpec):
     scout_config: Optional[str] = None        # the FBSR planner's (None: config/scout.yaml)
 
     def __post_init__(self):
-        if self.sensors is None:
-            self.sensors = (self.feedback,)   # the pose source's sensor only
+        if self.sensors is None:              # the pose source's sensors only
+            self.sensors = FEEDBACK_SENSORS.get(self.feedback, (self.feedback,))
 
 
 @dataclass
@@ -90,8 +91,8 @@ class RunResult:
     vio_samples: list = field(default_factory=list)
 
     def write(self, out_dir, plots: bool = True, evaluate_vio: bool = True) -> Dict[str, Any]:
-        """The results folder (experiments.write_results) plus, after a VIO run, the evaluation of the
-        simulated RTAB-Map against the plant's camera pose in out_dir/evaluation. Returns the metrics."""
+        """The results folder (experiments.write_results) plus, after a vio or vo run, the evaluation of
+        the camera odometry against the plant's camera pose in out_dir/evaluation. Returns the metrics."""
 
         out = Path(out_dir)
         p = self.tracker
@@ -102,26 +103,35 @@ class RunResult:
         metrics.update(self.extra)
         if evaluate_vio and self.vio_samples:
             try:
-                metrics["vio_evaluation"] = evaluate_vio_samples(self.vio_samples, out / "evaluation", plots=plots)
+                vo = self.spec.feedback == "vo"      # vo starts at the truth: no alignment (as its replays)
+                metrics["vio_evaluation"] = evaluate_vio_samples(
+                    self.vio_samples, out / "evaluation", plots=plots,
+                    name="visual-inertial odometry" if vo else "simulated RTAB-Map", align="none" if vo else "yaw")
             except Exception as exc:  # noqa: BLE001 - the run's own results must not be lost
                 metrics["vio_evaluation"] = {"error": f"{type(exc).__name__}: {exc}"}
         write_json_atomic(out / "metrics.json", metrics)
         return metrics
 
 
-def evaluate_vio_samples(samples, out_dir, plots: bool = True) -> Dict[str, Any]:
-    """The simulated RTAB-Map (camera odometry, losses as null poses) against the plant's camera
-    pose, yaw-only alignment (snake_autonomy.evaluation); figures and stats.json into out_dir."""
+def evaluate_vio_samples(samples, out_dir, plots: bool = True, name: str = "simulated RTAB-Map",
+                         align: str = "yaw") -> Dict[str, Any]:
+    """The camera odometry (lost samples flagged) against the plant's camera pose
+    (snake_autonomy.evaluation, `align` as evo's): APE and RPE over about 1 s (in frames) of the
+    translation, the tracking-loss intervals and their total; APE's figures and stats.json into out_dir."""
     t = np.array([s[0] for s in samples])
     est = trajectory_from_arrays(t, np.array([s[1] for s in samples]), np.array([s[2] for s in samples]),
-                                 name="simulated RTAB-Map", lost=np.array([s[3] for s in samples]))
+                                 name=name, lost=np.array([s[3] for s in samples]))
     ref = trajectory_from_arrays(t, np.array([s[4] for s in samples]), np.array([s[5] for s in samples]),
                                  name="ground truth (plant)")
-    result = evaluate(ref, est, EvaluationOptions(align="yaw", t_max_diff_s=0.005))
+    result = evaluate(ref, est, EvaluationOptions(align=align, t_max_diff_s=0.005))
     write_outputs(result, out_dir, plots=plots, report=plots)
-    stats = {k: float(v) for k, v in result.stats.items()}
-    return {"ape_translation_m": stats, "loss_intervals": len(result.loss_intervals),
-            "folder": str(Path(out_dir))}
+    frames_1s = max(1, int(round(1.0 / float(np.median(np.diff(t)))))) if len(t) > 1 else 1
+    rpe = evaluate(ref, est, EvaluationOptions(metric="rpe", align=align, t_max_diff_s=0.005, delta=frames_1s))
+    return {"ape_translation_m": {k: float(v) for k, v in result.stats.items()},
+            "rpe_translation_m": {k: float(v) for k, v in rpe.stats.items()}, "rpe_delta_frames": frames_1s,
+            "alignment": align, "loss_intervals": len(result.loss_intervals),
+            "lost_s": float(sum(i.duration_s for i in result.loss_intervals)),
+            "loss_interval_list": [i.to_dict() for i in result.loss_intervals], "folder": str(Path(out_dir))}
 
 
 def load_driver_config(path: str):
@@ -202,6 +212,11 @@ def refuse_navigation_legs(mission) -> None:
 
 class BatchRun:
     def __init__(self, spec: RunSpec, robot=None, library=None):
+        if spec.feedback == "vo" and not spec.scene_xml:
+            # the odometry needs texture wherever the head turns: the odometry room (sim/scene.vo_room)
+            # around the start, as bench/vo_replay_record records in
+            room = vo_room(tuple(spec.start[:2]))
+            spec = replace(spec, scene_xml=room.scene_xml, assets_xml=room.assets_xml)
         self.spec = spec
         self.robot = robot or _core.RobotModel.from_yaml(spec.robot)
         self.library = library or _core.GaitLibrary.from_yaml(spec.gaits)
@@ -211,7 +226,7 @@ class BatchRun:
         self.heading_offset_rad, self.plant = w.heading_offset_rad, w.plant
         refuse_navigation_legs(self.mission)
         self.driver = LockStepDriver(self.robot, self.library, self.plant, load_driver_config(spec.driver_config))
-        self.feedback = make_feedback(spec.feedback, self.params, self.robot)
+        self.feedback = make_feedback(spec.feedback, self.params, self.robot, world=self.world)
         self.scout_executor, scout_planner = None, None
         if self.mission.scouts:     # scout stops: the FBSR planner, trajectories through the driver
             scout_planner = fbsr_scout_planner(spec.robot, spec.scout_config, spec.driver_config,
@@ -309,6 +324,8 @@ class BatchRun:
             bar.close()
         wall = time.perf_counter() - wall0
         runner.close()
+        if spec.feedback == "vo":
+            fb.close()
         return self._result(traj, dec, outcome or runner.outcome, t_start, wall)
 
     def _scout_step(self, t: float) -> None:
@@ -368,6 +385,8 @@ class BatchRun:
             samples = self.feedback.samples
             extra["vio"] = {"samples": len(samples), "lost_samples": int(sum(s[3] for s in samples)),
                             "gate_rejected": int(self.feedback.gate.rejected)}
+        if spec.feedback == "vo":
+            extra["vo"] = self.feedback.summary()
         tracker = self.mission.tracker_params
         meta = {"mission": self.mission.name, "mission_source": self.mission.source, "t_start": t_start,
                 "seed": spec.seed, "feedback": spec.feedback, "start": list(spec.start),
@@ -381,7 +400,7 @@ class BatchRun:
                 "disturbance_triggers": [t.describe() for t in self.world.triggers]}
         return RunResult(spec, list(self.mission.waypoints), {k: np.asarray(v) for k, v in traj.items()}, dec,
                          outcome, meta, extra, tracker,
-                         vio_samples=list(self.feedback.samples) if spec.feedback == "vio" else [])
+                         vio_samples=list(self.feedback.samples) if spec.feedback in ("vio", "vo") else [])
 
 
 def _progress_bar(enabled: bool, total_s: float, desc: str):

@@ -1,7 +1,7 @@
 """Where the driver's base pose comes from in a simulated run: motion capture or the simulated
 RTAB-Map through the pose remapper (thesis eq. 3.1 and its lost-tracking gate).
 
-    fb = make_feedback("vio", params, robot)       # or "mocap"
+    fb = make_feedback("vio", params, robot)       # or "mocap"; "vo": make_feedback("vo", params, robot, world)
     out = world.step_to(t_s)       # the SimWorld samples the sensors (sim.world)
     pose = fb.pose(out)            # (t_s, position (3,), quat_xyzw (4,)) of base_link, or None
     ok, detail = fb.status(t_s)    # the pose source's verdict (what base_pose_status carries)
@@ -9,9 +9,10 @@ RTAB-Map through the pose remapper (thesis eq. 3.1 and its lost-tracking gate).
 `mocap`: the world's motion capture sample (base_link, 100 Hz) straight into the driver, as in the
 thesis's experiments. `vio`: its simulated RTAB-Map sample (camera odometry, 30 Hz, noise, drift,
 tracking losses) -> TrackingGate (lost, stale, jumps: config/camera.yaml lost_tracking) ->
-PoseRemapper (eq. 3.1, camera_in_head of config/camera.yaml, H of the robot YAML): the classes
-pose_remap_node wraps, so a lost or stale odometry holds the robot exactly as on the
-ROS path. `sensor`: the world sensor each needs (WorldSpec.sensors).
+PoseRemapper (eq. 3.1, camera_in_head of config/camera.yaml, H of the robot YAML), sim/odometry_gate.py:
+the classes pose_remap_node wraps, so a lost or stale odometry holds the robot exactly as on the
+ROS path. `vo`: the visual-inertial odometry on rendered frames and the IMU, through the same gate
+and remapper (sim/vo_feedback.py). `sensor`: the world sensor each needs (WorldSpec.sensors).
 
 VioFeedback records what it measured, for the evaluation after a run (`samples`).
 """
@@ -19,8 +20,9 @@ from typing import List, Optional, Tuple
 
 import numpy as np
 
-from ..estimation import PoseRemapper, TrackingGate, load_camera_calibration, load_gate_params
-from ..transforms import make_transform, matrix_to_pose, quat_to_matrix
+from ..transforms import matrix_to_pose
+from .odometry_gate import GatedRemap
+from .vo_feedback import VoFeedback
 from .world import FEEDBACKS
 
 Pose = Tuple[float, np.ndarray, np.ndarray]
@@ -42,16 +44,13 @@ class MocapFeedback:
         return True, "motion capture"
 
 
-class VioFeedback:
-    """Simulated RTAB-Map -> gate -> eq. 3.1. `samples` keeps (t, estimate pos, quat, lost, true pos,
-    true quat) of the camera for the evaluation (the truth is the plant's camera pose)."""
+class VioFeedback(GatedRemap):
+    """Simulated RTAB-Map -> gate -> eq. 3.1 (GatedRemap). `samples` keeps (t, estimate pos, quat, lost,
+    true pos, true quat) of the camera for the evaluation (the truth is the plant's camera pose)."""
     name = sensor = "vio"
 
     def __init__(self, params, robot):
-        cfg = params.config
-        calibration = load_camera_calibration(cfg.calibration_path())
-        self.gate = TrackingGate(load_gate_params(cfg.calibration_path()))
-        self.remapper = PoseRemapper(calibration.camera_in_head, robot.head_length_m)
+        super().__init__(params, robot)
         self.samples: List[tuple] = []
 
     def pose(self, out) -> Optional[Pose]:
@@ -66,23 +65,15 @@ class VioFeedback:
         p, q = matrix_to_pose(T)
         return s.t_s, np.asarray(p, float), np.asarray(q, float)
 
-    def base_in_world(self, s) -> Optional[np.ndarray]:
-        """One odometry sample through the gate and eq. 3.1: base_link's 4x4 pose, or None when the
-        gate refuses it (lost, invalid, a jump)."""
-        result = self.gate.check(s.t_s, s.position_m, s.quat_xyzw, np.diag(s.covariance))
-        if not result.ok:
-            return None
-        camera_in_world = make_transform(quat_to_matrix(*s.quat_xyzw), s.position_m)
-        return self.remapper.base_in_world(camera_in_world)
 
-    def status(self, t_s: float):
-        state, detail = self.gate.state_at(t_s)
-        return state == "ok", f"{state}: {detail}"
-
-
-def make_feedback(kind: str, params, robot):
+def make_feedback(kind: str, params, robot, world=None):
+    """world: the SimWorld (kind vo renders its frames from its plant and reads its IMU)."""
     if kind == "mocap":
         return MocapFeedback()
     if kind == "vio":
         return VioFeedback(params, robot)
+    if kind == "vo":
+        if world is None:
+            raise ValueError("feedback vo: needs the world (make_feedback(..., world=...))")
+        return VoFeedback(world, robot)
     raise ValueError(f"feedback: expected one of {', '.join(FEEDBACKS)}, got {kind!r}")

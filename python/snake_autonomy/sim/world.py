@@ -8,7 +8,9 @@ transport differ.
     world.true_com_pose()          # CoM and heading (direction of travel) from the true state
 
 Sensors (motion capture 100 Hz, simulated RTAB-Map 30 Hz, with "imu" in spec.sensors the head
-camera's IMU at sim.yaml imu.rate_hz) sample on their grids of simulated time.
+camera's IMU at sim.yaml imu.rate_hz) sample on their grids of simulated time; step_to stops the
+physics at the IMU's sample times between two calls (out.imu_between). Feedback vo needs the IMU
+only (FEEDBACK_SENSORS): its camera frames are rendered by the pose source (sim/vo_feedback.py).
 A mission's triggers are checked at 10 Hz once it started (start_mission / set_target) and, like
 pushes on command (disturb()), act from the next physics step; each fired trigger keeps the true
 CoM pose then and 2 s later. The monitor: roll-over (monitor.rollover_tilt_deg), largest tilt,
@@ -40,8 +42,11 @@ from .sensor_clock import SensorClock
 from .vio import SimulatedVio
 
 CONFIG = config_path()
-FEEDBACKS = ("mocap", "vio")
-SENSORS = FEEDBACKS + ("imu",)
+FEEDBACKS = ("mocap", "vio", "vo")
+SENSORS = ("mocap", "vio", "imu")
+#: the sensors each pose source needs (vo: the visual-inertial odometry on the head camera's frames,
+#: sim/vo_feedback.py, renders its frames itself and reads the IMU)
+FEEDBACK_SENSORS = {"mocap": ("mocap",), "vio": ("vio",), "vo": ("imu",)}
 TRIGGER_CHECK_HZ = 10.0          # mission triggers checked on this grid of simulated time
 RECOVERY_WINDOW_S = 2.0          # a fired trigger's CoM pose is recorded again this much later
 
@@ -49,7 +54,7 @@ RECOVERY_WINDOW_S = 2.0          # a fired trigger's CoM pose is recorded again 
 @dataclass
 class WorldSpec:
     seed: int = 0
-    feedback: str = "mocap"                    # mocap | vio: the pose source the run uses
+    feedback: str = "mocap"                    # mocap | vio | vo: the pose source the run uses
     start: Tuple[float, float, float] = (0.0, 0.0, 0.0)   # CoM x_m, y_m, heading_deg of a straight body
     mission: str = ""                          # a file or a provided mission's name ("" none)
     sim_config: str = str(CONFIG / "sim.yaml")
@@ -73,6 +78,7 @@ class WorldStep:
     truth_base: Optional[Tuple[np.ndarray, np.ndarray]] = None     # with every mocap sample
     truth_camera: Optional[Tuple[np.ndarray, np.ndarray]] = None   # with every vio sample
     imu: Optional[ImuSample] = None                                # the head camera's IMU (camera_link)
+    imu_between: List[ImuSample] = field(default_factory=list)     # step_to: its samples on the way, before imu
     fired: List[str] = field(default_factory=list)                 # disturbances applied now
     tilt_deg: float = 0.0                                          # base_link from the vertical
 
@@ -104,7 +110,8 @@ class SimWorld:
         to check the mission's gaits (None: not checked)."""
         if spec.feedback not in FEEDBACKS:
             raise ValueError(f"feedback: expected one of {', '.join(FEEDBACKS)}, got {spec.feedback!r}")
-        sensors = tuple(spec.sensors) if spec.sensors is not None else tuple({"mocap", spec.feedback})
+        sensors = (tuple(spec.sensors) if spec.sensors is not None
+                   else tuple({"mocap", *FEEDBACK_SENSORS[spec.feedback]}))
         unknown = sorted(set(sensors) - set(SENSORS))
         if unknown:
             raise ValueError(f"sensors: unknown {unknown}; known: {', '.join(SENSORS)}")
@@ -178,9 +185,22 @@ class SimWorld:
 
     # ---- the step --------------------------------------------------------------------------------
     def step_to(self, t_s: float) -> WorldStep:
-        """Lock-step: the physics to t_s, then observe()."""
+        """Lock-step: the physics to t_s, then observe(). With the IMU on, the physics stops at each of
+        its sample times on the way (200 Hz against a 100 Hz caller): those samples are out.imu_between."""
+        between = []
+        if self.imu is not None:
+            plant, half = self.plant, self.imu.half_step_s
+            while self.imu.clock.next_s + half < t_s - 1e-9:
+                # the physics step nearest the grid point (ImuSensor.poll: due from half a step before)
+                plant.step_to(math.ceil((self.imu.clock.next_s - half) / plant.dt_s - 1e-9) * plant.dt_s)
+                s = self.imu.poll(plant)
+                if s is None:
+                    break
+                between.append(s)
         self.plant.step_to(t_s)
-        return self.observe()
+        out = self.observe()
+        out.imu_between = between
+        return out
 
     def observe(self) -> WorldStep:
         """The world at the plant's present time: pushes on command applied, the sensors that fell
