@@ -65,8 +65,9 @@ def add_arguments(parser):
     exp = sub.add_parser("experiment", help="one of the thesis's experiments over seeds (chapter 4.2)")
     exp.add_argument("name", choices=EXPERIMENT_NAMES, help="the experiment")
     exp.add_argument("--seeds", default="0-4", help="e.g. 0-4 or 0,3")
-    exp.add_argument("--feedback", choices=("mocap", "vio", "both"), default="both",
-                     help="the base pose: motion capture, the simulated RTAB-Map, or each in turn")
+    exp.add_argument("--feedback", choices=("mocap", "vio", "vo", "both"), default="both",
+                     help="the base pose: motion capture, the simulated RTAB-Map, the visual-inertial odometry, "
+                          "or both (motion capture and the simulated RTAB-Map, each in turn)")
     exp.add_argument("--out", required=True, metavar="DIR", help="results folder")
     exp.add_argument("--jobs", type=int, default=1, help="parallel runs (the machine is shared)")
     exp.add_argument("--starts", help="single only: a subset of the 13 start poses, e.g. 0,7 or 0-3 (default all)")
