@@ -74,7 +74,7 @@ from snake_autonomy.nodes.image_msgs import to_camera_info, to_image
 from snake_autonomy.nodes.planner_display import contact_marker, contact_markers, world_markers
 from snake_autonomy.paths import config_path, resolve_world_path
 from snake_autonomy.planning.rectilinear.config import NavConfig
-from snake_autonomy.perception.camera_model import R_LINK_OPTICAL, CameraIntrinsics
+from snake_autonomy.perception.camera_model import R_LINK_OPTICAL
 from snake_autonomy.sim.camera import LinkMount
 from snake_autonomy.sim.camera_process import CameraProcess
 from snake_autonomy.sim.collisions import CollisionMonitor
@@ -82,6 +82,7 @@ from snake_autonomy.sim.depth_noise import named_depth_model
 from snake_autonomy.sim.realtime import RealTimeSim, SimSetup
 from snake_autonomy.sim.mjcf import camera_link_in_base
 from snake_autonomy.sim.scene import vo_room_around_camera, world_plant_fields
+from snake_autonomy.sim.vo_feedback import ODOMETRY_CAMERA, OdometryCameraSettings
 from snake_autonomy.sim.world_file import load_world
 from snake_autonomy.transforms import matrix_to_quat
 
@@ -179,7 +180,7 @@ class SimNode:
         self.updater.add("simulated robot", self.diagnose)
         # the pose source's rate: motion capture's, the simulated VIO's, or (vo) the odometry camera's
         if self.vo:
-            self.vo_camera_rate_hz = float(rospy.get_param("~vo_camera_rate_hz", 10.0))
+            self.vo_camera_rate_hz = float(rospy.get_param("~vo_camera_rate_hz", ODOMETRY_CAMERA.rate_hz))
             source_rate_hz, source_topic = self.vo_camera_rate_hz, "camera/color/image_raw"
         else:
             source = self.sim.params.config.mocap if self.feedback == "mocap" else self.sim.params.config.vio
@@ -216,9 +217,14 @@ class SimNode:
         scaled) at ~vo_camera_rate_hz (10), rendered from the IMU's camera_link (sim/camera.LinkMount);
         then ground_truth/camera_pose (camera_link) comes with every frame."""
         if self.vo:
-            w, h = int(rospy.get_param("~vo_camera_width", 320)), int(rospy.get_param("~vo_camera_height", 240))
-            f = 615.0 * w / 640.0
-            self.intrinsics = CameraIntrinsics(w, h, f, f, w / 2.0, h / 2.0)
+            settings = OdometryCameraSettings(int(rospy.get_param("~vo_camera_width", ODOMETRY_CAMERA.width)),
+                                              int(rospy.get_param("~vo_camera_height", ODOMETRY_CAMERA.height)),
+                                              self.vo_camera_rate_hz)
+            problems = settings.problems()       # each names the setting and its value
+            if problems:
+                raise ValueError("~vo_camera_*: " + "; ".join(problems))
+            self.intrinsics = settings.intrinsics()
+            f = self.intrinsics.fx
             mount = LinkMount(camera_link_in_base(self.sim.robot.head_length_m, self.sim.world.camera_in_head))
             self.camera_rate_hz = self.vo_camera_rate_hz
             self.depth_noise = named_depth_model(self.depth_model, self.sim.params.config.depth_noise, f,
