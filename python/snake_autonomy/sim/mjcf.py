@@ -23,10 +23,13 @@ Bodies and sites:
   camera_link): site `camera_link` on base_link there, and sensors `imu_gyro` (angular velocity,
   rad/s) and `imu_accel` (specific force, m/s^2, gravity included) at it, in the site's frame
   (sim/imu.py adds the BMI055's errors). Without it the model has no sensors.
+- lights: a scene_xml with a <light> of its own is lit by its lights alone; otherwise the model has
+  OVERHEAD_LIGHT (straight down, casting shadows).
 - actuator `servo_i`: the position servo of joint i. Its internal state (act) is the setpoint,
   integrated from a velocity command bounded by the joint speed limit and clamped to the joint's
   limits; force = kp (setpoint - q) - kv q', saturated at the torque limit.
 """
+import re
 from typing import Optional
 from xml.sax.saxutils import quoteattr
 
@@ -37,6 +40,9 @@ from .config import SimParams
 
 IMU_SITE = "camera_link"
 IMU_SENSORS = ("imu_gyro", "imu_accel")
+#: the light of a model whose scene brings none: straight down, casting shadows
+OVERHEAD_LIGHT = '<light name="overhead_light" pos="0 0 4" dir="0 0 -1" directional="true"/>'
+_LIGHT = re.compile(r"<light[\s/>]")
 
 
 def twists_rad(axes) -> list:
@@ -102,7 +108,8 @@ def build_mjcf(robot, params: SimParams, scene_xml: str = "", assets_xml: str = 
 
     scene_xml: MJCF elements (bodies, geoms, cameras) placed in the worldbody beside the floor:
     obstacles, pipes, the things a planner's world holds. Their geoms should set contype and
-    conaffinity so that the links touch them (links: contype 1, conaffinity 2 or 3).
+    conaffinity so that the links touch them (links: contype 1, conaffinity 2 or 3). If it has a
+    <light>, its lights are the model's only ones; otherwise the model has OVERHEAD_LIGHT.
 
     imu_in_head: the IMU's 4x4 pose in head_link (the module's docstring); None: no IMU."""
     cfg = params.config
@@ -140,7 +147,7 @@ def build_mjcf(robot, params: SimParams, scene_xml: str = "", assets_xml: str = 
         '  <worldbody>',
         f'    <geom name="floor" type="plane" size="0 0 1" contype="2" conaffinity="1" '
         f'condim="{condim}" friction="{friction}"/>',
-        '    <light pos="0 0 4" dir="0 0 -1" directional="true"/>',
+        *([] if _LIGHT.search(scene_xml) else [f'    {OVERHEAD_LIGHT}']),
         *([scene_xml.rstrip("\n")] if scene_xml else []),
         f'    <body name="base_link" pos="0 0 {_f(r + phys.start_height_m)}">',
         '      <freejoint name="base"/>',

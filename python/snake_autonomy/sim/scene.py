@@ -18,6 +18,7 @@ from typing import List, Optional, Tuple
 
 import numpy as np
 
+from .mjcf import OVERHEAD_LIGHT
 from .world import SimWorld, WorldSpec
 from .world_file import FLOOR_TEXTURES, World
 
@@ -85,7 +86,9 @@ def build_scene(world: World, appearance: Optional[Appearance] = None,
         f'texuniform="true" reflectance="0"/>',
     ]
     half = 0.5 * floor_size_m
+    # the model's overhead light (casting shadows) as in a model without a scene, and the appearance's
     scene = [
+        f'    {OVERHEAD_LIGHT}',
         f'    <light name="scene_light" dir="{_v(app.light_dir)}" directional="true" '
         f'diffuse="{_v([app.light_diffuse] * 3)}" castshadow="false"/>',
         f'    <geom name="floor_visual" type="plane" pos="{_v(world.start[:2])} 0.0002" '
@@ -133,8 +136,8 @@ _VO_WALL_COLOURS = [((0.8, 0.7, 0.3), (0.2, 0.1, 0.4)), ((0.3, 0.6, 0.8), (0.6, 
 
 def vo_room(centre_xy: Tuple[float, float] = (0.0, 0.0), half_m: float = VO_ROOM_HALF_M) -> Scene:
     """An obstacle-free room for the visual odometry: a random-dot floor (texels of about 2.4 cm) and
-    four random-dot walls (about 5 cm), half_m from centre_xy. The walls are obstacles to the
-    contacts' count (obstacle_<k>)."""
+    four random-dot walls (about 5 cm), half_m from centre_xy, lit without shadows. The walls are
+    obstacles to the contacts' count (obstacle_<k>)."""
     if not half_m > 0:
         raise ValueError(f"vo_room: half_m must be > 0, got {half_m!r}")
     cx, cy = (float(v) for v in centre_xy)
@@ -142,8 +145,11 @@ def vo_room(centre_xy: Tuple[float, float] = (0.0, 0.0), half_m: float = VO_ROOM
     assets = ['    <texture name="floor_tex" type="2d" builtin="flat" mark="random" random="0.5" '
               'rgb1="0.55 0.5 0.45" rgb2="0.55 0.5 0.45" markrgb="0.25 0.2 0.2" width="256" height="256"/>',
               '    <material name="floor_mat" texture="floor_tex" texrepeat="1 1"/>']
-    # one directional light towards each wall (a single one leaves the walls it skims dark: too few
-    # ORB features there) and some ambient light
+    # Lit like a lab under diffuse ceiling lights (many sources): the robot casts no hard shadow that
+    # moves with it into its head camera's view, as a single shadow-casting light makes it do (strong
+    # false features for the odometry). So no light here casts shadows, and with lights of its own the
+    # room has no sim/mjcf.OVERHEAD_LIGHT. One directional light towards each wall (a single one leaves
+    # the walls it skims dark: too few ORB features there) and some ambient light.
     scene = [f'    <light name="scene_light_{k}" dir="{_v(d)}" directional="true" diffuse="0.35 0.35 0.35" '
              f'ambient="{"0.25 0.25 0.25" if k == 0 else "0 0 0"}" castshadow="false"/>'
              for k, d in enumerate([(1, 0.2, -1), (-1, -0.2, -1), (-0.2, 1, -1), (0.2, -1, -1)])]
