@@ -61,7 +61,7 @@ def test_the_loop_holds_while_tracking_is_lost_and_moves_again_after(sim_config_
 
 
 def test_bad_pose_source_and_depth_model_are_refused():
-    with pytest.raises(ValueError, match="pose_source: expected one of mocap, truth, vio, got 'gps'"):
+    with pytest.raises(ValueError, match="pose_source: expected one of mocap, truth, vio, vo, got 'gps'"):
         NavRunSpec(one_obstacle(), pose_source="gps").check()
     with pytest.raises(ValueError, match="depth_model: expected one of noisy, perfect, got 'fuzzy'"):
         NavRunSpec(one_obstacle(), depth_model="fuzzy").check()

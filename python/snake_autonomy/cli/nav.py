@@ -8,14 +8,14 @@
                                                     precision/recall and ms per frame of the depth
                                                     method (and the classifier) on held-out scenes
     snake_autonomy nav run --world FILE [--robot R] [--perception depth|mono|truth] [--seed N]
-                           [--pose-source mocap|vio|truth] [--depth-model noisy|perfect]
+                           [--pose-source mocap|vio|vo|truth] [--depth-model noisy|perfect]
                            [--time-limit S] [--classifier FILE] [--no-progress] --out DIR
                                                     the closed loop in batch (runs/nav_batch.py):
                                                     DIR/metrics.json, topview.png, frames/
     snake_autonomy nav experiment --worlds N --seeds 0-4 [--perception depth|mono|both|truth]
                            [--family corridors|barn | --world-files GLOB] [--first-world K]
                            [--robot R] [--time-limit S|auto] [--time-factor F]
-                           [--pose-source mocap|vio|truth] [--depth-model noisy|perfect]
+                           [--pose-source mocap|vio|vo|truth] [--depth-model noisy|perfect]
                            [--engine dask|threads|serial] [--scheduler ADDR] --out DIR
                                                     generated worlds K..K+N-1 of a family
                                                     (sim/nav_worlds.py), or the user's own world
@@ -86,7 +86,9 @@ def add_arguments(parser):
         p.add_argument("--pose-source", choices=POSE_SOURCES, default="mocap",
                        help="the planner's base pose: mocap (motion capture with its noise, as sim.launch), "
                             "vio (the simulated RTAB-Map through the tracking gate and pose "
-                            "remapper: drift, tracking losses) or truth (the plant's, a diagnostic)")
+                            "remapper: drift, tracking losses), vo (the visual-inertial odometry vio_node runs, "
+                            "on rendered frames and the IMU: only on worlds with floor_texture dots) or truth "
+                            "(the plant's, a diagnostic)")
         p.add_argument("--depth-model", choices=DEPTH_MODELS, default=None,
                        help="the head camera's depth: noisy (D435i-like, config/sim.yaml depth_noise:) or "
                             "perfect (a diagnostic); default: depth_noise.enabled")

@@ -15,7 +15,9 @@ returns to the driver as driver_node would get it.
   delivered pose_latency_s later (default: the source's): `mocap` (default, as sim.launch
   feedback:=mocap: base_link at 100 Hz with config/sim.yaml's mocap noise), `vio` (the simulated
   RTAB-Map through the tracking gate and pose remapper; while tracking is lost no pose comes and the
-  loop holds on its stale pose) or `truth` (the plant's base_link, no noise: a diagnostic).
+  loop holds on its stale pose), `vo` (the visual-inertial odometry vio_node runs, on its own
+  10 Hz camera at camera_link and the head's 200 Hz IMU, through the same gate and remapper: only on
+  a world with a textured floor) or `truth` (the plant's base_link, no noise: a diagnostic).
 - Camera frames at camera_rate_hz (sim.launch's 0.5 Hz), stamped at capture and delivered
   frame_latency_s later (sim_node renders in a child process: 0.07-0.17 s). Depth through the
   D435i-like model of config/sim.yaml depth_noise: (sim/depth_noise.py) unless depth_model is
@@ -68,11 +70,11 @@ from snake_autonomy.sim.camera import HeadCamera
 from snake_autonomy.sim.collisions import CollisionMonitor
 from snake_autonomy.sim.config import SimConfig
 from snake_autonomy.sim.depth_noise import DepthNoise
-from snake_autonomy.sim.nav_pose_source import POSE_SOURCES, NavPoseSource
+from snake_autonomy.sim.nav_pose_source import POSE_SOURCES, NavPoseSource, imu_in_head
 from snake_autonomy.sim.scales import ScaledPlant
 from snake_autonomy.sim.scene import build_scene
 from snake_autonomy.sim.sensor_clock import SensorClock
-from snake_autonomy.sim.world_file import World
+from snake_autonomy.sim.world_file import ODOMETRY_FLOOR_TEXTURES, World
 
 DEPTH_MODELS = ("noisy", "perfect")
 
@@ -91,7 +93,7 @@ class NavRunSpec:
     command_period_s: float = 0.5         # planner_node's ~rate_hz 2
     camera_rate_hz: float = 0.5           # sim.launch camera_rate_hz
     frame_latency_s: float = 0.2          # capture to the planner: sim_node's render (0.07-0.17 s) + transport
-    pose_source: str = "mocap"            # mocap | vio | truth (a diagnostic: no noise)
+    pose_source: str = "mocap"            # mocap | vio | vo | truth (a diagnostic: no noise)
     pose_latency_s: Optional[float] = None   # sample to the planner; None: the source's (sim.yaml vio.latency_s)
     depth_model: Optional[str] = None     # noisy | perfect; None: config/sim.yaml depth_noise.enabled
     pose_timeout_s: float = 1.0           # planner_node's ~pose_timeout_s
@@ -115,6 +117,10 @@ class NavRunSpec:
                 raise ValueError(f"{key}: must be a finite number >= 0, got {v!r}")
         if self.pose_source not in POSE_SOURCES:
             raise ValueError(f"pose_source: expected one of {', '.join(POSE_SOURCES)}, got {self.pose_source!r}")
+        if self.pose_source == "vo" and self.world.floor_texture not in ODOMETRY_FLOOR_TEXTURES:
+            raise ValueError(f"pose_source vo: world {self.world.source or self.world.name!r} has floor_texture "
+                             f"{self.world.floor_texture!r}, on which the visual odometry loses track (too few "
+                             f"features); vo needs floor_texture {' or '.join(ODOMETRY_FLOOR_TEXTURES)}")
         if self.depth_model is not None and self.depth_model not in DEPTH_MODELS:
             raise ValueError(f"depth_model: expected one of {', '.join(DEPTH_MODELS)}, got {self.depth_model!r}")
         if self.perception not in ("depth", "mono", "truth"):
@@ -253,8 +259,8 @@ class NavRun:
         self.flat_belly_fraction = belly
         self.params = sim_cfg.with_flat_belly(belly).draw(seed=spec.seed, num_joints=self.robot.num_joints)
         scene = build_scene(spec.world)
-        self.plant = ScaledPlant(self.robot, self.params, spec.world.start_rad,
-                                 scene_xml=scene.scene_xml, assets_xml=scene.assets_xml)
+        self.plant = ScaledPlant(self.robot, self.params, spec.world.start_rad, scene_xml=scene.scene_xml,
+                                 assets_xml=scene.assets_xml, imu_in_head=imu_in_head(spec.pose_source, self.params))
         self.depth_model = spec.depth_model or ("noisy" if sim_cfg.depth_noise.enabled else "perfect")
         noise = (DepthNoise(sim_cfg.depth_noise, self.cfg.intrinsics.fx, self.params.rng("depth_noise"))
                  if self.depth_model == "noisy" else None)
@@ -262,7 +268,7 @@ class NavRun:
         self.collisions = CollisionMonitor(self.plant.model)
         self._contact_modes: List[str] = []
         self.rollover_deg = sim_cfg.monitor.rollover_tilt_deg
-        self.poses = NavPoseSource(spec.pose_source, self.params, self.robot)
+        self.poses = NavPoseSource(spec.pose_source, self.params, self.robot, plant=self.plant)
         self.pose_latency_s = self.poses.latency_s if spec.pose_latency_s is None else spec.pose_latency_s
         self.drive = PlantGaitDriver(self.robot, self.plant)
         self.render_kinds = {"colour": spec.perception == "mono" or spec.keep_frames,
@@ -351,11 +357,12 @@ class NavRun:
             self.drive.step(t, dt)
             step += 1
             t = step * dt
-            plant.step_to(t)
+            self.poses.step_to(plant, t)
             if progress is not None and t >= next_progress_s - 1e-9:
                 next_progress_s += 1.0
                 progress(t)
         self.camera.close()
+        self.poses.close()
         return self._result(t, traj, replans, frames, commands, path, rolled, loop_reached_t)
 
     def _overlay(self, tick) -> np.ndarray:

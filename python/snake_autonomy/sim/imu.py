@@ -105,6 +105,20 @@ class ImuSensor:
         t_s, gyro, _ = plant.imu_truth()
         return self.measure(t_s, gyro, plant.imu_accel_mean())
 
+    def step_plant_to(self, plant, t_s: float) -> List[ImuSample]:
+        """The plant to t_s, stopping at each of this IMU's sample times before it (its rate against a
+        slower caller's): the samples taken on the way. The sample at t_s itself is poll()'s."""
+        samples, half = [], self.half_step_s
+        while self.clock.next_s + half < t_s - 1e-9:
+            # the physics step nearest the grid point (poll: due from half a step before)
+            plant.step_to(math.ceil((self.clock.next_s - half) / plant.dt_s - 1e-9) * plant.dt_s)
+            s = self.poll(plant)
+            if s is None:
+                break
+            samples.append(s)
+        plant.step_to(t_s)
+        return samples
+
     def measure(self, t_s: float, gyro_rad_s, accel_m_s2) -> ImuSample:
         """A sample at t_s of the true angular velocity and specific force (sensor frame)."""
         draws = self.rng.standard_normal(12)    # white noise, then the bias's step: a fixed stream

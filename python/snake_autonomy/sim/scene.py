@@ -10,7 +10,10 @@ The floor texture is drawn on a visual-only plane `floor_visual` 0.2 mm above th
 (no contacts; the camera's segmentation counts both as ground).
 
 Appearance (textures, colours, light) is separate from the world so that the classifier's training
-renders can vary it (`random_appearance(rng)`) over the same geometry.
+renders can vary it (`random_appearance(rng)`) over the same geometry. A world whose floor_texture is
+one of ODOMETRY_FLOOR_TEXTURES looks like the odometry room (ODOMETRY_APPEARANCE): random dots of a
+few cm on the floor and the obstacles, lit without shadows, so that the visual odometry (nav runs'
+pose source vo) finds features wherever the head camera turns.
 """
 import math
 from dataclasses import dataclass, field, replace
@@ -20,7 +23,7 @@ import numpy as np
 
 from .mjcf import OVERHEAD_LIGHT
 from .world import SimWorld, WorldSpec
-from .world_file import FLOOR_TEXTURES, World
+from .world_file import FLOOR_TEXTURES, ODOMETRY_FLOOR_TEXTURES, WORLD_FLOOR_TEXTURES, World
 
 #: floor texture presets: (MuJoCo builtin, mark, rgb1, rgb2, random fraction, texrepeat per m)
 FLOOR_PRESETS = {
@@ -29,8 +32,10 @@ FLOOR_PRESETS = {
     "carpet": ("flat", "random", (0.42, 0.30, 0.25), (0.60, 0.50, 0.40), 0.35, 4.0),
     "tiles": ("checker", "edge", (0.70, 0.68, 0.62), (0.66, 0.64, 0.58), 0.0, 3.0),
     "concrete": ("flat", "random", (0.50, 0.50, 0.50), (0.70, 0.70, 0.68), 0.25, 6.0),
+    # the odometry room's floor (vo_room): dark dots on half the texels, a texel 2.4 cm
+    "dots": ("flat", "random", (0.55, 0.50, 0.45), (0.42, 0.33, 0.33), 0.5, 1.0 / (512 * 0.024)),
 }
-assert set(FLOOR_PRESETS) == set(FLOOR_TEXTURES)
+assert set(FLOOR_PRESETS) == set(WORLD_FLOOR_TEXTURES)
 OBSTACLE_MARKS = ("none", "random", "edge", "cross")
 
 
@@ -43,11 +48,32 @@ class Appearance:
     obstacle_mark: str = "none"
     light_diffuse: float = 0.7
     light_dir: Tuple[float, float, float] = (0.3, 0.2, -1.0)
+    obstacle_texel_m: Optional[float] = None     # None: the texture repeats 4 times per m (texels of 2 mm)
+    obstacle_mark_rgb: Optional[Tuple[float, float, float]] = None   # None: from the obstacle's colour
+    obstacle_mark_fraction: float = 0.3
+    shadows: bool = True                         # False: lit like the odometry room (diffuse_lights)
 
     def obstacle_colour(self, k: int) -> Tuple[float, float, float]:
         if self.obstacle_rgb:
             return self.obstacle_rgb[k % len(self.obstacle_rgb)]
         return (0.75, 0.35, 0.15)
+
+
+#: how a world with an odometry floor looks (see the module's docstring); measured on a 5 m corridor,
+#: 20 s, seed 0: tracking never lost, against 92 % of the time on carpet with the overhead light
+ODOMETRY_APPEARANCE = Appearance(floor="dots", obstacle_mark="random", obstacle_texel_m=0.03,
+                                 obstacle_mark_rgb=(0.15, 0.15, 0.3), obstacle_mark_fraction=0.5, shadows=False)
+
+
+def diffuse_lights() -> List[str]:
+    """Lit like a lab under diffuse ceiling lights (many sources): the robot casts no hard shadow that
+    moves with it into its head camera's view, as a single shadow-casting light makes it do (strong
+    false features for the odometry). No light casts shadows, and a scene lit by them has no
+    sim/mjcf.OVERHEAD_LIGHT. One directional light towards each side (a single one leaves the walls it
+    skims dark: too few ORB features there) and some ambient light."""
+    return [f'    <light name="scene_light_{k}" dir="{_v(d)}" directional="true" diffuse="0.35 0.35 0.35" '
+            f'ambient="{"0.25 0.25 0.25" if k == 0 else "0 0 0"}" castshadow="false"/>'
+            for k, d in enumerate([(1, 0.2, -1), (-1, -0.2, -1), (-0.2, 1, -1), (0.2, -1, -1)])]
 
 
 def random_appearance(rng: np.random.Generator) -> Appearance:
@@ -74,7 +100,8 @@ def _v(values) -> str:
 
 def build_scene(world: World, appearance: Optional[Appearance] = None,
                 floor_size_m: float = 30.0) -> Scene:
-    app = appearance or Appearance(floor=world.floor_texture)
+    app = appearance or (ODOMETRY_APPEARANCE if world.floor_texture in ODOMETRY_FLOOR_TEXTURES
+                         else Appearance(floor=world.floor_texture))
     builtin, mark, rgb1, rgb2, rnd, repeat = FLOOR_PRESETS[app.floor]
     if app.floor_rgb is not None:
         rgb1, rgb2 = app.floor_rgb
@@ -91,18 +118,24 @@ def build_scene(world: World, appearance: Optional[Appearance] = None,
         f'    {OVERHEAD_LIGHT}',
         f'    <light name="scene_light" dir="{_v(app.light_dir)}" directional="true" '
         f'diffuse="{_v([app.light_diffuse] * 3)}" castshadow="false"/>',
+    ] if app.shadows else diffuse_lights()
+    repeat = 4.0 if app.obstacle_texel_m is None else 1.0 / (128 * app.obstacle_texel_m)
+    scene += [
         f'    <geom name="floor_visual" type="plane" pos="{_v(world.start[:2])} 0.0002" '
         f'size="{half:.6g} {half:.6g} 0.1" material="floor_mat" contype="0" conaffinity="0"/>',
     ]
     for k, ob in enumerate(world.obstacles):
         colour = app.obstacle_colour(k)
+        mark_rgb = app.obstacle_mark_rgb
+        if mark_rgb is None:
+            mark_rgb = np.clip(np.asarray(colour) * 0.5 + 0.2, 0, 1)
         mat = f"obstacle_mat_{k}"
         assets += [
             f'    <texture name="obstacle_tex_{k}" type="2d" builtin="flat" mark="{app.obstacle_mark}" '
             f'rgb1="{_v(colour)}" rgb2="{_v(colour)}" '
-            f'markrgb="{_v(np.clip(np.asarray(colour) * 0.5 + 0.2, 0, 1))}" random="0.3" '
-            f'width="128" height="128"/>',
-            f'    <material name="{mat}" texture="obstacle_tex_{k}" texrepeat="4 4" texuniform="true"/>',
+            f'markrgb="{_v(mark_rgb)}" random="{app.obstacle_mark_fraction:.3g}" width="128" height="128"/>',
+            f'    <material name="{mat}" texture="obstacle_tex_{k}" texrepeat="{repeat:.6g} {repeat:.6g}" '
+            f'texuniform="true"/>',
         ]
         common = f'name="obstacle_{k}" contype="2" conaffinity="1" condim="3" material="{mat}"'
         if ob.kind == "cylinder":
@@ -145,14 +178,7 @@ def vo_room(centre_xy: Tuple[float, float] = (0.0, 0.0), half_m: float = VO_ROOM
     assets = ['    <texture name="floor_tex" type="2d" builtin="flat" mark="random" random="0.5" '
               'rgb1="0.55 0.5 0.45" rgb2="0.55 0.5 0.45" markrgb="0.25 0.2 0.2" width="256" height="256"/>',
               '    <material name="floor_mat" texture="floor_tex" texrepeat="1 1"/>']
-    # Lit like a lab under diffuse ceiling lights (many sources): the robot casts no hard shadow that
-    # moves with it into its head camera's view, as a single shadow-casting light makes it do (strong
-    # false features for the odometry). So no light here casts shadows, and with lights of its own the
-    # room has no sim/mjcf.OVERHEAD_LIGHT. One directional light towards each wall (a single one leaves
-    # the walls it skims dark: too few ORB features there) and some ambient light.
-    scene = [f'    <light name="scene_light_{k}" dir="{_v(d)}" directional="true" diffuse="0.35 0.35 0.35" '
-             f'ambient="{"0.25 0.25 0.25" if k == 0 else "0 0 0"}" castshadow="false"/>'
-             for k, d in enumerate([(1, 0.2, -1), (-1, -0.2, -1), (-0.2, 1, -1), (0.2, -1, -1)])]
+    scene = diffuse_lights()
     scene += [f'    <geom name="floor_visual" type="plane" pos="{_v((cx, cy))} 0.0002" '
               f'size="{half:.6g} {half:.6g} 0.1" material="floor_mat" contype="0" conaffinity="0"/>']
     walls = [((cx + half, cy), (0.02, half)), ((cx - half, cy), (0.02, half)), ((cx, cy + half), (half, 0.02)),

@@ -187,16 +187,7 @@ class SimWorld:
     def step_to(self, t_s: float) -> WorldStep:
         """Lock-step: the physics to t_s, then observe(). With the IMU on, the physics stops at each of
         its sample times on the way (200 Hz against a 100 Hz caller): those samples are out.imu_between."""
-        between = []
-        if self.imu is not None:
-            plant, half = self.plant, self.imu.half_step_s
-            while self.imu.clock.next_s + half < t_s - 1e-9:
-                # the physics step nearest the grid point (ImuSensor.poll: due from half a step before)
-                plant.step_to(math.ceil((self.imu.clock.next_s - half) / plant.dt_s - 1e-9) * plant.dt_s)
-                s = self.imu.poll(plant)
-                if s is None:
-                    break
-                between.append(s)
+        between = self.imu.step_plant_to(self.plant, t_s) if self.imu is not None else []
         self.plant.step_to(t_s)
         out = self.observe()
         out.imu_between = between

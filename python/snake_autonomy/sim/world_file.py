@@ -8,7 +8,7 @@ A world is a YAML file::
     obstacles:
       - {type: cylinder, x: 1.0, y: 0.2, radius_m: 0.1, height_m: 0.3}
       - {type: box, x: 2.0, y: -0.3, size_m: [0.2, 0.4, 0.3], yaw_deg: 30}
-    floor_texture: carpet               # optional: one of FLOOR_TEXTURES (sim/scene.py)
+    floor_texture: carpet               # optional: one of WORLD_FLOOR_TEXTURES (sim/scene.py)
 
 Optional keys ``name`` and ``description``. A bad world is refused whole with every problem listed
 (WorldError), each naming the key and the value (a short, escaped piece of it), as mission files are.
@@ -23,8 +23,14 @@ from typing import Any, List, Optional, Sequence, Tuple
 
 from ..safe_yaml import YamlFileError, load_yaml_file, short_repr
 
-#: Floor appearances a world may ask for (the textures themselves: sim/scene.py).
+#: Floor appearances a world may ask for (the textures themselves: sim/scene.py); the generated
+#: worlds and the classifier's training renders draw from FLOOR_TEXTURES.
 FLOOR_TEXTURES = ("plain", "checker", "carpet", "tiles", "concrete")
+#: Floors the visual odometry tracks on (nav runs' pose source vo needs one): random dots of a few cm.
+#: On FLOOR_TEXTURES it loses track (too few features at its 320x240: the carpet's and concrete's dots
+#: are sub-millimetre, the checker's and tiles' squares 25-33 cm).
+ODOMETRY_FLOOR_TEXTURES = ("dots",)
+WORLD_FLOOR_TEXTURES = FLOOR_TEXTURES + ODOMETRY_FLOOR_TEXTURES
 WORLD_KEYS = ("name", "description", "start", "goal", "goal_radius_m", "obstacles", "floor_texture")
 CYLINDER_KEYS = ("type", "x", "y", "radius_m", "height_m")
 BOX_KEYS = ("type", "x", "y", "size_m", "yaw_deg")
@@ -131,8 +137,9 @@ class World:
             if ob is not None:
                 obstacles.append(ob)
         floor = data.get("floor_texture", "plain")
-        if floor not in FLOOR_TEXTURES:
-            problems.append(f"floor_texture: unknown texture {short_repr(floor)}; known: {', '.join(FLOOR_TEXTURES)}")
+        if floor not in WORLD_FLOOR_TEXTURES:
+            problems.append(f"floor_texture: unknown texture {short_repr(floor)}; "
+                            f"known: {', '.join(WORLD_FLOOR_TEXTURES)}")
         if start and goal and not problems:
             for i, ob in enumerate(obstacles):
                 if ob.distance_m(start[0], start[1]) <= 0.0:
