@@ -8,6 +8,8 @@ import pytest
 
 from snake_autonomy.paths import config_path
 from snake_autonomy.runs.nav_batch import NavRun, NavRunSpec
+from snake_autonomy.sim.mjcf import OVERHEAD_LIGHT
+from snake_autonomy.sim.scene import build_scene
 from snake_autonomy.sim.world_file import load_world
 
 
@@ -44,3 +46,10 @@ def test_a_plain_floor_is_refused_for_vo_and_accepted_for_mocap():
     with pytest.raises(ValueError, match=r"pose_source vo: .* floor_texture 'plain'"):
         NavRunSpec(w, pose_source="vo").check()
     NavRunSpec(w, pose_source="mocap").check()
+
+
+def test_only_a_world_with_the_odometry_floor_is_lit_without_the_shadow_casting_light():
+    odometry = build_scene(world("odometry_corridor"))
+    assert OVERHEAD_LIGHT not in odometry.scene_xml and 'castshadow="true"' not in odometry.scene_xml
+    assert 'mark="random"' in odometry.assets_xml.split("obstacle_tex_0", 1)[1]
+    assert OVERHEAD_LIGHT in build_scene(world("corridor")).scene_xml
