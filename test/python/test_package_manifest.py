@@ -43,6 +43,7 @@ THIRD_PARTY = {
     "distributed": ("pypi", "distributed"),
     "importlinter": ("pypi", "import-linter"),
     "gtsam": ("pypi", "gtsam"),
+    "ompl": ("pypi", "ompl"),
 }
 # PyPI-pinned modules the package itself (python/snake_autonomy) imports at run time also need their rosdep key in
 # package.xml, for ROS users who install with rosdep rather than the venv (official keys: rosdistro rosdep/python.yaml).
