@@ -187,8 +187,11 @@ class SimWorld:
     def step_to(self, t_s: float) -> WorldStep:
         """Lock-step: the physics to t_s, then observe(). With the IMU on, the physics stops at each of
         its sample times on the way (200 Hz against a 100 Hz caller): those samples are out.imu_between."""
-        between = self.imu.step_plant_to(self.plant, t_s) if self.imu is not None else []
-        self.plant.step_to(t_s)
+        between = []
+        if self.imu is not None:
+            between = self.imu.step_plant_to(self.plant, t_s)     # ends at t_s
+        else:
+            self.plant.step_to(t_s)
         out = self.observe()
         out.imu_between = between
         return out
