@@ -3,8 +3,12 @@
 // posture as the first knot, the hold at the end, and every way a running trajectory ends.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "driver_rig.hpp"
 #include "snake_autonomy/driver/trajectory_source.hpp"
@@ -244,6 +248,75 @@ TEST(TrajectorySource, EveryAcceptedTrajectoryEndsWithExactlyOneFinalStatus) {
   ASSERT_EQ(f.size(), 1u);
   EXPECT_EQ(f[0].abort, TrajectoryAbort::kNotAllowed);
   EXPECT_EQ(src.finals_dropped(), 0u);
+}
+
+// Back to back from another thread, as the driver's callback thread submits while the loop takes and
+// updates and the publisher thread pops: whatever the interleaving, every accepted trajectory gets
+// exactly one final status and none is dropped. The submitter's pauses make all three ends happen:
+// done before the next arrives, superseded while running, superseded before the loop took it (several
+// submits between two takes). It keeps at most 32 statuses outstanding (each queue holds kFinalQueue =
+// 64), as a publisher thread keeping up would.
+TEST(TrajectorySource, BackToBackFromAnotherThreadEachEndExactlyOnce) {
+  const int n = 2, total = 1000;
+  TrajectorySource src(n, limits(n));
+  std::atomic<int> popped{0};
+  std::atomic<bool> looping{true}, consuming{true};
+  std::vector<int> ends(total + 1, 0);  // per sequence: final statuses seen (consumer thread only)
+  int done = 0, superseded_running = 0, superseded_pending = 0;  // consumer thread only
+  std::thread loop([&] {
+    Eigen::VectorXd goal = Eigen::VectorXd::Zero(n);
+    double t_s = 0.0;
+    while (looping.load()) {
+      t_s += 0.01;  // 50 cycles a trajectory
+      src.take(t_s, goal);
+      src.update(t_s, goal);
+      std::this_thread::sleep_for(std::chrono::microseconds(20));
+    }
+  });
+  std::thread consumer([&] {
+    TrajectoryProgress p;
+    for (;;) {
+      const bool last = !consuming.load();  // read first: set once the loop has stopped
+      while (src.pop_final(&p)) {
+        if (p.sequence >= 1 && p.sequence <= static_cast<std::uint64_t>(total)) ++ends[p.sequence];
+        if (p.phase == TrajectoryPhase::kDone) ++done;
+        else if (contains(p.reason.data(), "before it started")) ++superseded_pending;
+        else if (p.abort == TrajectoryAbort::kSuperseded) ++superseded_running;
+        ++popped;
+      }
+      if (last) return;
+      std::this_thread::sleep_for(std::chrono::microseconds(50));
+    }
+  });
+  // A lost status would stall the waits below: they give up after 30 s and the checks say which.
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  const auto waiting = [&] { return std::chrono::steady_clock::now() < give_up; };
+  int accepted = 0;
+  for (int k = 0; k < total; ++k) {
+    while (k - popped.load() > 32 && waiting()) std::this_thread::yield();
+    accepted += src.submit(ramp(n, {0.2, 0.5}, {0.01, 0.02}, "b2b-" + std::to_string(k))).empty();
+    if (k % 10 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));  // runs to its end
+    else if (k % 10 < 5) std::this_thread::sleep_for(std::chrono::milliseconds(1));  // taken, then replaced
+  }
+  // The last one is taken and runs to its end (done) within 0.5 s of loop time.
+  while (popped.load() < total && waiting()) std::this_thread::yield();
+  looping = false;
+  loop.join();
+  consuming = false;
+  consumer.join();
+  ASSERT_EQ(accepted, total);
+  int once = 0;
+  for (int s = 1; s <= total; ++s) {
+    EXPECT_EQ(ends[s], 1) << "sequence " << s;
+    once += ends[s] == 1;
+  }
+  EXPECT_EQ(once, total);
+  EXPECT_EQ(popped.load(), total) << "no final status for a sequence that was never accepted";
+  EXPECT_EQ(src.finals_dropped(), 0u);
+  EXPECT_EQ(done + superseded_running + superseded_pending, total);
+  EXPECT_GT(done, 0);
+  EXPECT_GT(superseded_running, 0);
+  EXPECT_GT(superseded_pending, 0);
 }
 
 TEST(TrajectorySource, AFullFinalStatusQueueCountsWhatItDrops) {
