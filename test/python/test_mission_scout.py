@@ -54,9 +54,10 @@ class FakeTrajectory:
 
 
 class FakeExecutor:
-    def __init__(self, refuse=()):
-        self.sent, self.refuse, self._end = [], set(refuse), -math.inf
+    def __init__(self, refuse=(), abort=()):
+        self.sent, self.refuse, self.abort, self._end = [], set(refuse), set(abort), -math.inf
         self.heights = []                   # what head_height_m returns, call after call (then NaN)
+        self.aborted = ""
 
     def execute(self, trajectory, t_s):
         if trajectory.name in self.refuse:
@@ -66,7 +67,11 @@ class FakeExecutor:
         return ""
 
     def finished(self, t_s):
-        return t_s >= self._end
+        if t_s < self._end:
+            return False
+        if self.sent and self.sent[-1][1] in self.abort:
+            self.aborted = "aborted fault: servo 3 overload"
+        return True
 
     def head_height_m(self):
         return self.heights.pop(0) if self.heights else math.nan
@@ -182,8 +187,8 @@ def test_the_measured_head_height_is_the_lowest_the_executor_reads_while_held():
     assert rec["outcome"] == "done" and rec["measured_head_height_m"] == pytest.approx(0.29)
 
 
-def test_a_refused_lowering_aborts_the_mission_with_the_head_held_up():
-    ex = FakeExecutor(("lower",))
+def run_until_ended(ex):
+    """A scout stop with hold_s 0 at waypoint 0, ticked at 1 Hz until the mission ends; (runner, last decision)."""
     r = arrive(mission({"hold_s": 0}), planner(), ex)
     r.step(1.0)
     assert r.scout.wait_planned(WAIT_S)
@@ -191,8 +196,23 @@ def test_a_refused_lowering_aborts_the_mission_with_the_head_held_up():
     while r.state == "running" and t < 30.0:
         d = r.step(t)
         t += 1.0
+    return r, d
+
+
+def test_a_refused_lowering_aborts_the_mission_with_the_head_held_up():
+    ex = FakeExecutor(("lower",))
+    r, d = run_until_ended(ex)
     assert r.state == "aborted" and "lowering: the executor refused" in r.outcome
     assert d.finished and d.trajectory_active and [n for _, n in ex.sent] == ["raise"]
+
+
+@pytest.mark.parametrize("aborted", ["raise", "lower"])
+def test_a_trajectory_that_ends_aborted_aborts_the_mission_with_the_head_held(aborted):
+    ex = FakeExecutor(abort=(aborted,))
+    r, d = run_until_ended(ex)
+    phase = "raising" if aborted == "raise" else "lowering"
+    assert r.outcome == f"aborted: scout at waypoint 0: failed: {phase}: aborted fault: servo 3 overload"
+    assert d.finished and d.trajectory_active and ex.sent[-1][1] == aborted     # nothing sent after it
 
 
 class DoneNavigator:

@@ -10,9 +10,10 @@ The mission node wires it to topics; the simulator can drive it directly. Safety
 - a waypoint with a scout stop (missions/scout.py): once reached, locomotion holds while the stop
   plans (a worker thread), raises, holds and lowers; `Decision.trajectory_active` then tells the
   caller not to send gait commands (the trajectory owns the joints). A failed plan is recorded in
-  `scout_log` and the mission resumes. The time limit is checked only between scout stops (a raised
-  head is lowered first); a stop needs `scout_planner` and `executor`, without them it is recorded
-  as failed and skipped;
+  `scout_log` and the mission resumes; a stop failed once a trajectory was handed over (refused,
+  aborted, no final status in time: the head may be up) aborts the mission, sending no gait. The
+  time limit is checked only between scout stops (a raised head is lowered first); a stop needs
+  `scout_planner` and `executor`, without them it is recorded as failed and skipped;
 - a navigate_to leg (missions/nav_leg.py) is driven by a `Navigator` (the planner's move_base on the
   ROS side): the tracker is not stepped and `Decision.navigating` tells the caller not to send gait
   commands; the leg ends reached (the tracker goes on with the next waypoint) or aborts the mission

@@ -18,8 +18,10 @@ The sequence (`ScoutStop`), driven by MissionRunner's control tick once the wayp
     -> holding (hold_s after the executor reports the raise finished)
     -> lowering (the inverse plan back to the lying posture)
     -> done: the mission resumes locomotion.
-    A lowering the executor refuses leaves the head up: the mission is aborted (never resumed),
-    holding the raised posture (the driver holds the last point).
+    A raise or lowering that ends without reaching its last point (the executor's `aborted`: the driver
+    aborted or refused it, or no final status came in time), and a lowering the executor refuses, may
+    leave the head up: the stop fails and the mission is aborted (never resumed), no gait command sent
+    (the driver holds where the trajectory left the joints).
 
 The planner (`ScoutPlanner`, a callable ScoutSpec -> ScoutPlan) does every check before anything
 moves: the FBSR planner's own (ZMP inside U at every sample, joint limits, head above after a
@@ -69,8 +71,13 @@ class TrajectoryExecutor(Protocol):
     def execute(self, trajectory, t_s: float) -> str:
         """Start `trajectory` at t_s; '' when accepted, otherwise why it was refused."""
 
+    #: Why the last trajectory sent ended without reaching its last point ('' while it runs or when it did).
+    aborted: str
+
     def finished(self, t_s: float) -> bool:
-        """The last trajectory sent has reached its last point (which is then held)."""
+        """The last trajectory sent has ended: reached its last point (then held), or not (`aborted`
+        says why). Becomes True in bounded time: an executor that can lose a trajectory gives up on it
+        after a deadline and says so in `aborted`."""
 
     def head_height_m(self) -> float:
         """The head's height above the floor as the executor's side measures it now (the robot's pose
@@ -132,6 +139,7 @@ class ScoutStop:
         self.plan: Optional[ScoutPlan] = None
         self._future: Future = pool.submit(self._plan_timed, spec)
         self._hold_until = math.inf
+        self._trajectory_sent = False       # a raise or lowering was handed over: the head may be up
 
     def _plan_timed(self, spec):
         started = time.perf_counter()
@@ -153,8 +161,8 @@ class ScoutStop:
 
     @property
     def head_up(self) -> bool:
-        """Failed after the raise was accepted: the head may be up (the lowering was refused)."""
-        return self.phase == FAILED and LOWERING in self.record.outcome
+        """Failed after a trajectory was handed over: the head may be up."""
+        return self.phase == FAILED and self._trajectory_sent
 
     @property
     def trajectory_active(self) -> bool:
@@ -172,6 +180,8 @@ class ScoutStop:
             rec.planning_time_s = wall_s
             self._send(t_s, self.plan.raise_trajectory, RAISING)
         elif self.phase == RAISING and self.executor.finished(t_s):
+            if self.executor.aborted:
+                return self._fail(t_s, f"{RAISING}: {self.executor.aborted}")
             self._enter(t_s, HOLDING)
             self._hold_until = t_s + rec.spec.hold_s
         elif self.phase == HOLDING:
@@ -179,6 +189,8 @@ class ScoutStop:
             if t_s >= self._hold_until:
                 self._send(t_s, self.plan.lower_trajectory, LOWERING)
         elif self.phase == LOWERING and self.executor.finished(t_s):
+            if self.executor.aborted:
+                return self._fail(t_s, f"{LOWERING}: {self.executor.aborted}")
             self._enter(t_s, DONE)
             rec.outcome = DONE
         return self.phase
@@ -196,6 +208,7 @@ class ScoutStop:
         if why:
             self._fail(t_s, f"{phase}: the executor refused the trajectory ({why})")
         else:
+            self._trajectory_sent = True
             self._enter(t_s, phase)
 
     def _enter(self, t_s, phase) -> None:

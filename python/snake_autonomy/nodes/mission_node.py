@@ -32,6 +32,7 @@ Params      ~mission (file or provided name: loaded at start-up), ~auto_start (f
             ~heading_offset_deg (defaults from tracker_config + overrides), ~results_dir, ~record (true),
             ~world_frame (odom), ~nav_server_timeout_s, ~nav_settle_s (nodes/mission_nav_leg.py), ~pose_status_name,
             ~robot (cobra) and ~scout_config (empty: config/scout.yaml) for the scout stops of a mission,
+            ~scout_accept_timeout_s (3), ~scout_result_margin_s (5): nodes/scout_trajectory.py,
             ~driver_status_name (the driver's locomotion status, default "snake_driver: locomotion"),
             ~on_driver_fault: abort (default: the mission ends, hold sent, results written, the action
             aborted with the fault) or pause (hold until mission/resume; the driver's own recovery never
@@ -199,7 +200,7 @@ class MissionNode:
         made once, when the first mission with a scout stop is loaded."""
         if self._scout_parts is None:
             planner = fbsr_scout_planner(self.robot, self.scout_config, torque_limit_nm=servo_torque_limit_nm())
-            self._scout_parts = (planner, TopicTrajectoryExecutor())
+            self._scout_parts = (planner, TopicTrajectoryExecutor.from_params())
         return self._scout_parts
 
     def set_state(self, text):
