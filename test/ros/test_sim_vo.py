@@ -27,7 +27,7 @@ MOVE_S = 12.0
 WITHHELD_S = 2.0
 RECOVER_S = 3.0
 MAX_ERROR_M = 0.1            # measured on 0.30 m of camera path (the room around the camera, debug visuals
-                             # hidden, lit without shadows): 28-77 mm in 7 runs (with the overhead
+                             # hidden, lit without shadows): 28-77 mm in 17 runs (with the overhead
                              # shadow-casting light the room had before: 27-44 mm in 8 runs, 2 of 11 over
                              # 50 mm); the runaways this guards against went 68-330 mm
 LOST = 1000.0                # the pose remapper's lost_covariance

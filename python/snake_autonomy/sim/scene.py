@@ -70,7 +70,13 @@ def diffuse_lights() -> List[str]:
     moves with it into its head camera's view, as a single shadow-casting light makes it do (strong
     false features for the odometry). No light casts shadows, and a scene lit by them has no
     sim/mjcf.OVERHEAD_LIGHT. One directional light towards each side (a single one leaves the walls it
-    skims dark: too few ORB features there) and some ambient light."""
+    skims dark: too few ORB features there) and some ambient light.
+
+    MuJoCo sums the ambient and diffuse light of the lights without shadows and clamps the sum at
+    full, so the floor under these already shows its texture's own colours: brighter or more such
+    lights add nothing to it (a 0.5 grey plane: 104 grey levels under one light of diffuse 0.7, 127
+    under 1.0 or 1.5). A shadow-casting light is drawn in a pass of its own added on top (142 under
+    1.0): the extra brightness and contrast the odometry room had with OVERHEAD_LIGHT."""
     return [f'    <light name="scene_light_{k}" dir="{_v(d)}" directional="true" diffuse="0.35 0.35 0.35" '
             f'ambient="{"0.25 0.25 0.25" if k == 0 else "0 0 0"}" castshadow="false"/>'
             for k, d in enumerate([(1, 0.2, -1), (-1, -0.2, -1), (-0.2, 1, -1), (0.2, -1, -1)])]
