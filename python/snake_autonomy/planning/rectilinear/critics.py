@@ -36,9 +36,6 @@ class CriticParams:
     route_inflation_m: float = 0.25  # route (grid_route.py): cells nearer an obstacle than this cost more
     route_inflated_cost: float = 20.0
     route_dead_end_cost: float = 0.0  # route: each recovery adds this to the cost of the cells round it
-    route_kinematic: bool = False    # route: the cost to go along a path in the robot's motions
-                                     # (kinematic_route.py), the grid route's where none is found
-    route_expansions: int = 4000     # route_kinematic: the search gives up after this many states
 
     def validate(self) -> List[str]:
         p = [f"{k}: must be >= 0, got {getattr(self, k)}" for k in CRITICS if not getattr(self, k) >= 0]
@@ -48,10 +45,6 @@ class CriticParams:
             p.append(f"route_inflation_m: must be > 0, got {self.route_inflation_m}")
         if not self.route_dead_end_cost >= 0:
             p.append(f"route_dead_end_cost: must be >= 0, got {self.route_dead_end_cost}")
-        if not isinstance(self.route_kinematic, bool):
-            p.append(f"route_kinematic: must be true or false, got {self.route_kinematic!r}")
-        if not (isinstance(self.route_expansions, int) and self.route_expansions >= 1):
-            p.append(f"route_expansions: must be an integer >= 1, got {self.route_expansions!r}")
         if not self.route_inflated_cost >= 1:
             p.append(f"route_inflated_cost: must be >= 1, got {self.route_inflated_cost}")
         return p

@@ -54,7 +54,6 @@ class GridRoute:
         self.marks = np.zeros((0, 2))       # world points of the places marked, one row per mark
         self.path = None                    # (K, 2) world points, robot to goal, of the last update
         self._field = None
-        self._cost = None                   # the cells' costs of the last update (kinematic_route.py)
 
     def mark(self, xy) -> None:
         """The robot recovered at xy (world): the cells within mark_radius_m cost mark_cost more."""
@@ -80,7 +79,7 @@ class GridRoute:
         self._lo = local_map.origin + 0.5 * (f - 1) * local_map.params.cell_m
         if self.mark_cost > 0 and len(self.marks):
             cost = cost + self.mark_cost * self._mark_counts(cost.shape, cell)
-        self._cell, self._shape, self._cost = cell, cost.shape, cost
+        self._cell, self._shape = cell, cost.shape
         g_idx = self._index(self._goal[None])[0]
         g_cell = self._lo + cell * np.array(g_idx)
         goal_gap = float(np.hypot(*(self._goal - g_cell)))     # goal outside the window: the way there

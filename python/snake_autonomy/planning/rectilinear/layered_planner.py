@@ -1,8 +1,7 @@
 """The layered local planner, ROS-free: one replan of the navigation loop, in Nav2's layers.
 
     traversability image -> local map (local_map.py: one rolling occupancy grid)
-      -> route (grid_route.py: Dijkstra on the map, the global planner's part; with
-         critics.route_kinematic, kinematic_route.py: a path in the robot's own arcs, Hybrid-A*)
+      -> route (grid_route.py: Dijkstra on the map, the global planner's part)
       -> candidate arcs (the head's unicycle arcs, Chang et al. III)
       -> body sweep (body_sweep.py: the one validity check, the measured body of each robot)
       -> critics (critics.py: weighted scores, the least wins)
@@ -29,7 +28,6 @@ from .body_sweep import BodySweep, sweep_bounds
 from .critics import Candidate, score
 from .follower import RecedingHorizonFollower
 from .grid_route import GridRoute
-from .kinematic_route import KinematicRoute
 from .local_map import LocalMap
 from .collision_check import prefix_length
 from .planner import Replan, T_world_ground, to_world, world_xy
@@ -53,8 +51,6 @@ class LayeredPlanner:
         rp = cfg.recovery
         self.route = GridRoute(2 * lm.cell_m, cp.route_inflation_m, 0.5 * body.width_m, cp.route_inflated_cost,
                                mark_cost=cp.route_dead_end_cost, mark_radius_m=rp.dead_end_radius_m)
-        self.kinematic = (KinematicRoute(self.sp.max_curvature_per_m, self.head_need_m,
-                                         max_expansions=cp.route_expansions) if cp.route_kinematic else None)
         self._escape = None                  # (x, y): the dead end being backed out of
         self.recovery = Recovery(rp)
         self.progress = ProgressChecker(cfg.recovery.progress_m, cfg.recovery.progress_window_s)
@@ -82,20 +78,9 @@ class LayeredPlanner:
         self.map.mark_body(world_xy(T_world_g, body_now),
                            half + (self.cfg.local_map.start_free_m if self.map.updates == 1 else 0.0))
         route_path = None
-        fp = self.follower.params
-        goal_in_m = max(0.0, goal_radius_m - fp.goal_margin_m)   # the loop stops goal_margin_m inside the disc
         if goal_xy is not None:
             self.route.update(self.map, pose[:2], goal_xy)
             route_path = self.route.path
-            if self.kinematic is not None:
-                # within the arcs' horizon of the goal the arcs reach it themselves: the grid route's
-                # cost to go there (as MPPI's path critics give way to its goal critic near the goal);
-                # the path's loops round a goal passed at the wrong heading made the robot orbit it
-                far = math.hypot(goal_xy[0] - pose[0], goal_xy[1] - pose[1]) > self.sp.horizon_m
-                if far and self.kinematic.plan(self.map, self.route, pose, goal_xy, goal_in_m) is not None:
-                    route_path = self.kinematic.path[:, :2]
-                elif not far:
-                    self.kinematic.clear()
         cands = [self._candidate(c, poses, s, kappa_now, T_world_g) for c, poses, s in self._arcs]
         sel = Selection([Arc(c.curvature_per_m, c.poses, c.s_m, c.free_m) for c in cands], None)
         if self._escape is not None:
@@ -108,7 +93,9 @@ class LayeredPlanner:
         if not valid or stuck:
             return self._recover(t_s, pose, sel, cands, T_world_g, goal_xy, route_path,
                                  "no progress" if stuck else "no valid arc")
-        ctg = self._route_cost(cands, valid, T_world_g, goal_xy, goal_in_m, pose[2])
+        fp = self.follower.params
+        # the loop stops goal_margin_m inside the disc (the stop's own move): aim there
+        ctg = self._route_cost(cands, valid, T_world_g, goal_xy, max(0.0, goal_radius_m - fp.goal_margin_m))
         totals = score([cands[i] for i in valid], self.cfg.critics, self.sp.horizon_m, kappa_now,
                        fp.kappa_max_per_m, self.sp.max_curvature_per_m, ctg)
         best = valid[int(np.argmin(totals))]
@@ -140,10 +127,9 @@ class LayeredPlanner:
             free, why = max(0.0, chk.free_m), "body"
         return Candidate(c, kappa, poses, s, max(0.0, free - p.margin_m), chk.clearance_m, chk.free_m >= 0, why)
 
-    def _route_cost(self, cands, valid, T_world_g, goal_xy, goal_radius_m, yaw):
-        """Per valid candidate, the route's cost to go at the end of its free prefix (with a
-        kinematic route, along it: its heading counts), or (a prefix entering the goal's disc) minus
-        its deepest point's depth in the disc; None without a goal."""
+    def _route_cost(self, cands, valid, T_world_g, goal_xy, goal_radius_m):
+        """Per valid candidate, the route's cost to go at the end of its free prefix, or (a prefix
+        entering the goal's disc) minus its deepest point's depth in the disc; None without a goal."""
         if goal_xy is None:
             return None
         out = []
@@ -153,13 +139,8 @@ class LayeredPlanner:
             xy = world_xy(T_world_g, c.poses[:n, :2])
             dist = np.hypot(xy[:, 0] - goal_xy[0], xy[:, 1] - goal_xy[1])
             inside = dist <= goal_radius_m
-            if inside.any():
-                out.append(float(np.min(dist[inside]) - goal_radius_m))
-                continue
-            cost = self.route.cost_to_go(xy[-1:])
-            if self.kinematic is not None:
-                cost = self.kinematic.cost_to_go(np.array([[*xy[-1], yaw + c.poses[n - 1, 2]]]), cost)
-            out.append(float(cost[0]))
+            out.append(float(np.min(dist[inside]) - goal_radius_m) if inside.any()
+                       else float(self.route.cost_to_go(xy[-1:])[0]))
         return np.array(out)
 
     def _recover(self, t_s, pose, sel, cands, T_world_g, goal_xy, route_path, cause) -> Replan:
