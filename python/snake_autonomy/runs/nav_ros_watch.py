@@ -11,8 +11,9 @@ Listens to  ground_truth/base_pose (base_link by ground truth), gait_command (th
 Ends        when the planner's state has been goal_reached for settle_s (the robot at rest; then
             base_link's final position decides "reached", as the batch run), at time_limit_s after
             the first command that moves (the settle cut at the limit, as the batch run), when a
-            node of the launch dies (its pid gone) or the master goes, or when nothing moves
-            within startup_s.
+            node of the launch dies (NodeCheck: its pid gone, its URI silent, roslaunch saw it die),
+            when the launch stops (roslaunch killed its nodes on exit) or the master goes, or when
+            nothing moves within startup_s.
 Times       wall clock (the launch runs on it: use_sim_time false); time_s from the first command
             that moves to the first goal_reached status (diagnostics every 1 s: +-1 s).
 Writes      the JSON (Watch.result) every second while it runs and once at the end: a killed
@@ -25,7 +26,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Set, Tuple
 from xmlrpc.client import ServerProxy
 
 from snake_autonomy.planning.rectilinear.config import NavConfig, nav_config_path
@@ -94,20 +95,23 @@ class Watch:
             self.sim = dict(values)
 
     # -- the end --------------------------------------------------------------------------------------
-    def step(self, now: float, dead: Optional[str] = None) -> Optional[str]:
-        """The reason the run ends now (and remembers it), else None. dead: a node that died."""
+    def step(self, now: float, dead: Optional[str] = None, stopped: Optional[str] = None) -> Optional[str]:
+        """The reason the run ends now (and remembers it), else None. dead: a node that died; stopped:
+        why the launch itself stopped (roslaunch stopped from outside killed its nodes on exit)."""
         with self.lock:
             if self.xy is not None:
                 self.track.append((now, *self.xy))
             if self.end is None:
-                self.end = self._why(now, dead)
+                self.end = self._why(now, dead, stopped)
                 if self.end is not None:
                     self.t_end = now
             return self.end
 
-    def _why(self, now: float, dead: Optional[str]) -> Optional[str]:
+    def _why(self, now: float, dead: Optional[str], stopped: Optional[str]) -> Optional[str]:
         if dead:
             return f"node_died: {dead}"
+        if stopped:
+            return f"launch_stopped: {stopped}"
         if self.t_move is None:
             return "no_start" if now - self.t0 >= self.startup_s else None
         if self.t_reached_now is not None and now - self.t_reached_now >= self.settle_s:
@@ -171,35 +175,92 @@ def _float(v) -> Optional[float]:
     return f if math.isfinite(f) and f >= 0 else None
 
 
-def _node_pids(me: str) -> Dict[str, int]:
-    """pid of every node the master knows, but this one and rosout."""
+class NodeCheck:
+    """Whether a node of the launch has died, from the pids taken once the robot moves.
+
+    Its pid gone is not enough: when roslaunch is stopped from outside (SIGINT/SIGTERM to roslaunch), it
+    kills every node on exit, and the first to go (robot_state_publisher, in C++, within 0.1 s) looked
+    like a node that died while the launch ran. A node has died when its pid is gone, its URI no longer
+    answers getPid with a live pid, and roslaunch's process monitor lists it among its dead (a node
+    roslaunch killed on exit stays among its active ones). While roslaunch still lists it active, the
+    verdict waits (`suspect`), up to confirm_s; when roslaunch no longer answers, the launch has stopped.
+
+    pid_of(name): the node's pid by its XML-RPC getPid (URI from the master), None when it does not answer;
+    seen_dead(): the nodes roslaunch saw die, None when roslaunch does not answer; alive(pid): a process."""
+
+    def __init__(self, pids: Dict[str, int], pid_of: Callable[[str], Optional[int]],
+                 seen_dead: Callable[[], Optional[Set[str]]], alive: Optional[Callable[[int], bool]] = None,
+                 confirm_s: float = 30.0):
+        self.pids, self.pid_of, self.seen_dead = dict(pids), pid_of, seen_dead
+        self.alive = alive or _pid_alive
+        self.confirm_s = float(confirm_s)
+        self.suspect: Dict[str, float] = {}     # name -> when its pid was first seen gone
+
+    def check(self, now: float) -> Tuple[Optional[str], Optional[str]]:
+        """(a node that died, else None; why the launch stopped, else None)."""
+        for name, pid in self.pids.items():
+            if self.alive(pid):
+                continue
+            again = self.pid_of(name)
+            if again is not None and self.alive(again):
+                self.pids[name] = again
+                self.suspect.pop(name, None)
+                continue
+            dead = self.seen_dead()
+            if dead is None:
+                return None, f"{name} gone with roslaunch"
+            if name in dead:
+                return name, None
+            if now - self.suspect.setdefault(name, now) >= self.confirm_s:
+                return name, None
+        return None, None
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass
+    return True
+
+
+def _node_check(me: str) -> NodeCheck:
+    """The check of every node the master knows, but this one and rosout."""
     import rosgraph   # ROS lazily: the runs layer is imported without ROS (the Watch, the tests)
     import rosnode
     master = rosgraph.Master(me)
+
+    def pid_of(name: str) -> Optional[int]:
+        try:
+            code, _, pid = ServerProxy(master.lookupNode(name)).getPid(me)
+        except Exception:   # noqa: BLE001 - not listed by the master, or its URI does not answer
+            return None
+        return int(pid) if code == 1 else None
+
+    def seen_dead() -> Optional[Set[str]]:
+        try:
+            dead = set()
+            for uri in master.getParam("/roslaunch/uris").values():
+                _, _, (_, procs) = ServerProxy(uri).list_processes()
+                # process "ns/name-N" of node "/ns/name"
+                dead.update("/" + proc.rsplit("-", 1)[0] for proc, _ in procs)
+            return dead
+        except Exception:   # noqa: BLE001 - roslaunch (or the master) gone
+            return None
+
     pids = {}
     for name in rosnode.get_node_names():
-        if name in (me, "/rosout"):
-            continue
-        uri = master.lookupNode(name)
-        code, _, pid = ServerProxy(uri).getPid(me)
-        if code == 1:
-            pids[name] = int(pid)
-    return pids
-
-
-def _dead(pids: Dict[str, int]) -> Optional[str]:
-    for name, pid in pids.items():
-        try:
-            os.kill(pid, 0)
-        except ProcessLookupError:
-            return name
-        except PermissionError:
-            pass
-    return None
+        if name not in (me, "/rosout"):
+            pid = pid_of(name)
+            if pid is not None:
+                pids[name] = pid
+    return NodeCheck(pids, pid_of, seen_dead)
 
 
 def watch(args) -> int:
-    import rospy      # ROS lazily, as in _node_pids
+    import rospy      # ROS lazily, as in _node_check
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import PoseStamped
 
@@ -223,21 +284,22 @@ def watch(args) -> int:
                 w.on_sim({kv.key: kv.value for kv in st.values})
     rospy.Subscriber("/diagnostics", DiagnosticArray, on_diagnostics, queue_size=20)
 
-    pids, next_check, next_progress, next_write = None, 0.0, 0.0, 0.0
+    nodes, next_check, next_progress, next_write = None, 0.0, 0.0, 0.0
     label = f"{world.name} seed {args.seed}"
     while True:
         now = time.monotonic()
-        dead = None
+        dead = stopped = None
         if rospy.is_shutdown():
-            dead = "the master (rospy shut down)"
-        elif w.t_move is not None and now >= next_check:
+            stopped = "the master gone (rospy shut down)"
+        elif w.t_move is not None and (now >= next_check or (nodes is not None and nodes.suspect)):
             next_check = now + NODE_CHECK_PERIOD_S
             try:
-                pids = pids or _node_pids(rospy.get_name())
-                dead = _dead(pids)
+                if nodes is None or not nodes.pids:
+                    nodes = _node_check(rospy.get_name())
+                dead, stopped = nodes.check(now)
             except Exception as exc:   # noqa: BLE001 - the master gone: the launch has ended
-                dead = f"the master ({type(exc).__name__}: {exc})"
-        end = w.step(now, dead)
+                stopped = f"the master gone ({type(exc).__name__}: {exc})"
+        end = w.step(now, dead, stopped)
         if now >= next_progress or end:
             next_progress = now + PROGRESS_PERIOD_S
             d = w.distance_m()
@@ -247,7 +309,7 @@ def watch(args) -> int:
                   + (f"; end: {end}" if end else ""), flush=True)
         if now >= next_write or end:
             next_write = now + 1.0
-            write_json_atomic(args.out, {**w.result(now), "nodes": sorted(pids or {})})
+            write_json_atomic(args.out, {**w.result(now), "nodes": dict(sorted(nodes.pids.items())) if nodes else {}})
         if end:
             break
         time.sleep(0.5)
