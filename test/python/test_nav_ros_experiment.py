@@ -40,6 +40,19 @@ def test_the_table_has_one_row_per_world_and_seed_and_counts_the_same_outcomes()
     assert lines[-1].endswith("1 of 2 runs")
 
 
+def test_a_ros_run_the_launch_cut_short_is_not_compared():
+    batch = {**OK, "time_from_move_s": 764.0, "outcome": "success"}
+    stopped = {"goal_reached": False, "collisions": 0, "time_s": 45.4,
+               "end": "launch_stopped: /robot_state_publisher gone with roslaunch"}
+    rows = [comparison_row("a", 0, OK, batch), comparison_row("b", 0, stopped, batch)]
+    assert rows[1]["same_outcome"] is None
+    lines = comparison_table(rows).splitlines()
+    assert lines[3].endswith("| 764 | - |")
+    assert lines[-1].endswith("1 of 1 runs (1 more cut short by the launch, not compared)")
+    died = {**stopped, "end": "node_died: /planner"}      # a node that died is an outcome: compared
+    assert comparison_row("b", 0, died, batch)["same_outcome"] is False
+
+
 def test_the_batch_time_counts_from_the_first_command_that_moves():
     commands = [(0.5, "hold_curve", 0.0, "waiting"), (1.0, "hold_curve", 0.0, "waiting"),
                 (1.5, "rectilinear", 0.1, "following"), (90.0, "hold_curve", 0.0, "goal_reached")]

@@ -73,13 +73,21 @@ def same_outcome(ros: Dict, batch: Dict) -> bool:
     return success(ros) == success(batch)
 
 
+# ROS runs ended by the launch or the watcher, not by the robot: no outcome to compare
+CUT_SHORT = ("launch_stopped", "launch_ended", "watcher_stopped", "watcher_failed")
+
+
+def cut_short(ros: Dict) -> bool:
+    return str(ros.get("end", "")).startswith(CUT_SHORT)
+
+
 def comparison_row(world: str, seed: int, ros: Dict, batch: Dict) -> Dict:
     return {"world": world, "seed": int(seed),
             "ros_reached": bool(ros.get("goal_reached")), "ros_contacts": ros.get("collisions"),
             "ros_time_s": ros.get("time_s"), "ros_end": ros.get("end"),
             "batch_reached": bool(batch.get("goal_reached")), "batch_contacts": batch.get("collisions"),
             "batch_time_s": batch.get("time_from_move_s"), "batch_outcome": batch.get("outcome"),
-            "same_outcome": same_outcome(ros, batch)}
+            "same_outcome": None if cut_short(ros) else same_outcome(ros, batch)}
 
 
 def _cell(v, fmt="{}") -> str:
@@ -90,9 +98,14 @@ def _cell(v, fmt="{}") -> str:
     return fmt.format(v)
 
 
+def _same_count(rows: List[Dict]) -> Tuple[int, int]:
+    """(rows with the same outcome, rows compared)."""
+    return sum(r["same_outcome"] is True for r in rows), sum(r["same_outcome"] is not None for r in rows)
+
+
 def comparison_table(rows: List[Dict]) -> str:
-    """world | seed | ROS: reached, contacts, time | batch: reached, contacts, time | same outcome,
-    and a last line counting the rows with the same outcome."""
+    """world | seed | ROS: reached, contacts, time | batch: reached, contacts, time | same outcome ("-"
+    where the ROS run was cut short), and a last line counting the rows with the same outcome."""
     lines = ["| world | seed | ROS: reached | ROS: contacts | ROS: time (s) | batch: reached | batch: contacts "
              "| batch: time (s) | same outcome |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
@@ -101,8 +114,10 @@ def comparison_table(rows: List[Dict]) -> str:
         lines.append(f"| {r['world']} | {r['seed']} | {_cell(r['ros_reached'])} | {_cell(r['ros_contacts'])} | "
                      f"{ros_time} | {_cell(r['batch_reached'])} | {_cell(r['batch_contacts'])} | "
                      f"{_cell(r['batch_time_s'], '{:.0f}')} | {_cell(r['same_outcome'])} |")
-    same = sum(r["same_outcome"] for r in rows)
-    lines.append(f"\nsame outcome (reached with no contact in both, or in neither): {same} of {len(rows)} runs")
+    same, compared = _same_count(rows)
+    cut = len(rows) - compared
+    lines.append(f"\nsame outcome (reached with no contact in both, or in neither): {same} of {compared} runs"
+                 + (f" ({cut} more cut short by the launch, not compared)" if cut else ""))
     return "\n".join(lines)
 
 
@@ -309,7 +324,7 @@ def _write(out: Path, rows, runs, robot, perception, wall_s) -> None:
     (out / "table.md").write_text(comparison_table(rows) + "\n")
     write_json_atomic(out / "summary.json", {
         "robot": robot, "perception": perception, "runs": len(rows),
-        "same_outcome": sum(r["same_outcome"] for r in rows),
+        "same_outcome": _same_count(rows)[0], "compared": _same_count(rows)[1],
         "ros_successes": sum(success(r["ros"]) for r in runs),
         "batch_successes": sum(success(r["batch"]) for r in runs),
         "wall_s": round(wall_s, 1), "rows": rows, "details": runs})
