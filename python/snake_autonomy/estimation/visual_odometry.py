@@ -26,11 +26,10 @@ max_step_m / max_step_deg (a gross PnP error). While lost, every frame is tried 
 keyframe again: tracking resumes when the camera sees the keyframe's scene again.
 
 Covariance (x, y, z, then small rotations about the odometry frame's fixed x, y, z axes, as in
-geometry_msgs/PoseWithCovariance): the PnP fit's (fit_covariance): its Gauss-Newton covariance,
-(sum_i J_i^T J_i)^-1 min_pixel_sigma_px^2, J_i an inlier's reprojection Jacobian with respect to
-the camera's pose (the keyframe's points taken as exact), scaled by the fit's variance factor (the
-residuals' chi^2 per degree of freedom) when above 1, widened to the leave-one-out spread of the
-fit where that is larger (a fit resting on a single inlier). Added
+geometry_msgs/PoseWithCovariance): the Gauss-Newton covariance of the PnP fit,
+(sum_i J_i^T W_i J_i)^-1, J_i an inlier's reprojection Jacobian with respect to the camera's pose
+and W_i the inverse of its image-space covariance, min_pixel_sigma_px^2 I (the keyframe's points
+taken as exact); scaled by the fit's variance factor (the residuals' chi^2 per degree of freedom) when above 1. Added
 to the keyframe's covariance carried over the lever arm from the keyframe to the camera, so
 covariance grows with each keyframe change, as odometry drift does. The first keyframe's pose is the
 odometry frame's origin, with zero covariance. Each tracked result names the keyframe it was
@@ -190,59 +189,6 @@ def _knn_allowed(kf_desc: np.ndarray, desc: np.ndarray, allowed: np.ndarray):
     has_second = np.r_[starts[1:] - starts[:-1] > 1, len(q) - starts[-1] > 1]
     return [(int(q[i]), int(t[i]), float(d[i]), float(d[i + 1]) if two else None)
             for i, two in zip(starts, has_second)]
-
-
-def fit_covariance(J: np.ndarray, r: np.ndarray, pixel_sigma_px: float) -> np.ndarray:
-    """The 6x6 covariance of a PnP fit from its inliers' reprojection Jacobians J (N, 2, 6) and
-    residuals r (N, 2), pixels; LOST_COVARIANCE on the diagonal when the fit is indeterminate.
-
-    The larger, direction by direction, of two estimates:
-    - Gauss-Newton: (sum J_i^T J_i)^-1 pixel_sigma_px^2, scaled by the fit's variance factor (its
-      residuals' chi^2 per degree of freedom) when above 1: the error were every inlier right;
-    - leave one out (the delete-one jackknife of the linearised fit): (n-1)/n sum d_i d_i^T, d_i
-      the pose's change without inlier i, H^-1 J_i^T (I - L_i)^-1 r_i, with H = sum J_i^T J_i and
-      L_i = J_i H^-1 J_i^T the inlier's leverage; r_i r_i^T taken as |r_i|^2 / 2 in each image
-      direction, as an inlier's error may lie in either. A fit that rests on one inlier (a lone
-      near point pins the translation while the far ones fix the rotation: leverage 0.999) moves
-      far without it, and a wrong one is absorbed by the fit, its residual well under the RANSAC
-      threshold: on the star's replay (bench/vo_replay_calibration) single mismatched near points
-      put visual motions 3-20 cm off with Gauss-Newton sigmas of 3-6 mm.
-    The two are combined in the Gauss-Newton covariance's whitened frame, the jackknife's
-    eigenvalues there clamped at 1 from below: at least either along each of its eigen directions.
-    RTAB-Map (corelib/src/util3d_motion_estimation.cpp, estimateMotion3DTo2D) takes the spread of
-    the inliers' 3D errors instead, isotropic and not divided by their number.
-    """
-    n = len(J)
-    s2 = max(pixel_sigma_px ** 2, 1e-12)
-    H = np.einsum("nai,naj->ij", J, J) / s2
-    try:
-        H_inv = np.linalg.inv(H)
-    except np.linalg.LinAlgError:
-        return np.eye(6) * LOST_COVARIANCE
-    if not np.all(np.isfinite(H_inv)):
-        return np.eye(6) * LOST_COVARIANCE
-    H_inv = 0.5 * (H_inv + H_inv.T)
-    chi2 = float(np.sum(r * r)) / s2
-    gauss_newton = max(chi2 / max(2 * n - 6, 1), 1.0) * H_inv
-    if n <= 6:
-        return gauss_newton
-    L = np.einsum("nai,ij,nbj->nab", J, H_inv, J) / s2            # (N, 2, 2) leverages
-    # (I - L_i) is singular for an inlier the fit cannot do without: its influence kept finite
-    w, V = np.linalg.eigh(np.eye(2) - L)
-    inv_IL = np.einsum("nab,nb,ncb->nac", V, 1.0 / np.maximum(w, 1e-6), V)
-    # each inlier's residual taken in every image direction (its squared norm shared by u and v)
-    G = np.einsum("ij,naj,nab->nib", H_inv, J, inv_IL) / s2        # (N, 6, 2) pose change per residual
-    q = 0.5 * np.einsum("na,na->n", r, r)
-    jackknife = (n - 1) / n * np.einsum("nia,n,nja->ij", G, q, G)
-    # max(gauss_newton, jackknife) along the jackknife's directions, whitened by gauss_newton
-    try:
-        Lc = np.linalg.cholesky(gauss_newton)
-    except np.linalg.LinAlgError:
-        return gauss_newton + jackknife
-    Lc_inv = np.linalg.inv(Lc)
-    lam, U = np.linalg.eigh(Lc_inv @ jackknife @ Lc_inv.T)
-    cov = Lc @ (U * np.maximum(lam, 1.0)) @ U.T @ Lc.T
-    return 0.5 * (cov + cov.T)
 
 
 class VisualOdometry:
@@ -510,7 +456,17 @@ class VisualOdometry:
         skews[:, 1, 0], skews[:, 2, 0], skews[:, 2, 1] = d[:, 2], -d[:, 1], d[:, 0]
         J_pose[:, :, 3:] = R.T @ skews
         J = Ju @ J_pose                                 # (N, 2, 6)
-        rel = fit_covariance(J, r, self.params.min_pixel_sigma_px)
+        # each point's image-space information: the inverse of the pixel noise's variance
+        px2 = self.params.min_pixel_sigma_px ** 2
+        W = np.broadcast_to(np.eye(2) / max(px2, 1e-12), (n, 2, 2))
+        info = np.einsum("nai,nab,nbj->ij", J, W, J)
+        # the fit's variance factor (its normalised residuals' chi^2 per degree of freedom), at least 1
+        chi2 = float(np.einsum("na,nab,nb->", r, W, r))
+        scale = max(chi2 / max(2 * n - 6, 1), 1.0)
+        try:
+            rel = scale * np.linalg.inv(info)
+        except np.linalg.LinAlgError:
+            rel = np.eye(6) * LOST_COVARIANCE
         A = np.eye(6)
         A[:3, 3:] = -skew(p_cam - kf.T_odom_camera[:3, 3])
         cov = A @ kf.covariance @ A.T + rel
