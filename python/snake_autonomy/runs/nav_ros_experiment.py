@@ -322,9 +322,10 @@ def run_experiment(worlds: Sequence[Tuple[World, str]], seeds: Sequence[int], ou
 def _write(out: Path, rows, runs, robot, perception, wall_s) -> None:
     """table.md and summary.json, after every run: an interrupted experiment keeps what it did."""
     (out / "table.md").write_text(comparison_table(rows) + "\n")
+    same, compared = _same_count(rows)
     write_json_atomic(out / "summary.json", {
         "robot": robot, "perception": perception, "runs": len(rows),
-        "same_outcome": _same_count(rows)[0], "compared": _same_count(rows)[1],
+        "same_outcome": same, "compared": compared,
         "ros_successes": sum(success(r["ros"]) for r in runs),
         "batch_successes": sum(success(r["batch"]) for r in runs),
         "wall_s": round(wall_s, 1), "rows": rows, "details": runs})

@@ -198,6 +198,7 @@ class NodeCheck:
 
     def check(self, now: float) -> Tuple[Optional[str], Optional[str]]:
         """(a node that died, else None; why the launch stopped, else None)."""
+        dead, asked = None, False               # roslaunch's dead: asked once a check, when a pid is gone
         for name, pid in self.pids.items():
             if self.alive(pid):
                 continue
@@ -206,7 +207,8 @@ class NodeCheck:
                 self.pids[name] = again
                 self.suspect.pop(name, None)
                 continue
-            dead = self.seen_dead()
+            if not asked:
+                dead, asked = self.seen_dead(), True
             if dead is None:
                 return None, f"{name} gone with roslaunch"
             if name in dead:
