@@ -25,7 +25,6 @@
                                                     the generated worlds as world files and top
                                                     views: DIR/NAME.yaml, DIR/NAME.png
 """
-import glob
 import json
 import math
 import sys
@@ -41,15 +40,15 @@ from snake_autonomy.paths import config_path, robot_yaml
 from snake_autonomy.perception.block_classifier import BlockClassifier
 from snake_autonomy.perception.depth_traversability import DepthTraversability
 from snake_autonomy.perception.ground_region import precision_recall, traversable
-from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m, nav_config_path
+from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, nav_config_path
 from snake_autonomy.runs.nav_batch import DEPTH_MODELS, POSE_SOURCES, NavRun, NavRunSpec
 from snake_autonomy.runs.nav_experiment import (TIME_FACTOR, estimation_table, experiment_tasks, markdown_table,
-                                                outcome_table, random_corridor, run_nav_task, summarise, time_limit_s)
+                                                outcome_table, run_nav_task, summarise, time_limit_s)
 from snake_autonomy.runs.nav_ros_experiment import check_robot, comparison_table, run_experiment
+from snake_autonomy.runs.nav_world_set import generated_worlds, world_files
 from snake_autonomy.runs.render_set import render_scenes
 from snake_autonomy.runs.sweep_runner import open_executor, progress_bar, run_tasks
 from snake_autonomy.sim.config import SimConfig
-from snake_autonomy.sim.nav_worlds import barn_layout
 from snake_autonomy.sim.world_file import WorldError, load_world
 
 
@@ -307,13 +306,14 @@ def _experiment(args) -> int:
             print("nav experiment: --family and --world-files: one or the other", file=sys.stderr)
             return 2
         try:
-            worlds = _world_files(args.world_files)
+            worlds = world_files(args.world_files)
         except ValueError as e:
             print(f"nav experiment: --world-files: {e}", file=sys.stderr)
             return 2
     else:
         try:
-            worlds = [w for w, _ in _generated(args, args.family or "corridors")]
+            worlds = [w for w, _ in generated_worlds(args.family or "corridors", args.first_world, args.worlds,
+                                                     args.robot, args.config)]
         except ValueError as e:
             print(f"nav experiment: {e}", file=sys.stderr)
             return 1
@@ -385,52 +385,10 @@ WORLDS_CONVENTION = ("World indices: tune on worlds 0-19 (--first-world 0 --worl
                      "worlds from 100 up (--first-world 100), never looked at while tuning.")
 
 
-def _generated(args, family: str):
-    """[(world, BarnLayout or None)] of the family's worlds --first-world .. + --worlds - 1, for the
-    robot: corridors' gaps from its body width, barn's footprint from its nav config's
-    sampler.body_clearance_m and the body's length behind base_link from the robot model."""
-    if args.worlds < 1:
-        raise ValueError(f"--worlds must be >= 1, got {args.worlds}")
-    if args.first_world < 0:
-        raise ValueError(f"--first-world must be >= 0, got {args.first_world}")
-    indices = range(args.first_world, args.first_world + args.worlds)
-    ry = robot_yaml(args.robot)
-    model = _core.RobotModel.from_yaml(str(ry))
-    if family == "corridors":
-        body = max(head_width_m(ry), 2.0 * model.link_radius_m)
-        return [(random_corridor(k, body_width_m=body), None) for k in indices]
-    clearance = NavConfig.from_yaml(args.config or nav_config_path(args.robot)).sampler.body_clearance_m
-    length = model.head_length_m + model.num_joints * model.link_length_m + model.link_radius_m
-    layouts = [barn_layout(k, clearance, body_length_m=length) for k in indices]
-    return [(b.world, b) for b in layouts]
-
-
-def _world_files(pattern: str):
-    """The world files matching the glob, sorted, each named (its name, else its file's stem);
-    ValueError naming the glob or the file."""
-    files = sorted(glob.glob(pattern, recursive=True))
-    if not files:
-        raise ValueError(f"no file matches {pattern!r}")
-    worlds = []
-    for f in files:
-        try:
-            w = load_world(f)
-        except WorldError as e:
-            raise ValueError(str(e)) from None
-        w.name = w.name or Path(f).stem
-        worlds.append(w)
-    names = [w.name for w in worlds]
-    twice = sorted({n for n in names if names.count(n) > 1})
-    if twice:
-        raise ValueError(f"world names must differ (runs.csv and DIR/worlds/NAME.yaml use them); more than one "
-                         f"file is named {', '.join(twice)}: {', '.join(w.source for w in worlds if w.name in twice)}")
-    return worlds
-
-
 def _worlds(args) -> int:
     """nav worlds: the generated worlds as world files, with a top view each."""
     try:
-        pairs = _generated(args, args.family)
+        pairs = generated_worlds(args.family, args.first_world, args.worlds, args.robot, args.config)
     except ValueError as e:
         print(f"nav worlds: {e}", file=sys.stderr)
         return 1
@@ -489,8 +447,9 @@ def _ros_experiment(args) -> int:
             raise ValueError("--perception mono needs --classifier FILE")
         if args.world_files is not None and args.family is not None:
             raise ValueError("--family and --world-files: one or the other")
-        worlds = (_world_files(args.world_files) if args.world_files is not None
-                  else [w for w, _ in _generated(args, args.family or "corridors")])
+        worlds = (world_files(args.world_files) if args.world_files is not None
+                  else [w for w, _ in generated_worlds(args.family or "corridors", args.first_world, args.worlds,
+                                                       args.robot, args.config)])
         limits, _ = _time_limits(args, worlds)
     except ValueError as e:
         print(f"nav ros-experiment: {e}", file=sys.stderr)
