@@ -55,7 +55,6 @@ class _Goal:
         self.id, self.sent_s, self.duration_s = trajectory_id, sent_s, duration_s
         self.answered = False               # any status for it: the driver has it (running) or refused it
         self.final = None                   # its final TrajectoryStatus
-        self.given_up = False
 
 
 class TopicTrajectoryExecutor:
@@ -75,7 +74,9 @@ class TopicTrajectoryExecutor:
             TOPIC, JointTrajectory, queue_size=1, latch=False)
         self._lock = threading.Lock()
         self._goal = None                   # the last trajectory sent (_Goal), None before the first
-        self._given_up = deque(maxlen=16)   # ids of trajectories given up: their late statuses are ignored
+        # ids of trajectories given up, the goal's among them once it is given up (only the goal is ever
+        # given up, so it is the newest); their late statuses are ignored
+        self._given_up = deque(maxlen=16)
         self._count = 0
         self.aborted = ""
         self._head_z = math.nan
@@ -99,12 +100,12 @@ class TopicTrajectoryExecutor:
         trajectory_id, phase = str(msg.id), str(msg.phase)
         with self._lock:
             goal = self._goal
-            ours = goal is not None and goal.id == trajectory_id and not goal.given_up
+            given_up = trajectory_id in self._given_up
+            ours = goal is not None and goal.id == trajectory_id and not given_up
             if ours:
                 goal.answered = True
                 if phase in ENDED and goal.final is None:
                     goal.final = msg
-            given_up = trajectory_id in self._given_up
         if given_up and phase in ENDED:
             rospy.logwarn(f"{STATUS_TOPIC}: '{trajectory_id}' {phase} came after it was given up: ignored")
         elif not ours:
@@ -127,7 +128,7 @@ class TopicTrajectoryExecutor:
             goal = self._goal
             if goal is None:
                 return True
-            if goal.given_up:
+            if goal.id in self._given_up:
                 return True
             if goal.final is not None:
                 end = goal.final
@@ -145,7 +146,6 @@ class TopicTrajectoryExecutor:
                        f"{self.result_margin_s:.1f} s)")
             if not why:
                 return False
-            goal.given_up = True
             self._given_up.append(goal.id)
             self.aborted = why
         rospy.logerr(f"scout trajectory given up: {why}")
