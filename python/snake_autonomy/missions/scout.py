@@ -48,6 +48,10 @@ TRAJECTORY_PHASES = (RAISING, HOLDING, LOWERING)
 SCOUT_KEYS = ("height_m", "hold_s", "max_active", "seed")
 MAX_HEIGHT_M = 5.0
 MAX_HOLD_S = 3600.0
+#: A trajectory's end is waited for at most its duration (the last point's time_from_start) + this many
+#: seconds: the default of the mission node's ~scout_result_margin_s (nodes/scout_trajectory.py) and of
+#: the physics run's send_through_driver (runs/scout_execute.py).
+RESULT_MARGIN_S = 5.0
 
 
 @dataclass(frozen=True)

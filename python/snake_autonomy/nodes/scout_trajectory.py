@@ -25,6 +25,7 @@ import rospy
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from snake_autonomy.missions.scout import RESULT_MARGIN_S  # ~scout_result_margin_s's default
 from snake_autonomy.msg import TrajectoryStatus
 
 TOPIC = "driver/joint_trajectory"
@@ -32,7 +33,6 @@ STATUS_TOPIC = "driver/trajectory_status"
 POSE_TOPIC = "base_pose"            # base_link's pose: its z is the head's height
 ENDED = ("done", "aborted", "refused")
 ACCEPT_TIMEOUT_S = 3.0       # ~scout_accept_timeout_s: any status for a trajectory sent
-RESULT_MARGIN_S = 5.0        # ~scout_result_margin_s: its final status, beyond its duration
 
 
 def to_msg(trajectory, frame_id: str = "") -> JointTrajectory:

@@ -48,12 +48,14 @@
   `reason` says why in one line ("" when ok).
 """
 import dataclasses
+import math
 from typing import Callable, NamedTuple, Optional
 
 import mujoco
 import numpy as np
 
 from snake_autonomy import _core
+from snake_autonomy.missions.scout import RESULT_MARGIN_S
 from snake_autonomy.paths import config_path
 from snake_autonomy.planning.fbsr.pipe_scene import pipe_mjcf
 from snake_autonomy.planning.fbsr.plan_io import stage_samples
@@ -145,18 +147,25 @@ def verdict(measured: Measured) -> Verdict:
 
 
 def send_through_driver(plant: Plant, plan: Plan, sample_period_s: float,
-                        on_step: Callable[[float], None], period_s: float = DRIVER_PERIOD_S) -> None:
+                        on_step: Callable[[float], None], period_s: float = DRIVER_PERIOD_S,
+                        result_margin_s: float = RESULT_MARGIN_S) -> None:
     """The plan executed by the driver's trajectory execution on `plant`; on_step(t) after each
     10 ms step until the driver reports the trajectory done. ValueError with the driver's reasons
-    when it refuses or aborts the trajectory."""
-
-
+    when it refuses or aborts the trajectory. TimeoutError when the driver has not reported its end
+    within the trajectory's duration (the last point's time_from_start) + result_margin_s of plant
+    time from handing it over (a stuck or dead driver), as the mission node bounds its wait for a
+    final status (nodes/scout_trajectory.py, ~scout_result_margin_s)."""
+    if not (isinstance(result_margin_s, (int, float)) and math.isfinite(result_margin_s) and result_margin_s > 0):
+        raise ValueError(f"result_margin_s: must be a positive number of seconds, got {result_margin_s!r}")
     robot = plant.robot
     driver = LockStepDriver(robot, _core.GaitLibrary.from_yaml(str(config_path("gaits.yaml"))), plant,
                             load_driver_config(config_path("driver.yaml")))
     executor = DriverTrajectoryExecutor(driver.controller)
+    trajectory = plan_points(plan, sample_period_s)
+    duration_s = trajectory.duration_s
+    wait_s = duration_s + result_margin_s
     t0 = plant.time_s
-    why = executor.execute(plan_points(plan, sample_period_s), t0)
+    why = executor.execute(trajectory, t0)
     if why:
         raise ValueError(f"the driver refused the plan's trajectory: {why}")
     t = 0.0
@@ -167,6 +176,10 @@ def send_through_driver(plant: Plant, plan: Plan, sample_period_s: float,
         t += period_s
         if executor.finished(t0 + t):
             break
+        if t > wait_s:
+            raise TimeoutError(f"the driver reported no end of the plan's trajectory within {wait_s:.1f} s of "
+                               f"handing it over ({duration_s:.1f} s trajectory + {result_margin_s:.1f} s, "
+                               f"plant time)")
     if executor.aborted:
         raise ValueError(f"the driver aborted the plan's trajectory: {executor.aborted}")
 
