@@ -9,7 +9,10 @@ The design of RTAB-Map's frame-to-keyframe odometry: ORB features of the keyfram
 each (its depth pixel back-projected; features on a depth hole, 0 or NaN, or outside the depth range
 are dropped); every new frame's ORB features are matched to them (Hamming distance, Lowe's ratio
 test) and the camera's pose relative to the keyframe is PnP-RANSAC (OpenCV) on those 3D-2D matches,
-EPnP in the RANSAC loop, refined by Levenberg-Marquardt on the inliers. The current frame replaces
+EPnP in the RANSAC loop, refined by Levenberg-Marquardt on the inliers; then, as ORB-SLAM's RGB-D
+tracking does, each inlier's depth measured in the current frame enters a Gauss-Newton refinement
+as the difference of its measured and predicted inverse depth (std depth_inverse_sigma_per_m, Huber
+at depth_gate_sigmas), the matches classified again, at most four times. The current frame replaces
 the keyframe when the inliers fall below keyframe_min_inliers or below keyframe_min_overlap of the
 keyframe's 3D points, unless one of the last keyframe_memory keyframes places it with enough
 inliers: that one is the keyframe again (a view seen before adds no new keyframe error); when a
@@ -29,7 +32,8 @@ Covariance (x, y, z, then small rotations about the odometry frame's fixed x, y,
 geometry_msgs/PoseWithCovariance): the Gauss-Newton covariance of the PnP fit,
 (sum_i J_i^T W_i J_i)^-1, J_i an inlier's reprojection Jacobian with respect to the camera's pose
 and W_i the inverse of its image-space covariance, min_pixel_sigma_px^2 I (the keyframe's points
-taken as exact); scaled by the fit's variance factor (the residuals' chi^2 per degree of freedom) when above 1. Added
+taken as exact), plus each inlier's inverse depth (std depth_inverse_sigma_per_m) when the depth is
+in the fit; scaled by the fit's variance factor (the residuals' chi^2 per degree of freedom) when above 1. Added
 to the keyframe's covariance carried over the lever arm from the keyframe to the camera, so
 covariance grows with each keyframe change, as odometry drift does. The first keyframe's pose is the
 odometry frame's origin, with zero covariance. Each tracked result names the keyframe it was
@@ -85,6 +89,12 @@ class VoParams:
     depth_redetect_below: int = 50     # a frame with fewer features with depth than this is detected again
                                        # within the pixels that have depth (0: never); a far wall's strong
                                        # texture beyond max_depth_m took every feature
+    # the frame's own depth in the fit (ORB-SLAM's RGB-D tracking): each inlier with depth adds the
+    # difference of its measured and its predicted inverse depth, with this std (1/m; 0: the 2D fit
+    # alone); the D435i-like depth noise, std 0.0052 z^2 m, is 0.0052 1/m in inverse depth, and half a
+    # pixel's rounding on the grazing floor adds as much again
+    depth_inverse_sigma_per_m: float = 0.01
+    depth_gate_sigmas: float = 3.0     # a match whose inverse depth is further off than this many stds: outlier
 
     def problems(self, prefix: str = "vo") -> List[str]:
         """Every invalid value, each naming its key and value."""
@@ -116,7 +126,8 @@ _LIMITS = {
     "max_step_m": (float, 1e-3, 100.0), "max_step_deg": (float, 0.1, 180.0),
     "min_pixel_sigma_px": (float, 0.0, 100.0), "guided_radius_px": (float, 0.0, 10000.0),
     "keyframe_memory": (int, 0, 100),
-    "depth_redetect_below": (int, 0, 20000),
+    "depth_redetect_below": (int, 0, 20000), "depth_inverse_sigma_per_m": (float, 0.0, 10.0),
+    "depth_gate_sigmas": (float, 0.5, 100.0),
 }
 assert set(_LIMITS) == {f.name for f in fields(VoParams)}
 
@@ -294,7 +305,8 @@ class VisualOdometry:
                                      f"{p.min_inliers})", features=n_feat, matches=len(kf_idx))
         obj = kf.points[kf_idx]
         img = feats.uv[cur_idx]
-        solved = self._solve_pnp(obj, img)
+        depth = feats.depth[cur_idx]
+        solved = self._solve_pnp(obj, img, depth)
         if solved is None:
             return self._lost(stamp, "PnP-RANSAC found no pose", features=n_feat, matches=len(kf_idx))
         rvec, tvec, inl = solved
@@ -312,7 +324,7 @@ class VisualOdometry:
             return self._lost(stamp, f"pose jumped {step_m:.3f} m, {step_deg:.1f} deg from the last good one "
                                      f"(max_step_m {p.max_step_m:g}, max_step_deg {p.max_step_deg:g})",
                               features=n_feat, matches=len(kf_idx), inliers=len(inl))
-        cov, rel = self._covariance_of(T, kf, obj[inl], img[inl], rvec, tvec)
+        cov, rel = self._covariance_of(T, kf, obj[inl], img[inl], rvec, tvec, depth[inl])
         return T, cov, rel, len(inl), len(kf_idx)
 
     # ---------------------------------------------------------------------------------------------
@@ -409,8 +421,10 @@ class VisualOdometry:
             cur_idx.append(train)
         return np.array(kf_idx, int), np.array(cur_idx, int)
 
-    def _solve_pnp(self, obj: np.ndarray, img: np.ndarray):
-        """(rvec, tvec, inlier indices) of the keyframe in the camera, or None."""
+    def _solve_pnp(self, obj: np.ndarray, img: np.ndarray, depth: Optional[np.ndarray] = None):
+        """(rvec, tvec, inlier indices) of the keyframe in the camera, or None. depth (N,): the
+        frame's measured depth at each match (0: none); with depth_inverse_sigma_per_m > 0 the pose
+        is refined on it as well and a match whose depth disagrees is an outlier."""
         p = self.params
         ok, rvec, tvec, inliers = cv2.solvePnPRansac(
             obj, img, self.K, None, iterationsCount=p.ransac_iterations,
@@ -421,9 +435,90 @@ class VisualOdometry:
         inl = inliers.ravel()
         rvec, tvec = cv2.solvePnPRefineLM(obj[inl], img[inl], self.K, None, rvec, tvec)
         # the refined pose's inliers (the refinement can move points across the threshold)
-        residual = self._residuals(obj, img, rvec, tvec)
-        inl = np.nonzero(np.hypot(residual[:, 0], residual[:, 1]) <= p.ransac_reprojection_px)[0]
+        inl = self._inliers(obj, img, None, rvec, tvec)
+        if depth is None or p.depth_inverse_sigma_per_m <= 0:
+            return rvec, tvec, inl
+        # ORB-SLAM's pose optimisation: fit, classify the matches again, at most four times; the
+        # 2D fit's translation along the view is weak (far points), so the first fit with depth is
+        # on the 2D inliers, before any of them is judged by its depth
+        for _ in range(4):
+            if len(inl) < 6:
+                break
+            rvec, tvec = self._refine_with_depth(obj[inl], img[inl], depth[inl], rvec, tvec)
+            again = self._inliers(obj, img, depth, rvec, tvec)
+            if np.array_equal(again, inl):
+                break
+            inl = again
         return rvec, tvec, inl
+
+    def _inliers(self, obj, img, depth, rvec, tvec) -> np.ndarray:
+        """Indices of the matches within ransac_reprojection_px and, given depth, whose inverse
+        depth is within depth_gate_sigmas stds of the predicted one (those without depth pass)."""
+        p = self.params
+        r = self._residuals(obj, img, rvec, tvec)
+        good = np.hypot(r[:, 0], r[:, 1]) <= p.ransac_reprojection_px
+        if depth is not None:
+            z = obj @ cv2.Rodrigues(rvec)[0][2] + float(np.ravel(tvec)[2])
+            with np.errstate(divide="ignore", invalid="ignore"):
+                off = np.abs(1.0 / depth - 1.0 / np.where(z > 1e-6, z, np.nan))
+            good &= (depth <= 0) | (off <= p.depth_gate_sigmas * p.depth_inverse_sigma_per_m)
+        return np.nonzero(good)[0]
+
+    def _refine_with_depth(self, obj, img, depth, rvec, tvec, iterations: int = 10):
+        """rvec, tvec minimising the reprojection errors (std min_pixel_sigma_px) and, for the
+        points with depth, the differences of measured and predicted inverse depth (std
+        depth_inverse_sigma_per_m), each point's whitened 2D error and its inverse depth's under a
+        Huber loss at depth_gate_sigmas (ORB-SLAM's robust kernel: one wrong depth must not drag
+        the fit): iteratively reweighted Gauss-Newton on x_c -> x_c + v + w x x_c (the points in
+        the camera), a step kept only when it lowers the loss."""
+        p, K = self.params, self.K
+        R, t = cv2.Rodrigues(rvec)[0], np.ravel(tvec).astype(np.float64)
+        w_px, w_d = 1.0 / max(p.min_pixel_sigma_px, 1e-3), 1.0 / p.depth_inverse_sigma_per_m
+        delta = p.depth_gate_sigmas
+        has = depth > 0
+        inv_zm = 1.0 / depth[has]
+
+        def whitened(R, t):
+            """the points in the camera, their depths, whitened 2D errors (N, 2) and inverse depth errors"""
+            x = obj @ R.T + t
+            z = np.maximum(x[:, 2], 1e-6)
+            uv = np.column_stack([K[0, 0] * x[:, 0] / z + K[0, 2], K[1, 1] * x[:, 1] / z + K[1, 2]])
+            return x, z, w_px * (uv - img), w_d * (1.0 / z[has] - inv_zm)
+
+        def loss(e_uv, e_d):
+            s = np.concatenate([np.hypot(e_uv[:, 0], e_uv[:, 1]), np.abs(e_d)])
+            return float(np.sum(np.where(s <= delta, s * s, 2 * delta * s - delta * delta)))
+
+        x, z, e_uv, e_d = whitened(R, t)
+        cost = loss(e_uv, e_d)
+        for _ in range(iterations):
+            # gradients of u, v and 1/z with respect to x_c; with respect to w: x_c x gradient
+            gu = np.column_stack([K[0, 0] / z, np.zeros_like(z), -K[0, 0] * x[:, 0] / z ** 2])
+            gv = np.column_stack([np.zeros_like(z), K[1, 1] / z, -K[1, 1] * x[:, 1] / z ** 2])
+            gd = np.zeros((len(e_d), 3))
+            gd[:, 2] = -1.0 / z[has] ** 2
+            # Huber's weights (square roots) per point's 2D error and per inverse depth
+            s_uv = np.hypot(e_uv[:, 0], e_uv[:, 1])
+            r_uv = np.sqrt(np.minimum(1.0, delta / np.maximum(s_uv, 1e-12)))
+            r_d = np.sqrt(np.minimum(1.0, delta / np.maximum(np.abs(e_d), 1e-12)))
+            J = np.vstack([np.column_stack([gu, np.cross(x, gu)]) * (w_px * r_uv)[:, None],
+                           np.column_stack([gv, np.cross(x, gv)]) * (w_px * r_uv)[:, None],
+                           np.column_stack([gd, np.cross(x[has], gd)]) * (w_d * r_d)[:, None]])
+            e = np.concatenate([e_uv[:, 0] * r_uv, e_uv[:, 1] * r_uv, e_d * r_d])
+            try:
+                step = -np.linalg.solve(J.T @ J, J.T @ e)
+            except np.linalg.LinAlgError:
+                break
+            dR = cv2.Rodrigues(step[3:])[0]
+            R_new, t_new = dR @ R, dR @ t + step[:3]
+            x_new, z_new, e_uv_new, e_d_new = whitened(R_new, t_new)
+            cost_new = loss(e_uv_new, e_d_new)
+            if cost_new >= cost:
+                break
+            R, t, x, z, e_uv, e_d, cost = R_new, t_new, x_new, z_new, e_uv_new, e_d_new, cost_new
+            if np.linalg.norm(step) < 1e-9:
+                break
+        return cv2.Rodrigues(R)[0], t.reshape(3, 1)
 
     def _project(self, obj, rvec, tvec) -> np.ndarray:
         """(N, 2) pixels of the points obj (N, 3) seen from the pose rvec, tvec (OpenCV's)."""
@@ -433,8 +528,9 @@ class VisualOdometry:
     def _residuals(self, obj, img, rvec, tvec) -> np.ndarray:
         return self._project(obj, rvec, tvec) - img
 
-    def _covariance_of(self, T: np.ndarray, kf: _Keyframe, obj, img, rvec, tvec):
-        """The pose's covariance (see the module's docstring) and the PnP fit's part of it."""
+    def _covariance_of(self, T: np.ndarray, kf: _Keyframe, obj, img, rvec, tvec, depth=None):
+        """The pose's covariance (see the module's docstring) and the PnP fit's part of it; depth
+        (the inliers' measured depth, 0: none) adds each one's inverse depth when it is in the fit."""
         K, R, p_cam = self.K, T[:3, :3], T[:3, 3]
         r = self._residuals(obj, img, rvec, tvec)
         n = len(obj)
@@ -462,7 +558,16 @@ class VisualOdometry:
         info = np.einsum("nai,nab,nbj->ij", J, W, J)
         # the fit's variance factor (its normalised residuals' chi^2 per degree of freedom), at least 1
         chi2 = float(np.einsum("na,nab,nb->", r, W, r))
-        scale = max(chi2 / max(2 * n - 6, 1), 1.0)
+        n_rows = 2 * n
+        if depth is not None and self.params.depth_inverse_sigma_per_m > 0:
+            has = depth > 0
+            J_d = -J_pose[has, 2, :] / z[has, None] ** 2     # d(1/z)/d pose
+            w_d = self.params.depth_inverse_sigma_per_m ** -2
+            r_d = 1.0 / z[has] - 1.0 / depth[has]
+            info = info + w_d * J_d.T @ J_d
+            chi2 += w_d * float(r_d @ r_d)
+            n_rows += int(np.count_nonzero(has))
+        scale = max(chi2 / max(n_rows - 6, 1), 1.0)
         try:
             rel = scale * np.linalg.inv(info)
         except np.linalg.LinAlgError:
