@@ -312,8 +312,7 @@ def _experiment(args) -> int:
             return 2
     else:
         try:
-            worlds = [w for w, _ in generated_worlds(args.family or "corridors", args.first_world, args.worlds,
-                                                     args.robot, args.config)]
+            worlds = [w for w, _ in _generated(args, args.family or "corridors")]
         except ValueError as e:
             print(f"nav experiment: {e}", file=sys.stderr)
             return 1
@@ -385,10 +384,15 @@ WORLDS_CONVENTION = ("World indices: tune on worlds 0-19 (--first-world 0 --worl
                      "worlds from 100 up (--first-world 100), never looked at while tuning.")
 
 
+def _generated(args, family: str):
+    """generated_worlds of `family` for the parsed --first-world, --worlds, --robot and --config."""
+    return generated_worlds(family, args.first_world, args.worlds, args.robot, args.config)
+
+
 def _worlds(args) -> int:
     """nav worlds: the generated worlds as world files, with a top view each."""
     try:
-        pairs = generated_worlds(args.family, args.first_world, args.worlds, args.robot, args.config)
+        pairs = _generated(args, args.family)
     except ValueError as e:
         print(f"nav worlds: {e}", file=sys.stderr)
         return 1
@@ -448,8 +452,7 @@ def _ros_experiment(args) -> int:
         if args.world_files is not None and args.family is not None:
             raise ValueError("--family and --world-files: one or the other")
         worlds = (world_files(args.world_files) if args.world_files is not None
-                  else [w for w, _ in generated_worlds(args.family or "corridors", args.first_world, args.worlds,
-                                                       args.robot, args.config)])
+                  else [w for w, _ in _generated(args, args.family or "corridors")])
         limits, _ = _time_limits(args, worlds)
     except ValueError as e:
         print(f"nav ros-experiment: {e}", file=sys.stderr)
