@@ -283,3 +283,28 @@ def test_body_sweep_keeps_the_body_on_known_cells_when_asked():
     assert sweep.check(back, m, np.eye(4), known=True).free_m < 0.1             # the tail backs into the unseen
     m.mark_body(body - [0.15, 0.0], 0.045)         # the body lay there before (its track)
     assert sweep.check(back, m, np.eye(4), known=True).free_m == pytest.approx(0.1)
+
+
+def test_the_simulators_truth_map_sets_every_cell_the_views_never_showed(root):
+    """map.source truth (a diagnostic): the layered planner's local map is the world's, occupied at an
+    obstacle behind the camera that no view shows, free elsewhere, whatever the view says."""
+    from shapely.geometry import Point
+    from snake_autonomy.planning.rectilinear.nav_loop import NavLoop
+    from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
+    cfg = NavConfig.from_yaml(root / "config" / "nav_layered.yaml")
+    cfg = dataclasses.replace(cfg, map=dataclasses.replace(cfg.map, source="truth"))
+    world = ObstacleMap(Point(-0.6, 0.0).buffer(0.1))             # behind the robot: never in view
+    loop = NavLoop(cfg, 0.09, lambda img: np.zeros((K.height, K.width), bool), goal_xy=(2.0, 0.0),
+                   on_no_free_arc="back_off", body=COBRA, obstacle_map=world)
+    frame = np.ones((cfg.intrinsics.height, cfg.intrinsics.width), np.float32)
+    base = np.eye(4)
+    base[2, 3] = 0.046
+    loop.on_pose(0.0, base)
+    loop.on_frame(0.0, frame)                                      # the view shows no floor at all
+    loop.tick(0.0)
+    m = loop.planner.map
+    assert m.distance(np.array([[-0.6, 0.0]]))[0] == 0.0           # the obstacle's cells: occupied
+    assert m.seen_free(np.array([[1.0, 0.5], [-0.6, 0.3]])).all()   # the rest: free
+    assert not (m.grid() == UNKNOWN).any()
+    with pytest.raises(ValueError, match="map.source: truth"):     # the robot's path has no world to give
+        NavLoop(cfg, 0.09, lambda img: img, goal_xy=(2.0, 0.0), body=COBRA)

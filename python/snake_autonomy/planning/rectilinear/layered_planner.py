@@ -55,7 +55,8 @@ class LayeredPlanner:
         self.recovery = Recovery(rp)
         self.progress = ProgressChecker(cfg.recovery.progress_m, cfg.recovery.progress_window_s)
         self.holding = False                 # the last replan chose to wait (the loop holds)
-        self.obstacle_map = None             # the loop's diagnostic map (map.source truth): not used here
+        self.obstacle_map = None             # map.source truth (the simulator's diagnostic): the world's
+                                             # obstacles, the local map set from them every replan
         p = self.sp
         self._arcs = candidate_arcs(p)
         # the head's footprint, growing from its own width to the body's reach over footprint_taper_m
@@ -72,6 +73,8 @@ class LayeredPlanner:
                goal_xy=None, goal_radius_m: float = 0.0) -> Replan:
         T_world_g = T_world_ground(pose)
         self.map.add_view(ground, self.intrinsics.K(), T_world_g @ np.asarray(T_ground_camera, float))
+        if self.obstacle_map is not None:             # map.source truth: the simulator's diagnostic
+            self.map.know(self.obstacle_map)
         kappa_now = self.follower.kappa_per_m
         body_now = self.sweep.body_now(kappa_now)
         half = 0.5 * self.sweep.geometry.width_m

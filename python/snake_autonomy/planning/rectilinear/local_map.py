@@ -82,6 +82,7 @@ class LocalMap:
         self.swept = np.zeros((self.n, self.n), bool)               # cells the body has lain on
         self._dist = self._unknown_dist = None
         self._cleared_key, self._cleared = None, None     # distance_clearing's field and the cells it cleared
+        self._known_key, self._known_occ = None, None     # know(): the window it was computed for, its cells
         self.updates = 0
 
     # --- placing the window ---
@@ -162,6 +163,23 @@ class LocalMap:
         ok = (ii >= 0) & (ii < self.n) & (jj >= 0) & (jj < self.n)
         self.swept[ii[ok], jj[ok]] = True
         self._unknown_dist = None
+
+    def know(self, world) -> None:
+        """The simulator's diagnostic (map.source truth): every cell of the window as the world has it,
+        occupied where an obstacle covers its centre's half cell, free elsewhere, whatever the views
+        showed. world: anything with distance((M, 2) points) -> (M,) metres to the nearest obstacle
+        (obstacle_map.ObstacleMap.from_world). Computed again only when the window rolls."""
+        if self.origin is None:
+            return
+        key = (float(self.origin[0]), float(self.origin[1]))
+        if self._known_key != key:
+            x, y = self.centres()
+            X, Y = np.meshgrid(x, y, indexing="ij")
+            d = np.asarray(world.distance(np.column_stack([X.ravel(), Y.ravel()]))).reshape(self.n, self.n)
+            self._known_occ, self._known_key = d <= 0.5 * self.params.cell_m, key
+        p = self.params
+        self.log_odds[:] = np.where(self._known_occ, p.max_log_odds, p.min_log_odds)
+        self._dist = self._unknown_dist = None
 
     @staticmethod
     @functools.lru_cache(maxsize=8)

@@ -123,8 +123,6 @@ class NavLoop:
             raise ValueError("map.source: truth is the simulator's diagnostic (the world's obstacles, given as "
                              "obstacle_map); a robot's planner maps the faces it sees: use faces or none"
                              if obstacle_map is None else "obstacle_map: given only with map.source truth")
-        if cfg.planner.kind == "layered" and obstacle_map is not None:
-            raise ValueError("map.source truth: the layered planner maps what its views show (local_map)")
         self.planner = make_planner(dataclasses.replace(cfg, follower=follower), head_width_m, body)
         if obstacle_map is not None:
             self.planner.obstacle_map = obstacle_map
