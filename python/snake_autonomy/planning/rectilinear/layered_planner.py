@@ -72,9 +72,11 @@ class LayeredPlanner:
     def replan(self, t_s: float, ground: np.ndarray, T_ground_camera: np.ndarray, pose,
                goal_xy=None, goal_radius_m: float = 0.0) -> Replan:
         T_world_g = T_world_ground(pose)
-        self.map.add_view(ground, self.intrinsics.K(), T_world_g @ np.asarray(T_ground_camera, float))
+        T_world_camera = T_world_g @ np.asarray(T_ground_camera, float)
         if self.obstacle_map is not None:             # map.source truth: the simulator's diagnostic
-            self.map.know(self.obstacle_map)
+            self.map.know(self.obstacle_map, T_world_camera)
+        else:
+            self.map.add_view(ground, self.intrinsics.K(), T_world_camera)
         kappa_now = self.follower.kappa_per_m
         body_now = self.sweep.body_now(kappa_now)
         half = 0.5 * self.sweep.geometry.width_m

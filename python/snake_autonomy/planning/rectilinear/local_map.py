@@ -164,13 +164,13 @@ class LocalMap:
         self.swept[ii[ok], jj[ok]] = True
         self._unknown_dist = None
 
-    def know(self, world) -> None:
-        """The simulator's diagnostic (map.source truth): every cell of the window as the world has it,
-        occupied where an obstacle covers its centre's half cell, free elsewhere, whatever the views
-        showed. world: anything with distance((M, 2) points) -> (M,) metres to the nearest obstacle
-        (obstacle_map.ObstacleMap.from_world). Computed again only when the window rolls."""
-        if self.origin is None:
-            return
+    def know(self, world, T_world_camera: np.ndarray) -> None:
+        """The simulator's diagnostic (map.source truth), in place of add_view: the window placed as a view
+        from T_world_camera places it, and every cell of it as the world has it, occupied where an
+        obstacle covers its centre's half cell, free elsewhere. world: anything with distance((M, 2)
+        points) -> (M,) metres to the nearest obstacle (obstacle_map.ObstacleMap.from_world). The cells
+        are computed again only when the window rolls."""
+        self._place(np.asarray(T_world_camera, float)[:2, 3])
         key = (float(self.origin[0]), float(self.origin[1]))
         if self._known_key != key:
             x, y = self.centres()
@@ -180,6 +180,7 @@ class LocalMap:
         p = self.params
         self.log_odds[:] = np.where(self._known_occ, p.max_log_odds, p.min_log_odds)
         self._dist = self._unknown_dist = None
+        self.updates += 1
 
     @staticmethod
     @functools.lru_cache(maxsize=8)
