@@ -74,8 +74,13 @@ class FusionParams:
     prior_position_sigma_m: float = 1e-3       # the first state's prior: pose given ...
     prior_angle_sigma_deg: float = 0.5
     prior_velocity_sigma_m_s: float = 0.5      # ... velocity unknown (zero, loosely)
-    prior_gyro_bias_sigma_rad_s: float = 5e-3  # biases: zero, within a few datasheet offsets
-    prior_accel_bias_sigma_m_s2: float = 0.1
+    # biases: zero. The gyro's within 1e-4 rad/s (0.006 deg/s): a gyro calibrated at rest (its zero-rate
+    # offset removed, as the simulated one starts at zero). The heading is unobservable from gravity, so
+    # the fused heading drifts by what the gyro bias estimate is off: with 5e-3 rad/s the estimate
+    # wandered to 2-9e-3 rad/s on the star mission and the heading 3-16 deg RMS, the raw gyro's 0.4-1.7 deg;
+    # with 1e-4 the APE RMSE median 21.1 -> 13.7 cm on held-out seeds 50-59 (docs/vo_error_sources.md)
+    prior_gyro_bias_sigma_rad_s: float = 1e-4
+    prior_accel_bias_sigma_m_s2: float = 0.1   # the accelerometer's: within a few datasheet offsets
     vo_min_sigma_m: float = 1e-3               # the visual pose's std is at least this ...
     vo_min_sigma_deg: float = 0.5              # ... and this (lower: the fused tilt follows the visual one
                                                # and gravity leaks into the dead-reckoning when tracking is lost)
