@@ -81,3 +81,38 @@ def test_refining_the_plane_drops_an_obstacles_foot_that_tilted_it():
     t_ref = tilt_deg(fit_ground_plane(noisy, DepthTraversabilityParams(refine_iterations=3),
                                       np.random.default_rng(1))[0])
     assert t_ref <= t_once + 0.05, (t_once, t_ref)
+
+
+def floor_depth(intr, T_gc) -> np.ndarray:
+    """The exact depth image of an empty floor seen from T_gc (the optical frame in the ground frame)."""
+    from snake_autonomy.perception.depth_traversability import plane_from_mount
+    n, d = plane_from_mount(T_gc)
+    v, u = np.mgrid[0:intr.height, 0:intr.width]
+    rays = np.dstack([(u - intr.cx) / intr.fx, (v - intr.cy) / intr.fy, np.ones(u.shape)])
+    dot = rays @ n
+    return np.where(dot < -1e-9, -d / np.where(dot < -1e-9, dot, -1.0), 0.0)
+
+
+def test_a_floor_whose_depth_ends_at_grazing_angles_ends_in_unknown_pixels(root):
+    """The 12-link robot's camera, 2.6 cm up, at the D435i depth stream's 385 px focal over an empty
+    floor: the D435i-like model leaves the floor without depth where neighbouring rows differ by 10 %
+    (about 1 m away). The region ends there, below pixels classify calls unknown; a wall in the same
+    place ends it below measured pixels."""
+    from snake_autonomy.perception.camera_model import CameraIntrinsics
+    from snake_autonomy.sim.depth_noise import DepthNoise, DepthNoiseConfig
+    cfg = NavConfig.from_yaml(str(root / "config" / "nav_chang_rectilinear.yaml"))
+    intr = CameraIntrinsics(640, 480, 385.0, 385.0, 320.0, 240.0)
+    T_gc = T_ground_camera(cfg.mount, 0.0255)
+    exact = floor_depth(intr, T_gc)
+    z = DepthNoise(DepthNoiseConfig(), intr.fx, np.random.default_rng(0))(exact)
+    seen = DepthTraversability(intr, T_gc, cfg.depth).classify(z)
+    col = seen.ground[:, 320]
+    top = int(np.argmin(col[::-1]))                       # ground rows from the bottom
+    assert 0 < top < intr.height
+    row = intr.height - 1 - top                           # the first pixel above the region
+    assert 0.5 < exact[row + 1, 320] < 1.6                # the floor's depth where the region ends
+    assert seen.unknown[row, 320] and not seen.unknown[intr.height - 1, 320]
+    walled = np.where(exact > 0.6, 0.6, exact)            # a wall 0.6 m ahead of the camera
+    wall = DepthTraversability(intr, T_gc, cfg.depth).classify(walled)
+    wtop = int(np.argmin(wall.ground[::-1, 320]))
+    assert wtop < top and not wall.unknown[intr.height - 1 - wtop, 320]

@@ -44,6 +44,25 @@ def test_local_map_marks_the_face_of_what_stands_ahead_and_frees_the_floor(disc_
     assert (grid == OCCUPIED).any() and (grid == FREE).any() and (grid == UNKNOWN).any()
 
 
+def test_local_map_marks_no_face_where_the_view_ends_unmeasured():
+    """The same image, its region ending at the same rows: below pixels the sensor measured as not
+    ground, a face; below pixels it did not measure (a depth camera's range, the grazing floor), none."""
+    mask = drawn_mask(discs=[(0.5, 0.0, 0.08)])
+    measured, unmeasured = LocalMap(), LocalMap()
+    measured.add_view(mask, K.K(), camera_at(), unknown=np.zeros_like(mask))
+    unmeasured.add_view(mask, K.K(), camera_at(), unknown=~mask)
+    near_side = np.array([[0.42, 0.0]])
+    assert measured.distance(near_side)[0] < 0.04
+    assert not (unmeasured.grid() == OCCUPIED).any()
+    assert unmeasured.seen_free(np.array([[0.3, 0.0]]))[0]         # the floor it saw is free all the same
+    # an obstacle nearer than the camera's minimum range has no depth: a region ending unmeasured that
+    # near is its face
+    near = drawn_mask(discs=[(0.22, 0.0, 0.05)])
+    close = LocalMap()
+    close.add_view(near, K.K(), camera_at(), unknown=~near)
+    assert close.distance(np.array([[0.17, 0.0]]))[0] < 0.04
+
+
 def test_local_map_clears_a_mark_that_later_views_show_as_floor(disc_map):
     m = disc_map
     face = np.array([[0.42, 0.0]])

@@ -229,7 +229,7 @@ class PlannerNode:
         cfg = dataclasses.replace(self.cfg, intrinsics=intr)
         robot = _core.RobotModel.from_yaml(self.robot_yaml)
         if self.perception == "depth":
-            perceive = DepthTraversability(intr, T_ground_camera(cfg.mount, robot.link_radius_m), cfg.depth)
+            perceive = DepthTraversability(intr, T_ground_camera(cfg.mount, robot.link_radius_m), cfg.depth).classify
         else:
             clf, margin = BlockClassifier.load(self.classifier), cfg.classifier.ground_margin
             perceive = lambda rgb: clf.traversable(rgb, margin)

@@ -19,14 +19,17 @@
    min_measured_fraction of its pixels measured is unknown. Growing from the bottom, a run of
    unknown cells joins the region when the first measured cell above it is ground (the floor nearer
    than the sensor's minimum range at the image's bottom, a hole in the floor) and ends it
-   otherwise (under an obstacle, or with nothing measured above).
+   otherwise (under an obstacle, or with nothing measured above). `classify` also returns the
+   unknown cells it did not join (ground_region.Traversability): a region ending at one ends where
+   the sensor stopped seeing (the floor's grazing angle beyond about 0.1 x camera height x focal:
+   0.96 m for a camera 2.5 cm up at a 385 px focal), not at an obstacle's face.
 """
 from dataclasses import dataclass
 from typing import List, Optional, Tuple
 
 import numpy as np
 
-from .ground_region import cell_counts, expand_cells, grow_from_bottom
+from .ground_region import Traversability, cell_counts, expand_cells, grow_from_bottom
 
 
 MIN_LOWER_POINTS = 200    # fewer measured points in the image's lower two thirds: the fit takes the whole image's
@@ -166,13 +169,20 @@ class DepthTraversability:
         return valid & hits & (np.abs(z - expected) < p.depth_tolerance * expected)
 
     def __call__(self, depth_m: np.ndarray) -> np.ndarray:
+        """The traversable region (H, W) bool."""
+        return self.classify(depth_m).ground
+
+    def classify(self, depth_m: np.ndarray) -> Traversability:
+        """The traversable region and the unknown pixels (cells with too little depth, not joined to it)."""
         p = self.params
         z = np.asarray(depth_m, float)
         ground = cell_counts(self.ground_mask(z), p.block_px)
         measured = cell_counts(z > 0, p.block_px)
         unknown = measured < p.min_measured_fraction * p.block_px * p.block_px
         cells = ~unknown & (ground >= p.min_fraction * measured)
-        return expand_cells(grow_from_bottom(fill_unknown_below_ground(cells, unknown)), p.block_px, z.shape)
+        region = grow_from_bottom(fill_unknown_below_ground(cells, unknown))
+        return Traversability(expand_cells(region, p.block_px, z.shape),
+                              expand_cells(unknown & ~region, p.block_px, z.shape))
 
 
 def fill_unknown_below_ground(ground: np.ndarray, unknown: np.ndarray) -> np.ndarray:

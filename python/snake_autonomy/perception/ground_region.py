@@ -12,7 +12,18 @@ block_px is the paper's tiling; a smaller stride keeps the block's features but 
 edges stride_px apart. With 40 px tiles COBRA's mono runs failed where the segmentation render
 itself, put through the same tiles, fails (2 of 10 runs; 9 of 10 at a 20 px stride).
 """
+from typing import NamedTuple
+
 import numpy as np
+
+
+class Traversability(NamedTuple):
+    """A traversability image with what it could not judge: ground (H, W) bool, the traversable region;
+    unknown (H, W) bool, the pixels with no measurement (a depth camera's invalid pixels: beyond its
+    range, the floor at grazing angles, occlusion edges). Where a column's ground region ends at an
+    unknown pixel, the region's edge is where the sensor stopped seeing, not an obstacle's face."""
+    ground: np.ndarray
+    unknown: np.ndarray
 
 
 def window_origins(n_px: int, block_px: int, stride_px: int) -> np.ndarray:

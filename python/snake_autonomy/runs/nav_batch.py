@@ -290,7 +290,7 @@ class NavRun:
         if spec.perception == "depth":
             depth = DepthTraversability(self.cfg.intrinsics, T_ground_camera(self.cfg.mount, self.robot.link_radius_m),
                                         self.cfg.depth, seed=spec.seed)
-            return lambda f: depth(f.depth_m)
+            return lambda f: depth.classify(f.depth_m)
         if spec.perception == "mono":
             clf, margin = BlockClassifier.load(spec.classifier), self.cfg.classifier.ground_margin
             return lambda f: clf.traversable(f.rgb, margin)

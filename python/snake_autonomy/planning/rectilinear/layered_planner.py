@@ -70,13 +70,14 @@ class LayeredPlanner:
         return 2.0 * self.head_need_m
 
     def replan(self, t_s: float, ground: np.ndarray, T_ground_camera: np.ndarray, pose,
-               goal_xy=None, goal_radius_m: float = 0.0) -> Replan:
+               goal_xy=None, goal_radius_m: float = 0.0, unknown=None) -> Replan:
+        """unknown: the image's unmeasured pixels (ground_region.Traversability), None for a classifier's."""
         T_world_g = T_world_ground(pose)
         T_world_camera = T_world_g @ np.asarray(T_ground_camera, float)
         if self.obstacle_map is not None:             # map.source truth: the simulator's diagnostic
             self.map.know(self.obstacle_map, T_world_camera)
         else:
-            self.map.add_view(ground, self.intrinsics.K(), T_world_camera)
+            self.map.add_view(ground, self.intrinsics.K(), T_world_camera, unknown)
         kappa_now = self.follower.kappa_per_m
         body_now = self.sweep.body_now(kappa_now)
         half = 0.5 * self.sweep.geometry.width_m

@@ -1,14 +1,14 @@
 """The local map: one rolling occupancy grid of what the head camera's views showed, ROS-free.
 
-Every replan's traversability image (depth or monocular alike: a boolean ground mask) is laid on
-the floor through the camera's pose: the ground pixels are free observations of the cells they fall
-in, the obstacle faces (where a column's ground region, counted from the image's bottom row, ends
-below a non-ground pixel) occupied observations of the cells from the face to `face_depth_m` behind
-it along the ray (a face tells where an obstacle's near side is; what lies behind it stays unknown
-until a view shows it). Each cell keeps the log-odds of being occupied (the occupancy-grid update
-of Thrun et al., Probabilistic Robotics ch. 9, as costmap_2d's obstacle layer and OctoMap keep it),
-clamped so that later views can clear a cell a misjudged view marked: a cell is occupied above
-`occupied_log_odds`, free below `free_log_odds`, unknown between.
+Every replan's traversability image (depth or monocular alike: a boolean ground mask) is laid on the
+floor through the camera's pose: the ground pixels are free observations of the cells they fall in,
+the obstacle faces (where a column's ground region, counted from the image's bottom row, ends below
+a non-ground pixel the sensor measured: not where its view ends) occupied observations of the cells
+from the face to `face_depth_m` behind it along the ray (a face tells where an obstacle's near side
+is; what lies behind it stays unknown until a view shows it). Each cell keeps the log-odds of being
+occupied (the occupancy-grid update of Thrun et al., Probabilistic Robotics ch. 9, as costmap_2d's
+obstacle layer and OctoMap keep it), clamped so that later views can clear a cell a misjudged view
+marked: a cell is occupied above `occupied_log_odds`, free below `free_log_odds`, unknown between.
 
 The grid is a window of `size_m` around the robot, rolled (whole cells, the cells that enter are
 unknown) when the camera moves more than a quarter of the window from its centre. The checks ask it
@@ -51,11 +51,15 @@ class LocalMapParams:
                                       # field (it sees the floor from about 0.06 m ahead of the head)
     start_free_m: float = 0.25        # the robot is placed with this much free floor round its body: known
                                       # free at the first view (the camera has not seen beside or behind it)
+    view_end_m: float = 0.3           # a ground region ending at pixels the sensor did not measure (a depth
+                                      # camera's grazing floor, its range) further than this from the camera
+                                      # ends the view, no face; nearer, a face (an obstacle nearer than the
+                                      # camera's minimum range has no depth)
 
     def validate(self) -> List[str]:
         p = []
         for key in ("cell_m", "size_m", "free_range_m", "face_range_m", "hit_log_odds", "miss_log_odds",
-                    "max_log_odds", "blind_m"):
+                    "max_log_odds", "blind_m", "view_end_m"):
             if not getattr(self, key) > 0:
                 p.append(f"{key}: must be > 0, got {getattr(self, key)}")
         for key in ("face_depth_m", "start_free_m"):
@@ -122,8 +126,11 @@ class LocalMap:
         return self.origin[0] + a, self.origin[1] + a
 
     # --- the update ---
-    def add_view(self, ground: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray) -> None:
-        """One traversability image (True = ground) seen from T_world_camera (the floor is z = 0)."""
+    def add_view(self, ground: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray, unknown=None) -> None:
+        """One traversability image (True = ground) seen from T_world_camera (the floor is z = 0).
+        unknown: the pixels the sensor did not measure (ground_region.Traversability), or None: a column
+        whose ground region ends at one further than view_end_m has no face (the view stopped there, no
+        obstacle began)."""
         p = self.params
         T = np.asarray(T_world_camera, float)
         self._place(T[:2, 3])
@@ -138,6 +145,10 @@ class LocalMap:
         gc = ground[:, cols]
         run = np.where(gc.all(axis=0), h, np.argmin(gc[::-1], axis=0))      # ground rows from the bottom
         has_face = run < h
+        if unknown is not None:          # the pixel above the region's top unmeasured: the view's end there
+            ends = has_face & np.asarray(unknown, bool)[np.clip(h - 1 - run, 0, h - 1), cols]
+            reach, _, down = floor_hits(cols[ends], h - run[ends] - 0.5, K, T)
+            has_face[np.flatnonzero(ends)[~down | (reach > p.view_end_m)]] = False
         face_row = np.minimum(h - run - 0.5 + p.edge_px, h - 0.5)[has_face]
         faces, dirs = self._on_floor(cols[has_face], face_row, K, T, p.face_range_m)
         steps = np.arange(0.0, p.face_depth_m + 1e-9, 0.5 * p.cell_m)

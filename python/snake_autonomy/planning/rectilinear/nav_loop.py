@@ -40,6 +40,7 @@ from typing import Callable, Optional, Tuple
 
 import numpy as np
 
+from ...perception.ground_region import Traversability
 from .follower import BACK_OFF, RecedingHorizonFollower
 from .layered_planner import LayeredPlanner
 from .planner import NavPlanner, Replan, T_world_ground, ground_frame
@@ -97,11 +98,13 @@ class NavTick:
 
 
 class NavLoop:
-    def __init__(self, cfg, head_width_m: float, perception: Callable[[np.ndarray], np.ndarray],
+    def __init__(self, cfg, head_width_m: float, perception: Callable[[np.ndarray], object],
                  goal_xy: Optional[Tuple[float, float]] = None, goal_radius_m: float = 0.1,
                  on_no_free_arc: str = "hold", pose_timeout_s: float = 1.0, body=None,
                  frame_timeout_s: float = 5.0, obstacle_map=None):
-        """body: the robot's BodyGeometry (body_model.py: the guards' body stations).
+        """perception: a frame -> its traversability image (bool) or a ground_region.Traversability
+        (with the pixels it did not measure: DepthTraversability.classify).
+        body: the robot's BodyGeometry (body_model.py: the guards' body stations).
         pose_timeout_s, frame_timeout_s: the oldest pose / camera frame the loop still moves on.
         obstacle_map: with map.source truth only, the map given in advance (the simulator's
         diagnostic: ObstacleMap.from_world of the world's obstacles)."""
@@ -286,11 +289,13 @@ class NavLoop:
 
     def _replan(self, t_s: float, pose) -> NavTick:
         t_frame, image = self._frame
-        ground = np.asarray(self.perception(image), bool)
+        seen = self.perception(image)
+        ground, unknown = (seen.ground, seen.unknown) if isinstance(seen, Traversability) else (seen, None)
+        ground = np.asarray(ground, bool)
         T_wb = self.pose_at(t_frame)           # where the camera was when it took the frame
         pose = ground_frame(T_wb)
         T_gc = np.linalg.inv(T_world_ground(pose)) @ T_wb @ self.T_base_optical
-        r = self.planner.replan(t_s, ground, T_gc, pose, self.goal_xy, self.goal_radius_m)
+        r = self.planner.replan(t_s, ground, T_gc, pose, self.goal_xy, self.goal_radius_m, unknown)
         self.replans += 1
         if r.path_world is None:
             self.stops_no_free_arc += 1
