@@ -19,6 +19,18 @@ def test_failed_cases_are_named_with_their_reason(tmp_path, load_script):
                       "pytest: pkg.Case.test_errors: RuntimeError: boom"]
 
 
+def test_a_rosunit_failure_is_named_by_its_error_not_the_tracebacks_carets(tmp_path, load_script):
+    # rosunit writes no message: the error first, then the traceback, whose last line may be Python's carets
+    xml = tmp_path / "r.xml"
+    xml.write_text(
+        '<testsuite name="s"><testcase classname="__main__.T" name="test_a"><failure type="AssertionError">'
+        '3 != 1 : goal aborted\n  File "t.py", line 9, in test_a\n    if method() is not None:\n'
+        '       ^^^^^^^^\n</failure></testcase></testsuite>')
+    failed = []
+    assert load_script("run_tests").count_junit(xml, "rostest t.test", failed) == (1, 1, 0)
+    assert failed == ["rostest t.test: __main__.T.test_a: 3 != 1 : goal aborted"]
+
+
 def test_a_suite_without_cases_is_named_when_it_failed(tmp_path, load_script):
     xml = tmp_path / "r.xml"
     xml.write_text('<testsuite name="rostest_x" tests="3" failures="1" errors="1" skipped="0"/>')
