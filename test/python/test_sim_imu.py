@@ -1,7 +1,7 @@
 """The head camera's IMU (sim/imu.py; MuJoCo's gyro and accelerometer at the camera_link site of
-sim/mjcf.py): what sim_node publishes on camera/imu. At rest it reads gravity and no rotation, a
-positive yaw rate (REP 103: counter-clockwise seen from above) reads positive about the sensor's
-up axis, and the white noise is the configured density over the Nyquist band."""
+sim/mjcf.py): what sim_node publishes on camera/imu. At rest it reads gravity and no rotation but its
+zero-rate offset (drawn per seed), a positive yaw rate (REP 103: counter-clockwise seen from above)
+reads positive about the sensor's up axis, and the white noise is the configured density over the Nyquist band."""
 import math
 
 import mujoco
@@ -45,7 +45,9 @@ def test_at_rest_the_accelerometer_reads_gravity_up_and_the_gyro_nothing():
     np.testing.assert_allclose(accel.mean(axis=0), G * up_in_sensor, atol=0.02)
     assert np.linalg.norm(accel.mean(axis=0)) == pytest.approx(G, abs=0.02)
     cfg = world.config.imu
-    assert np.all(np.abs(gyro.mean(axis=0)) < 4 * cfg.gyro_std_rad_s / math.sqrt(len(samples)) + 1e-4)
+    offset = world.imu.gyro_offset_rad_s                     # the seed's zero-rate offset, BMI055-sized
+    assert 0 < np.abs(offset).max() < 3 * cfg.gyro_offset_deg_s * math.pi / 180
+    assert np.all(np.abs(gyro.mean(axis=0) - offset) < 4 * cfg.gyro_std_rad_s / math.sqrt(len(samples)) + 1e-4)
     np.testing.assert_allclose(gyro.std(axis=0), cfg.gyro_std_rad_s, rtol=0.2)
     np.testing.assert_allclose(accel.std(axis=0), cfg.accel_std_m_s2, rtol=0.2)
 
@@ -92,6 +94,28 @@ def test_the_bias_walks_as_configured():
     std = np.array(ends).std(axis=0)
     np.testing.assert_allclose(std[:3], cfg.gyro_bias_walk_rad_s_per_sqrt_s * math.sqrt(2.0), rtol=0.2)
     np.testing.assert_allclose(std[3:], cfg.accel_bias_walk_m_s2_per_sqrt_s * math.sqrt(2.0), rtol=0.2)
+
+
+def test_the_gyro_offset_is_drawn_per_seed_and_leaves_the_noise_sequence_as_it_was():
+    """The zero-rate offset: the same seed gives the same offset, other seeds others, spread as configured
+    (std per axis); the white noise and the walk are the same draws with or without it."""
+    cfg = ImuConfig(gyro_offset_deg_s=0.5)
+    offsets = np.array([ImuSensor(cfg, np.random.default_rng([seed, 7])).gyro_offset_rad_s for seed in range(400)])
+    again = ImuSensor(cfg, np.random.default_rng([3, 7])).gyro_offset_rad_s
+    assert np.array_equal(again, offsets[3]) and not np.array_equal(offsets[3], offsets[4])
+    np.testing.assert_allclose(offsets.std(axis=0), math.radians(0.5), rtol=0.15)
+    with_offset = ImuSensor(cfg, np.random.default_rng(5))
+    without = ImuSensor(ImuConfig(), np.random.default_rng(5))
+    assert np.array_equal(without.gyro_offset_rad_s, np.zeros(3))
+    for k in range(50):
+        a = with_offset.measure(0.005 * k, np.zeros(3), np.zeros(3))
+        b = without.measure(0.005 * k, np.zeros(3), np.zeros(3))
+        np.testing.assert_allclose(a.angular_velocity_rad_s - b.angular_velocity_rad_s, with_offset.gyro_offset_rad_s,
+                                   atol=1e-15)
+        assert np.array_equal(a.linear_acceleration_m_s2, b.linear_acceleration_m_s2)
+    for bad in (-0.1, math.nan, "1"):
+        with pytest.raises(ValueError, match=f"imu.gyro_offset_deg_s: must be a finite number >= 0, got {bad!r}"):
+            ImuSensor(ImuConfig(gyro_offset_deg_s=bad), np.random.default_rng(0))
 
 
 def test_without_the_imu_the_model_has_no_sensors():

@@ -11,7 +11,7 @@ import pytest
 
 from snake_autonomy.runs.batch import BatchRun, RunSpec
 from snake_autonomy.sim.feedback import make_feedback
-from snake_autonomy.sim.vo_feedback import START_S, OdometryCameraSettings, VoFeedback, odometry_anchor
+from snake_autonomy.sim.vo_feedback import OdometryCameraSettings, VoFeedback, odometry_anchor
 from snake_autonomy.sim.world import SimWorld, WorldSpec
 from snake_autonomy.transforms import make_transform, rot_x, rot_y, rot_z
 
@@ -51,15 +51,17 @@ def test_vo_refuses_a_bad_camera_setting_and_a_world_without_imu():
 
 
 def test_vo_batch_run_stays_near_the_truth_and_reports_ape_rpe_and_lost_time(tmp_path):
-    """Six simulated seconds of the star mission (the robot at rest, then sidewinding): the estimate
-    drives the mission, stays within 15 cm RMS of the plant's camera pose, and the report holds APE,
-    RPE, the lost intervals and their total, the frames at 10 Hz and their costs."""
+    """Six simulated seconds of the star mission (the robot at rest while the gyro is calibrated, then
+    sidewinding): the gyro calibrated at rest, the estimate drives the mission, stays within 15 cm RMS
+    of the plant's camera pose, and the report holds APE, RPE, the lost intervals and their total, the
+    frames at 10 Hz and their costs."""
     run = BatchRun(RunSpec(mission="star", seed=0, feedback="vo", time_limit_s=6.0))
     result = run.run()
     m = result.write(tmp_path / "run", plots=False)
     assert json.loads((tmp_path / "run" / "metrics.json").read_text())["vo"] == m["vo"]
     vo, ev = m["vo"], m["vio_evaluation"]
-    assert vo["frames"] == pytest.approx((m["sim_time_s"] - START_S) * 10, abs=2)
+    assert vo["frames"] == pytest.approx((m["sim_time_s"] - run.feedback.start_s) * 10, abs=2)
+    assert vo["gyro_calibration"].startswith("calibrated at rest") and vo["waiting"] == 0
     assert vo["tracked"] > 0.7 * vo["frames"]
     assert vo["failed"] == 0 and vo["ms_median"] > 0 and vo["render_ms_median"] > 0
     assert ev["alignment"] == "none"
@@ -74,12 +76,14 @@ def test_vo_batch_run_stays_near_the_truth_and_reports_ape_rpe_and_lost_time(tmp
 
 
 def test_vo_blanked_frames_lose_tracking_the_driver_holds_and_tracking_recovers(tmp_path):
-    """The lens covered from 2 to 4 s: the odometry reports lost (covariance 9999) and the gate
-    refuses it, so the driver's pose goes stale and the mission holds; the frames back, tracking
-    resumes and the report says how long it was lost."""
-    run = BatchRun(RunSpec(mission="star", seed=0, feedback="vo", time_limit_s=6.0))
+    """The lens covered from 2 to 4 s after the odometry's first frame (1.7 to 3.7 s into the motion):
+    the odometry reports lost (covariance 9999) and the gate refuses it, so the driver's pose goes
+    stale and the mission holds; the frames back, tracking resumes and the report says how long it
+    was lost."""
+    run = BatchRun(RunSpec(mission="star", seed=0, feedback="vo", time_limit_s=8.0))
     fb = run.feedback
-    fb.blackouts = [(2.0, 4.0)]
+    d = fb.start_s - 0.3                     # the times below count from a first frame at 0.3 s
+    fb.blackouts = [(d + 2.0, d + 4.0)]
     statuses = []
     status = fb.status
 
@@ -91,22 +95,23 @@ def test_vo_blanked_frames_lose_tracking_the_driver_holds_and_tracking_recovers(
     result = run.run()
     m = result.write(tmp_path / "run", plots=False)
     lost = [s for s in fb.samples if s[3]]
-    assert any(2.0 <= s[0] < 4.0 for s in lost)
-    assert all(s[3] for s in fb.samples if 2.15 <= s[0] < 4.0)          # every covered frame lost
-    assert not any(ok for t, ok, _ in statuses if 2.5 <= t < 4.0)       # the gate holds the driver
-    assert any(stale for t, stale in zip(result.decisions["t"], result.decisions["pose_stale"]) if 2.5 <= t < 4.0)
-    assert any(not s[3] for s in fb.samples if s[0] >= 4.5)             # tracking resumed
-    assert any(ok for t, ok, _ in statuses if t >= 5.0)
+    assert any(d + 2.0 <= s[0] < d + 4.0 for s in lost)
+    assert all(s[3] for s in fb.samples if d + 2.15 <= s[0] < d + 4.0)  # every covered frame lost
+    assert not any(ok for t, ok, _ in statuses if d + 2.5 <= t < d + 4.0)   # the gate holds the driver
+    decisions = zip(result.decisions["t"], result.decisions["pose_stale"])
+    assert any(stale for t, stale in decisions if d + 2.5 <= t < d + 4.0)
+    assert any(not s[3] for s in fb.samples if s[0] >= d + 4.5)         # tracking resumed
+    assert any(ok for t, ok, _ in statuses if t >= d + 5.0)
     assert m["vo"]["lost_s_total"] >= 1.8
     assert m["vio_evaluation"]["lost_s"] >= 1.8
-    assert any(i["start"] <= 2.2 and i["end"] >= 3.9 for i in m["vio_evaluation"]["loss_interval_list"])
+    assert any(i["start"] <= d + 2.2 and i["end"] >= d + 3.9 for i in m["vio_evaluation"]["loss_interval_list"])
 
 
 def test_vo_batch_run_is_deterministic_per_seed():
     """The same seed twice: the same estimates, losses and true path (renders, noise, RANSAC and the
     smoother repeat; nothing waits on the wall clock)."""
     def run():
-        r = BatchRun(RunSpec(mission="star", seed=1, feedback="vo", time_limit_s=2.5))
+        r = BatchRun(RunSpec(mission="star", seed=1, feedback="vo", time_limit_s=4.5))
         result = r.run()
         return np.array([np.r_[s[0], s[1], s[3]] for s in r.feedback.samples]), result.trajectory["x_true"]
     (a, ta), (b, tb) = run(), run()

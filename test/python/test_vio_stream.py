@@ -1,11 +1,14 @@
 """estimation/vio_stream.py: colour and depth paired by stamp, the IMU samples up to a frame fed before
 it, a frame waiting for its IMU sample at most imu_wait_s, a newer pair replacing an unprocessed one,
 an exception inside the fusion counted (failed) and published as lost at the last pose, lost
-intervals opened and closed. The fusion is a stand-in that records its calls."""
+intervals opened and closed, the first frame held until the IMU spans the rest window. The fusion is a
+stand-in that records its calls; but for the rest window's test, the rest window is off
+(fusion.rest_calibration_s 0)."""
 import numpy as np
 import pytest
 
-from snake_autonomy.estimation.vio_fusion import FusedResult
+from snake_autonomy.estimation.rest_calibration import GyroCalibration
+from snake_autonomy.estimation.vio_fusion import FusedResult, FusionParams
 from snake_autonomy.estimation.visual_odometry import LOST, LOST_COVARIANCE, OK
 from snake_autonomy.estimation.vio_stream import VioStream, lost_cause
 
@@ -13,6 +16,7 @@ from snake_autonomy.estimation.vio_stream import VioStream, lost_cause
 class FakeFusion:
     def __init__(self):
         self.calls, self.fail_at, self.lost_at, self.restart_at = [], set(), set(), set()
+        self.calibration = None
 
     def add_imu(self, t, g, a):
         self.calls.append(("imu", t))
@@ -39,8 +43,13 @@ class Clock:
 
 @pytest.fixture
 def stream():
+    return make_stream(0.0)
+
+
+def make_stream(rest_s):
     clock = Clock()
-    s = VioStream(np.diag([300.0, 300.0, 1.0]), np.eye(4), imu_wait_s=0.1, clock=clock)
+    s = VioStream(np.diag([300.0, 300.0, 1.0]), np.eye(4), fusion_params=FusionParams(rest_calibration_s=rest_s),
+                  imu_wait_s=0.1, clock=clock)
     s.fusion = FakeFusion()
     return s, clock
 
@@ -138,3 +147,25 @@ def test_smoother_restarts_are_counted_by_the_results_flag_not_its_reason(stream
     assert [o.smoother_restarted for o in outs] == [False, True, False, True]
     assert s.stats.restarts == 2
     assert s.stats.summary()["restarts"] == 2
+
+
+def test_the_first_frame_waits_until_the_imu_spans_the_rest_window_then_reports_the_calibration():
+    """fusion.rest_calibration_s 1: frames before the IMU samples reach 1 s back are held (waiting, not
+    dropped, their samples kept for the fusion); the first frame with the window behind it gets every
+    sample of the window, and the fusion's calibration is in the summary."""
+    s, clock = make_stream(1.0)
+    for k in range(301):                         # 1.5 s of IMU from t = 0
+        s.add_imu(0.005 * k, np.zeros(3), np.zeros(3))
+    for t in (0.5, 0.9):
+        frame(s, t)
+        assert s.step() is None
+    assert s.stats.waiting == 2 and s.stats.dropped == 0 and s.fusion.calls == []
+    s.fusion.calibration = GyroCalibration(np.zeros(3), 1e-4, True, "calibrated at rest: gyro mean ...")
+    frame(s, 1.2)
+    out = s.step()
+    assert out.ok and out.stamp == 1.2 and s.stats.frames == 1
+    imu = [t for kind, t in s.fusion.calls if kind == "imu"]
+    assert imu[0] <= 0.2 and imu[-1] == pytest.approx(1.2) and s.fusion.calls[-1] == ("frame", 1.2)
+    assert s.stats.summary()["gyro_calibration"].startswith("calibrated at rest")
+    frame(s, 1.3)                                 # later frames do not wait
+    assert s.step().stamp == 1.3 and s.stats.waiting == 2

@@ -21,6 +21,11 @@ restarted odometry frame moves nothing. The first tracked frame after a gap only
 one (it is reported lost). On the simulated star mission (sidewinding) this kept the estimate within
 metres where the odometry's poses taken as absolute priors ran away (a study; docs/estimation.md).
 
+The gyro's zero-rate offset is measured at rest before the first frame (rest_calibration.py: the
+mean rate over the last rest_calibration_s of IMU samples before it, the robot held still), and the
+first state's gyro bias prior is centred there; a window that moved, or too short, leaves the prior
+zero-mean and wide (uncalibrated_gyro_bias_sigma_rad_s), logged as a warning (self.calibration).
+
 The robot's motion model (motion_model.py: velocity_prior_sigma_m_s, height_prior_sigma_m, and
 standing still while lost: still_*) adds priors on every state.
 
@@ -43,6 +48,7 @@ Frames: the IMU frame is the body of the preintegration (sim/imu.py: camera_link
 y left, z up); T_imu_camera is the camera's optical frame in it. Covariances are 6x6 in
 geometry_msgs order: x, y, z, then small rotations about the world's x, y, z axes.
 """
+import logging
 import math
 from dataclasses import dataclass, fields
 from typing import List, Optional
@@ -54,6 +60,7 @@ from gtsam.symbol_shorthand import B, V, X
 from .config_section import load_section
 from .motion_model import GRAVITY_M_S2, MotionModel
 from .pose_remap import base_covariance
+from .rest_calibration import GyroCalibration, RestSettings, calibrate_gyro_at_rest
 from .visual_odometry import LOST, LOST_COVARIANCE, OK, VisualOdometry, VoParams, VoResult, rotation_angle_deg
 
 
@@ -74,13 +81,25 @@ class FusionParams:
     prior_position_sigma_m: float = 1e-3       # the first state's prior: pose given ...
     prior_angle_sigma_deg: float = 0.5
     prior_velocity_sigma_m_s: float = 0.5      # ... velocity unknown (zero, loosely)
-    # biases: zero. The gyro's within 1e-4 rad/s (0.006 deg/s): a gyro calibrated at rest (its zero-rate
-    # offset removed, as the simulated one starts at zero). The heading is unobservable from gravity, so
-    # the fused heading drifts by what the gyro bias estimate is off: with 5e-3 rad/s the estimate
-    # wandered to 2-9e-3 rad/s on the star mission and the heading 3-16 deg RMS, the raw gyro's 0.4-1.7 deg;
-    # with 1e-4 the APE RMSE median 21.1 -> 13.7 cm on held-out seeds 50-59 (docs/vo_error_sources.md)
+    # biases: the gyro's at its zero-rate offset measured at rest (rest_calibration_s, below), within 1e-4
+    # rad/s (0.006 deg/s). The heading is unobservable from gravity, so the fused heading drifts by what the
+    # gyro bias estimate is off: with 5e-3 rad/s the estimate wandered to 2-9e-3 rad/s on the star mission
+    # and the heading 3-16 deg RMS, the raw gyro's 0.4-1.7 deg; with 1e-4 the APE RMSE median 21.1 -> 13.7 cm
+    # on held-out seeds 50-59 (docs/vo_error_sources.md)
     prior_gyro_bias_sigma_rad_s: float = 1e-4
     prior_accel_bias_sigma_m_s2: float = 0.1   # the accelerometer's: within a few datasheet offsets
+    # the gyro calibrated at rest (rest_calibration.py) on the IMU samples of this long before the first
+    # frame (0: not at rest, the prior zero-mean: a gyro calibrated beforehand). The window's mean has a
+    # standard error of the noise density / sqrt(2 x window) (1.2e-4 rad/s over 2 s; the prior's std is
+    # at least that). At rest: the gyro's std within rest_gyro_std_rad_s on each axis (the BMI055's
+    # white noise: 2.4e-3 rad/s at 200 Hz), its mean within rest_gyro_rate_rad_s (the BMI055's offset:
+    # +-1 deg/s, 0.017 rad/s, per axis), the specific force within rest_accel_m_s2 of gravity
+    rest_calibration_s: float = 2.0
+    rest_gyro_std_rad_s: float = 0.01
+    rest_gyro_rate_rad_s: float = 0.05
+    rest_accel_m_s2: float = 0.3
+    # a window that moved (or too short): the gyro bias prior zero-mean within this (a few datasheet offsets)
+    uncalibrated_gyro_bias_sigma_rad_s: float = 5e-3
     vo_min_sigma_m: float = 1e-3               # the visual pose's std is at least this ...
     vo_min_sigma_deg: float = 0.5              # ... and this (lower: the fused tilt follows the visual one
                                                # and gravity leaks into the dead-reckoning when tracking is lost)
@@ -115,7 +134,8 @@ class FusionParams:
             elif f.name in ("vo_reset_after_lost", "gate_max_refused"):
                 if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                     out.append(f"{prefix}.{f.name}: must be an integer >= 0, got {v!r}")
-            elif f.name in ("velocity_prior_sigma_m_s", "height_prior_sigma_m", "still_gyro_rad_s"):
+            elif f.name in ("velocity_prior_sigma_m_s", "height_prior_sigma_m", "still_gyro_rad_s",
+                            "rest_calibration_s"):
                 if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                     out.append(f"{prefix}.{f.name}: must be a finite number >= 0, got {v!r}")
             elif isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
@@ -215,6 +235,10 @@ class VioFusion:
         self._est = None                             # the smoother's estimate, None once it was updated since
         self._motion = MotionModel(p.velocity_prior_sigma_m_s, p.height_prior_sigma_m, p.still_gyro_rad_s,
                                    p.still_accel_m_s2, p.still_sigma_m_s)
+        self._rest = RestSettings(p.rest_calibration_s, p.prior_gyro_bias_sigma_rad_s,
+                                  p.uncalibrated_gyro_bias_sigma_rad_s, p.rest_gyro_std_rad_s,
+                                  p.rest_gyro_rate_rad_s, p.rest_accel_m_s2)
+        self.calibration: Optional[GyroCalibration] = None    # the gyro's, at the first frame
 
     def add_imu(self, t_s: float, gyro_rad_s, accel_m_s2) -> None:
         self._imu.append((float(t_s), np.asarray(gyro_rad_s, float), np.asarray(accel_m_s2, float)))
@@ -330,13 +354,23 @@ class VioFusion:
         return ""
 
     def _first_frame(self, image, depth_m, stamp: float, mask) -> FusedResult:
-        """The first state: the given pose (or levelled on the mean specific force so far), velocity
-        and biases loosely zero; the visual odometry's frame is set to the world."""
+        """The first state: the given pose (or levelled on the mean specific force of the rest window,
+        or of every sample so far without one), velocity loosely zero, the gyro bias calibrated at rest
+        (rest_calibration_s) and the accelerometer's loosely zero; the visual odometry's frame is set
+        to the world."""
+        before = [s for s in self._imu if s[0] <= stamp]
+        window = self.params.rest_calibration_s
+        rest = [s for s in before if s[0] >= stamp - window] if window > 0 else before
+        span = stamp - before[0][0] if before else 0.0
+        self.calibration = calibrate_gyro_at_rest([s[1] for s in rest], [s[2] for s in rest], span, self._rest)
+        if window > 0 and not self.calibration.calibrated:
+            logging.getLogger(__name__).warning("vio: %s", self.calibration.detail)
         if self._initial is None:
-            if not self._imu:
+            if not rest:
                 raise ValueError("the first frame needs an initial IMU pose or IMU samples before it (levelling)")
-            self._initial = level_pose(np.mean([s[2] for s in self._imu], axis=0))
-        self._start(self._initial, np.zeros(3), gtsam.imuBias.ConstantBias(), stamp)
+            self._initial = level_pose(np.mean([s[2] for s in rest], axis=0))
+        bias = gtsam.imuBias.ConstantBias(np.zeros(3), self.calibration.bias_rad_s)
+        self._start(self._initial, np.zeros(3), bias, stamp)
         self._imu = [s for s in self._imu if s[0] > stamp]
         self.vo.reset(self._initial @ self.T_imu_camera)
         vo = self.vo.process(image, depth_m, stamp, mask)
@@ -366,7 +400,8 @@ class VioFusion:
         graph.add(gtsam.PriorFactorPose3(X(k), pose, gtsam.noiseModel.Diagonal.Sigmas(sigmas)))
         graph.add(gtsam.PriorFactorVector(V(k), np.asarray(velocity, float),
                                           gtsam.noiseModel.Isotropic.Sigma(3, p.prior_velocity_sigma_m_s)))
-        bias_sigmas = np.r_[[p.prior_accel_bias_sigma_m_s2] * 3, [p.prior_gyro_bias_sigma_rad_s] * 3]
+        gyro_sigma = self.calibration.sigma_rad_s if self.calibration is not None else p.prior_gyro_bias_sigma_rad_s
+        bias_sigmas = np.r_[[p.prior_accel_bias_sigma_m_s2] * 3, [gyro_sigma] * 3]
         graph.add(gtsam.PriorFactorConstantBias(B(k), bias, gtsam.noiseModel.Diagonal.Sigmas(bias_sigmas)))
         values.insert(X(k), pose)
         values.insert(V(k), np.asarray(velocity, float))

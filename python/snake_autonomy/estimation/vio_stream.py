@@ -10,7 +10,9 @@ reports (frames, lost intervals, time per frame).
 
 A frame waits for the IMU sample at or after its stamp (the fusion integrates up to the frame) at
 most `imu_wait_s`; then it is processed with the samples there are. A newer image pair replaces one
-not processed yet (counted as dropped): the odometry keeps up with the newest frame.
+not processed yet (counted as dropped): the odometry keeps up with the newest frame. The first frame
+waits (counted as waiting) until the IMU samples before it span the fusion's rest window
+(FusionParams.rest_calibration_s: the robot held still while the gyro is calibrated, rest_calibration.py).
 
 The pose published is the IMU's frame (camera_link: x forward, z up; RTAB-Map's odometry child
 frame), T_world_imu; its covariance (geometry_msgs order, about the world's axes) is the fusion's,
@@ -25,7 +27,7 @@ from typing import List, Optional, Tuple
 
 import numpy as np
 
-from .vio_fusion import FusedResult, VioFusion
+from .vio_fusion import FusedResult, FusionParams, VioFusion
 from .visual_odometry import LOST_COVARIANCE
 
 STAMP_TOLERANCE_S = 1e-3      # a colour and a depth image within this of each other are one frame
@@ -55,6 +57,8 @@ class StreamStats:
     ms: List[float] = field(default_factory=list)        # the last 100 frames' times
     lost_causes: Counter = field(default_factory=Counter)   # lost frames by cause (lost_cause)
     restarts: int = 0                 # the fusion's smoother restarted (an indeterminate system)
+    waiting: int = 0                  # first frames held until the IMU spanned the rest window
+    gyro_calibration: str = ""        # the fusion's calibration at rest (or why there was none)
 
     def lost_now(self) -> bool:
         return bool(self.lost_intervals) and self.lost_intervals[-1][1] is None
@@ -67,7 +71,7 @@ class StreamStats:
                 "dropped": self.dropped, "lost_intervals": len(self.lost_intervals),
                 "lost_s_total": float(total_lost), "ms_median": float(np.median(ms)),
                 "ms_p90": float(np.percentile(ms, 90)), "ms_last": float(ms[-1]), "last_error": self.last_error,
-                "restarts": self.restarts,
+                "restarts": self.restarts, "waiting": self.waiting, "gyro_calibration": self.gyro_calibration,
                 "lost_causes": "; ".join(f"{n} {cause}" for cause, n in self.lost_causes.most_common())}
 
 
@@ -83,6 +87,7 @@ class VioStream:
     def __init__(self, K, T_imu_camera, vo_params=None, fusion_params=None, imu_wait_s: float = 0.1,
                  clock=time.perf_counter):
         self.fusion = VioFusion(K, T_imu_camera, vo_params, fusion_params)
+        self.rest_s = (fusion_params or FusionParams()).rest_calibration_s
         self.imu_wait_s = float(imu_wait_s)
         self.clock = clock
         self.stats = StreamStats()
@@ -133,6 +138,8 @@ class VioStream:
             if self._last_imu_t < stamp and self.clock() - paired < self.imu_wait_s:
                 return None
             self._pending = None
+            if self._last_frame_t == -np.inf and self.rest_s > 0 and self._waits(stamp):
+                return None
             samples = [s for s in self._imu if s[0] <= stamp]
             self._imu = [s for s in self._imu if s[0] > stamp]
         if stamp <= self._last_frame_t or (not samples and self._last_frame_t == -np.inf):
@@ -151,7 +158,20 @@ class VioStream:
             self.stats.last_error = f"{type(exc).__name__}: {exc}"
             result = None
         ms = 1000.0 * (self.clock() - t0)
+        if self.fusion.calibration is not None:
+            self.stats.gyro_calibration = self.fusion.calibration.detail
         return self._account(stamp, result, ms)
+
+    def _waits(self, stamp: float) -> bool:
+        """Whether the first frame (at stamp) waits: no IMU sample rest_s or more before it. The samples
+        older than the window but the last of them are let go. Called with the lock held."""
+        start = stamp - self.rest_s
+        older = [s for s in self._imu if s[0] <= start]
+        self._imu = older[-1:] + [s for s in self._imu if s[0] > start]
+        if older:
+            return False
+        self.stats.waiting += 1
+        return True
 
     def _account(self, stamp: float, result: Optional[FusedResult], ms: float) -> Optional[StreamOutput]:
         s = self.stats

@@ -12,13 +12,17 @@ Publishes   odom (nav_msgs/Odometry, one per processed frame: header.frame_id ~o
             lost; twist: the linear velocity in camera_link, no covariance given),
             /diagnostics ("vio: visual-inertial odometry", every second: frames, tracked, lost,
             failed, dropped, lost intervals and their total, lost frames by cause, smoother restarts,
-            ms per frame median / p90 / last; WARN while lost, ERROR before the first frame or after a
-            failure in the last second). The log says when tracking is lost and why, and when it resumes.
+            first frames waiting for the rest window, the gyro's calibration at rest, ms per frame
+            median / p90 / last; WARN while lost, ERROR before the first frame or after a failure in the
+            last second). The log says when tracking is lost and why, and when it resumes; and the
+            gyro's calibration at rest (a warning with the measured figures when the robot moved).
             No TF: camera_link already hangs from base_link (the URDF), and the pose remapper turns odom
             into base_pose.
 Params      ~config (config/estimation.yaml: vo: and fusion:), ~odom_frame, ~camera_frame,
             ~imu_wait_s (0.1: how long a frame waits for the IMU sample at its stamp).
 No exception ends the worker: a frame that fails is counted (failed), reported, and published as lost.
+Hold the robot still for the fusion's rest window (fusion.rest_calibration_s) after the camera starts:
+the gyro's zero-rate offset is measured then, and the first frame waits for it.
 """
 import threading
 
@@ -60,6 +64,7 @@ class VioNode:
         self.stream = None                   # made on the first camera_info
         self.bad_inputs, self.failed_seen = 0, 0
         self.was_ok = True
+        self.calibration_logged = False
         self._wake = threading.Event()
         self.pub = rospy.Publisher("odom", Odometry, queue_size=20)
         self.updater = diagnostic_updater.Updater()
@@ -81,7 +86,8 @@ class VioNode:
             return
         self.stream = VioStream(K, make_transform(R_LINK_OPTICAL), self.vo_params, self.fusion_params,
                                 self.imu_wait_s)
-        rospy.loginfo(f"vio: camera {msg.width}x{msg.height}, fx {K[0, 0]:.1f} px; estimating")
+        rospy.loginfo(f"vio: camera {msg.width}x{msg.height}, fx {K[0, 0]:.1f} px; estimating after "
+                      f"{self.fusion_params.rest_calibration_s:g} s at rest (the gyro's calibration)")
 
     def on_imu(self, msg):
         if self.stream is not None:
@@ -129,7 +135,13 @@ class VioNode:
                 self.bad_input(f"worker: {type(exc).__name__}: {exc}")
 
     def log_change(self, out):
-        """The log says when tracking is lost and why, when it resumes, and every smoother restart."""
+        """The log says when tracking is lost and why, when it resumes, every smoother restart, and the
+        gyro's calibration at rest once."""
+        calibration = self.stream.fusion.calibration
+        if calibration is not None and not self.calibration_logged:
+            self.calibration_logged = True
+            quiet = calibration.calibrated or self.fusion_params.rest_calibration_s == 0
+            (rospy.loginfo if quiet else rospy.logwarn)(f"vio: {calibration.detail}")
         if out.smoother_restarted:
             rospy.logwarn(f"vio: {out.reason}")
         if out.ok != self.was_ok:

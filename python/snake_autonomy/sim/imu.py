@@ -18,8 +18,12 @@ the 200 Hz samples. The gyro's sample is the instant reading (the body's rate ch
 What it does to the true readings (config/sim.yaml imu:, ImuConfig), per axis and sample:
 - white noise of the datasheet's noise density over the sample's bandwidth: std = density x
   sqrt(rate_hz / 2) (the sensor's low-pass filter keeps the noise below the Nyquist frequency);
-- a bias that starts at zero (the zero-rate and zero-g offsets are what the robot's calibration,
-  or the estimator, removes) and walks: per sample a step of walk x sqrt(1 / rate_hz).
+- a bias that walks: per sample a step of walk x sqrt(1 / rate_hz). The gyro's starts at its
+  zero-rate offset, drawn once per sensor (normal, std gyro_offset_deg_s per axis) from a child of
+  the generator given (Generator.spawn: the noise sequence is the same whatever the offset), as a
+  real gyro's differs from one power-up to the next; the estimator calibrates it at rest
+  (estimation/rest_calibration.py). The accelerometer's starts at zero (its zero-g offset is not
+  modelled).
 Frame and units as REP 145 wants them: the sensor frame (camera_link, x forward, y left, z up),
 angular velocity in rad/s, linear acceleration in m/s^2 including gravity (at rest: +9.81 along
 the frame's up). Every random number comes from the generator given (the seed's "imu" stream).
@@ -48,12 +52,15 @@ class ImuConfig:
     # of MEMS IMUs of this class report (rad/s and m/s^2 per sqrt(s), i.e. per s x sqrt(Hz)).
     gyro_bias_walk_rad_s_per_sqrt_s: float = 2.0e-5
     accel_bias_walk_m_s2_per_sqrt_s: float = 4.0e-4
+    # the gyro's zero-rate offset at power-up: std of a normal draw per axis (deg/s; 0: none, a gyro
+    # calibrated beforehand). config/sim.yaml gives the BMI055's
+    gyro_offset_deg_s: float = 0.0
 
     def problems(self, prefix: str = "imu") -> List[str]:
         """Every invalid value, each naming its key."""
         out = []
         for key in ("rate_hz", "gyro_noise_density_deg_s_per_sqrt_hz", "accel_noise_density_ug_per_sqrt_hz",
-                    "gyro_bias_walk_rad_s_per_sqrt_s", "accel_bias_walk_m_s2_per_sqrt_s"):
+                    "gyro_bias_walk_rad_s_per_sqrt_s", "accel_bias_walk_m_s2_per_sqrt_s", "gyro_offset_deg_s"):
             v, need = getattr(self, key), ("> 0" if key == "rate_hz" else ">= 0")
             number = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
             if not number or v < 0 or (key == "rate_hz" and v == 0):
@@ -94,7 +101,9 @@ class ImuSensor:
         self.gyro_std, self.accel_std = config.gyro_std_rad_s, config.accel_std_m_s2
         self._walk_step = math.sqrt(1.0 / config.rate_hz) * np.array(
             [config.gyro_bias_walk_rad_s_per_sqrt_s] * 3 + [config.accel_bias_walk_m_s2_per_sqrt_s] * 3)
-        self.bias = np.zeros(6)                 # gyro (rad/s), accelerometer (m/s^2)
+        # the zero-rate offset from a child stream: the parent's draws (the noise) stay as they were
+        self.gyro_offset_rad_s = rng.spawn(1)[0].standard_normal(3) * config.gyro_offset_deg_s * DEG
+        self.bias = np.r_[self.gyro_offset_rad_s, np.zeros(3)]   # gyro (rad/s), accelerometer (m/s^2)
 
     def poll(self, plant) -> Optional[ImuSample]:
         """The plant's IMU sample when one fell due at its present time (the grid point within half a

@@ -18,10 +18,11 @@ was from the truth.
   camera_link's colour + depth at 320x240, 10 Hz, rendered apart from the planner's frames) and the
   head camera's 200 Hz IMU, through the same gate and remapper; the plant must carry the IMU
   (Plant(imu_in_head=imu_in_head("vo", params))) and be stepped by step_to, which stops the physics
-  at the IMU's sample times. The odometry frame is anchored to the world at its first frame (0.3 s,
-  the robot lying still). Latency config/sim.yaml vio.latency_s, as vio's. It needs something to
-  see: runs refuse it on a world whose floor_texture is not an odometry floor
-  (runs/nav_batch.NavRunSpec.check, sim/world_file.ODOMETRY_FLOOR_TEXTURES).
+  at the IMU's sample times. The odometry frame is anchored to the world at its first frame (2.3 s,
+  after the gyro's calibration at rest: VoFeedback.start_s; the robot lying still). Latency
+  config/sim.yaml vio.latency_s, as vio's. It needs something to see: runs refuse it on a world whose
+  floor_texture is not an odometry floor (runs/nav_batch.NavRunSpec.check,
+  sim/world_file.ODOMETRY_FLOOR_TEXTURES).
 
 Errors are measured at every pose delivered: base_link's position on the floor (x, y) and yaw
 against the plant's at the sample's stamp (vo: at the frame's world step, one 2 ms physics step after

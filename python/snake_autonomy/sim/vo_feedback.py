@@ -21,9 +21,12 @@ the IMU's samples do. A frame waits for the IMU sample at its stamp, as vio_node
 infinite: in lock-step that sample comes in the same world step).
 
 The odometry's frame: the fusion starts level on gravity, with zero yaw, at camera_link's first
-frame (as vio_node's), START_S into the run with the robot lying still. It is anchored to the world
-once, at that frame, by the camera's true position and heading then (the simulated RTAB-Map's
-odometry frame is the world's at the start, too); from then on only the estimate moves it.
+frame (as vio_node's), start_s into the run with the robot lying still: the IMU's samples are fed
+from REST_FROM_S (the plant has settled on the floor), and the first frame comes LEVELLING_S plus the
+fusion's rest window (fusion.rest_calibration_s: the gyro calibrated at rest) after that; the
+mission holds the robot until the first pose. It is anchored to the world once, at that frame, by
+the camera's true position and heading then (the simulated RTAB-Map's odometry frame is the world's
+at the start, too); from then on only the estimate moves it.
 
 blackouts: [(start_s, end_s)] of simulated time in which the frames are black with no depth (a
 covered lens), to test lost tracking.
@@ -49,10 +52,11 @@ from .pose_sample import PoseSample
 from .sensor_clock import SensorClock
 
 D435I_FOCAL_PX_AT_640 = 615.0         # the colour stream's focal length at 640 px wide
-#: the odometry's first frame (s of simulated time): the plant drops onto the floor in its first 40 ms
-#: (the specific force near zero, then a 30 m/s^2 jolt), and the fusion levels its first pose on the
-#: mean specific force before its first frame; LEVELLING_S of IMU samples before it are fed
-START_S, LEVELLING_S = 0.3, 0.1
+#: the IMU's samples are fed from REST_FROM_S (s of simulated time): the plant drops onto the floor in
+#: its first 40 ms (the specific force near zero, then a 30 m/s^2 jolt); the fusion levels its first pose
+#: on the mean specific force before its first frame and calibrates the gyro on the rest window before
+#: it: the first frame is LEVELLING_S plus that window after REST_FROM_S
+REST_FROM_S, LEVELLING_S = 0.2, 0.1
 
 
 @dataclass(frozen=True)
@@ -127,7 +131,7 @@ class VoFeedback:
 
     def __init__(self, world, robot, camera: OdometryCameraSettings = ODOMETRY_CAMERA,
                  estimation_config: Optional[str] = None, blackouts: Sequence[Tuple[float, float]] = (),
-                 start_s: float = START_S):
+                 start_s: Optional[float] = None):
         if world.imu is None:
             raise ValueError("feedback vo: the world samples no IMU (WorldSpec.sensors must hold 'imu')")
         params = world.params
@@ -140,17 +144,18 @@ class VoFeedback:
         self.camera = OdometryCamera(self.plant, link_in_base, camera,
                                      DepthNoise(params.config.depth_noise, camera.intrinsics().fx,
                                                 params.rng("depth_noise")))
+        fusion = load_fusion_params(path)
         self.stream = VioStream(self.camera.intrinsics.K(), make_transform(R_LINK_OPTICAL), load_vo_params(path),
-                                load_fusion_params(path), imu_wait_s=math.inf)
+                                fusion, imu_wait_s=math.inf)
         self.blackouts = [(float(a), float(b)) for a, b in blackouts]
-        self.start_s = float(start_s)
+        self.start_s = REST_FROM_S + LEVELLING_S + fusion.rest_calibration_s if start_s is None else float(start_s)
         self.T_world_odom: Optional[np.ndarray] = None
         self.samples: List[tuple] = []
         self._truth = {}                       # frame stamp -> camera_link's true 4x4
 
     def pose(self, out):
         for s in list(out.imu_between) + ([out.imu] if out.imu is not None else []):
-            if s.t_s >= self.start_s - LEVELLING_S:
+            if s.t_s >= REST_FROM_S:
                 self.stream.add_imu(s.t_s, s.angular_velocity_rad_s, s.linear_acceleration_m_s2)
         if out.t_s < self.start_s - 1e-9:
             return None
