@@ -22,8 +22,9 @@ def test_a_short_vo_run_tracks_the_moving_robot_with_a_small_pose_error():
     result = run.run()
     m = result.metrics
     assert m["pose_source"] == "vo" and m["pose_latency_s"] == pytest.approx(0.05)
-    # 10 Hz frames from 0.3 s: about 197, nearly every one's odometry through the gate
-    assert 190 <= m["vo_frames"] <= 200 and m["pose_samples"] >= 180
+    # 10 Hz frames from 2.3 s (after the gyro's 2 s calibration at rest): about 177, nearly every one's
+    # odometry through the gate
+    assert 170 <= m["vo_frames"] <= 180 and m["pose_samples"] >= 160
     assert m["tracking_lost_s"] < 1.0 and m["loop_errors"] == 0
     # the estimate is not the truth, and stays near it (measured: 2.6 cm RMSE)
     assert 0.002 < m["pose_error_xy_rmse_m"] < 0.06 and m["pose_error_xy_max_m"] < 0.15
