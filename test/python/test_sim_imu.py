@@ -71,7 +71,8 @@ def test_a_yawing_body_reads_the_yaw_rate_with_its_sign_about_the_sensors_up_axi
 
 @pytest.mark.parametrize("rate_hz", [200.0, 400.0])
 def test_white_noise_std_is_the_density_over_the_nyquist_band(rate_hz):
-    cfg = ImuConfig(rate_hz=rate_hz, gyro_bias_walk_rad_s_per_sqrt_s=0.0, accel_bias_walk_m_s2_per_sqrt_s=0.0)
+    cfg = ImuConfig(rate_hz=rate_hz, gyro_bias_walk_rad_s_per_sqrt_s=0.0, accel_bias_walk_m_s2_per_sqrt_s=0.0,
+                    gyro_offset_deg_s=0.0)
     imu = ImuSensor(cfg, np.random.default_rng(1))
     out = [imu.measure(k / rate_hz, np.zeros(3), np.array([0.0, 0.0, G])) for k in range(20000)]
     gyro = np.array([s.angular_velocity_rad_s for s in out])
@@ -84,7 +85,7 @@ def test_white_noise_std_is_the_density_over_the_nyquist_band(rate_hz):
 
 
 def test_the_bias_walks_as_configured():
-    cfg = ImuConfig(gyro_noise_density_deg_s_per_sqrt_hz=0.0, accel_noise_density_ug_per_sqrt_hz=0.0)
+    cfg = ImuConfig(gyro_noise_density_deg_s_per_sqrt_hz=0.0, accel_noise_density_ug_per_sqrt_hz=0.0, gyro_offset_deg_s=0.0)
     ends = []
     for seed in range(300):
         imu = ImuSensor(cfg, np.random.default_rng(seed))
@@ -105,7 +106,7 @@ def test_the_gyro_offset_is_drawn_per_seed_and_leaves_the_noise_sequence_as_it_w
     assert np.array_equal(again, offsets[3]) and not np.array_equal(offsets[3], offsets[4])
     np.testing.assert_allclose(offsets.std(axis=0), math.radians(0.5), rtol=0.15)
     with_offset = ImuSensor(cfg, np.random.default_rng(5))
-    without = ImuSensor(ImuConfig(), np.random.default_rng(5))
+    without = ImuSensor(ImuConfig(gyro_offset_deg_s=0.0), np.random.default_rng(5))
     assert np.array_equal(without.gyro_offset_rad_s, np.zeros(3))
     for k in range(50):
         a = with_offset.measure(0.005 * k, np.zeros(3), np.zeros(3))
@@ -143,7 +144,8 @@ def test_the_accelerometer_sample_is_the_mean_over_its_period_and_the_gyro_the_i
     world = _world()
     plant = world.plant
     quiet = ImuConfig(gyro_noise_density_deg_s_per_sqrt_hz=0.0, accel_noise_density_ug_per_sqrt_hz=0.0,
-                      gyro_bias_walk_rad_s_per_sqrt_s=0.0, accel_bias_walk_m_s2_per_sqrt_s=0.0)
+                      gyro_bias_walk_rad_s_per_sqrt_s=0.0, accel_bias_walk_m_s2_per_sqrt_s=0.0,
+                      gyro_offset_deg_s=0.0)
     imu = ImuSensor(quiet, np.random.default_rng(0), step_s=plant.dt_s)
     a = int(plant.model.sensor_adr[mujoco.mj_name2id(plant.model, mujoco.mjtObj.mjOBJ_SENSOR, "imu_accel")])
     assert not plant.disturbances.items     # the jolts below are the only pushes

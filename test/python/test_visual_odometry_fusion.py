@@ -40,7 +40,7 @@ class Run:
         self.T_world_imu0 = frames[0].T_world_camera @ np.linalg.inv(T_IMU_CAMERA)
         self.velocity = (frames[1].T_world_camera[:3, 3] - frames[0].T_world_camera[:3, 3]) / FRAME_S
         self.f_body = self.T_world_imu0[:3, :3].T @ np.array([0.0, 0.0, 9.80665])
-        self.imu = ImuSensor(ImuConfig(), np.random.default_rng(1))
+        self.imu = ImuSensor(ImuConfig(gyro_offset_deg_s=0.0), np.random.default_rng(1))
         params = params or FusionParams(still_gyro_rad_s=0.0)
         self.vio = VioFusion(K() if camera_matrix is None else camera_matrix, T_IMU_CAMERA, vo_params, params,
                              initial_imu_pose=self.T_world_imu0)
@@ -258,7 +258,7 @@ def test_motion_priors_hold_a_still_robot_in_the_dark():
     for name, params in (("default", FusionParams()), ("priors", FusionParams(still_gyro_rad_s=0.0)),
                          ("none", FusionParams(velocity_prior_sigma_m_s=0.0, height_prior_sigma_m=0.0,
                                                still_gyro_rad_s=0.0))):
-        imu = ImuSensor(ImuConfig(), np.random.default_rng(1))
+        imu = ImuSensor(ImuConfig(gyro_offset_deg_s=0.0), np.random.default_rng(1))
         vio = VioFusion(K(), T_IMU_CAMERA, params=params, initial_imu_pose=T0)
         n_imu = 0
         for i in range(101):

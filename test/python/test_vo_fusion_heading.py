@@ -65,7 +65,7 @@ class DriftingCamera:
 def fused_heading_errors_deg(params, seconds=40.0, imu_config=None, rest_s=0.0):
     """The fused heading's error against the truth at every frame, and the camera's own; the IMU
     (imu_config, default: no offset) still for rest_s before the first frame (t = 0)."""
-    imu = ImuSensor(imu_config or ImuConfig(), np.random.default_rng(3))
+    imu = ImuSensor(imu_config or ImuConfig(gyro_offset_deg_s=0.0), np.random.default_rng(3))
     vio = VioFusion(K, T_IMU_CAMERA, params=params, initial_imu_pose=T_world_imu(0.0))
     vio.vo = DriftingCamera()
     blank = np.zeros((240, 320), np.uint8), np.zeros((240, 320), np.float32)

@@ -53,8 +53,8 @@ class ImuConfig:
     gyro_bias_walk_rad_s_per_sqrt_s: float = 2.0e-5
     accel_bias_walk_m_s2_per_sqrt_s: float = 4.0e-4
     # the gyro's zero-rate offset at power-up: std of a normal draw per axis (deg/s; 0: none, a gyro
-    # calibrated beforehand). config/sim.yaml gives the BMI055's
-    gyro_offset_deg_s: float = 0.0
+    # calibrated beforehand): the BMI055 datasheet's +-1 deg/s typical taken as 2 sigma, as config/sim.yaml
+    gyro_offset_deg_s: float = 0.5
 
     def problems(self, prefix: str = "imu") -> List[str]:
         """Every invalid value, each naming its key."""
