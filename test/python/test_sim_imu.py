@@ -85,7 +85,8 @@ def test_white_noise_std_is_the_density_over_the_nyquist_band(rate_hz):
 
 
 def test_the_bias_walks_as_configured():
-    cfg = ImuConfig(gyro_noise_density_deg_s_per_sqrt_hz=0.0, accel_noise_density_ug_per_sqrt_hz=0.0, gyro_offset_deg_s=0.0)
+    cfg = ImuConfig(gyro_noise_density_deg_s_per_sqrt_hz=0.0, accel_noise_density_ug_per_sqrt_hz=0.0,
+                    gyro_offset_deg_s=0.0)
     ends = []
     for seed in range(300):
         imu = ImuSensor(cfg, np.random.default_rng(seed))
