@@ -67,16 +67,17 @@ def first_frame(seconds, turning_rad_s=0.0, params=None):
     return vio
 
 
-def test_the_fusions_first_state_takes_the_calibrated_bias_and_warns_when_the_robot_moved(caplog):
+def test_the_fusions_first_state_takes_the_calibrated_bias_and_records_why_not_when_the_robot_moved(caplog):
     with caplog.at_level(logging.WARNING):
         vio = first_frame(3.0)                   # 3 s of samples: the last 2 s are the window
-    assert vio.calibration.calibrated and not caplog.records
+    assert vio.calibration.calibrated
     np.testing.assert_allclose(vio._bias.gyroscope(), OFFSET, atol=4 * NOISE_RAD_S / math.sqrt(400))
     assert vio.calibration.detail.endswith("over 3.00 s (401 samples)")
     with caplog.at_level(logging.WARNING):
         moved = first_frame(2.0, turning_rad_s=0.5)
     assert not moved.calibration.calibrated and np.allclose(moved._bias.gyroscope(), 0.0, atol=1e-9)
-    assert any("robot moved during the rest window (gyro std 0.35" in r.getMessage() for r in caplog.records)
+    assert "robot moved during the rest window (gyro std 0.35" in moved.calibration.detail
+    assert not caplog.records                    # recorded only: vio_node and the batch summary report it once
 
 
 def test_the_rest_settings_are_validated_by_name(tmp_path):

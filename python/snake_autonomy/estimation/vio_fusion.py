@@ -24,7 +24,8 @@ metres where the odometry's poses taken as absolute priors ran away (a study; do
 The gyro's zero-rate offset is measured at rest before the first frame (rest_calibration.py: the
 mean rate over the last rest_calibration_s of IMU samples before it, the robot held still), and the
 first state's gyro bias prior is centred there; a window that moved, or too short, leaves the prior
-zero-mean and wide (uncalibrated_gyro_bias_sigma_rad_s), logged as a warning (self.calibration).
+zero-mean and wide (uncalibrated_gyro_bias_sigma_rad_s). The outcome is recorded, not logged
+(self.calibration): its owner says it once (vio_node's log, the batch run's vo summary).
 
 The robot's motion model (motion_model.py: velocity_prior_sigma_m_s, height_prior_sigma_m, and
 standing still while lost: still_*) adds priors on every state.
@@ -48,7 +49,6 @@ Frames: the IMU frame is the body of the preintegration (sim/imu.py: camera_link
 y left, z up); T_imu_camera is the camera's optical frame in it. Covariances are 6x6 in
 geometry_msgs order: x, y, z, then small rotations about the world's x, y, z axes.
 """
-import logging
 import math
 from dataclasses import dataclass, fields
 from typing import List, Optional
@@ -363,8 +363,6 @@ class VioFusion:
         rest = [s for s in before if s[0] >= stamp - window] if window > 0 else before
         span = stamp - before[0][0] if before else 0.0
         self.calibration = calibrate_gyro_at_rest([s[1] for s in rest], [s[2] for s in rest], span, self._rest)
-        if window > 0 and not self.calibration.calibrated:
-            logging.getLogger(__name__).warning("vio: %s", self.calibration.detail)
         if self._initial is None:
             if not rest:
                 raise ValueError("the first frame needs an initial IMU pose or IMU samples before it (levelling)")
