@@ -301,21 +301,11 @@ def _experiment(args) -> int:
         print("nav experiment: perception mono/both needs --classifier FILE (snake_autonomy nav "
               "train-classifier --out FILE)", file=sys.stderr)
         return 1
-    if args.world_files is not None:
-        if args.family is not None:
-            print("nav experiment: --family and --world-files: one or the other", file=sys.stderr)
-            return 2
-        try:
-            worlds = world_files(args.world_files)
-        except ValueError as e:
-            print(f"nav experiment: --world-files: {e}", file=sys.stderr)
-            return 2
-    else:
-        try:
-            worlds = [w for w, _ in _generated(args, args.family or "corridors")]
-        except ValueError as e:
-            print(f"nav experiment: {e}", file=sys.stderr)
-            return 1
+    try:
+        worlds = _chosen_worlds(args)
+    except ValueError as e:
+        print(f"nav experiment: {e}", file=sys.stderr)
+        return 2
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     _write_worlds(worlds, out / "worlds")
@@ -389,6 +379,18 @@ def _generated(args, family: str):
     return generated_worlds(family, args.first_world, args.worlds, args.robot, args.config)
 
 
+def _chosen_worlds(args) -> list:
+    """The worlds of --world-files GLOB, or of the generated --family (corridors by default)."""
+    if args.world_files is None:
+        return [w for w, _ in _generated(args, args.family or "corridors")]
+    if args.family is not None:
+        raise ValueError("--family and --world-files: one or the other")
+    try:
+        return world_files(args.world_files)
+    except ValueError as e:
+        raise ValueError(f"--world-files: {e}") from None
+
+
 def _worlds(args) -> int:
     """nav worlds: the generated worlds as world files, with a top view each."""
     try:
@@ -449,10 +451,7 @@ def _ros_experiment(args) -> int:
         seeds = parse_seeds(args.seeds)
         if args.perception == "mono" and not args.classifier:
             raise ValueError("--perception mono needs --classifier FILE")
-        if args.world_files is not None and args.family is not None:
-            raise ValueError("--family and --world-files: one or the other")
-        worlds = (world_files(args.world_files) if args.world_files is not None
-                  else [w for w, _ in _generated(args, args.family or "corridors")])
+        worlds = _chosen_worlds(args)
         limits, _ = _time_limits(args, worlds)
     except ValueError as e:
         print(f"nav ros-experiment: {e}", file=sys.stderr)
