@@ -88,3 +88,27 @@ def test_a_planned_fbsr_trajectory_reaches_its_final_posture_through_the_driver(
     np.testing.assert_allclose(plant.joint_positions_rad(), final, atol=JOINT_TOLERANCE_RAD)
     assert plant.frame_positions()[0][2] == pytest.approx(plan.final_head_height_m, abs=HEAD_TOLERANCE_M)
     assert plant.limit_violations == 0
+
+
+class _StuckController:
+    """A driver that takes a trajectory and never ends it (it stopped stepping mid-way)."""
+    ids = list(range(1, 12))
+
+    def __init__(self):
+        self.trajectory_progress = {"sequence": 0, "phase": "idle", "abort": "", "reason": ""}
+
+    def command_trajectory(self, names, times, q, v, id=""):
+        self.trajectory_progress = {"sequence": 1, "phase": "running", "abort": "", "reason": ""}
+        return ""
+
+
+def test_a_trajectory_the_driver_never_ends_is_given_up_after_its_duration_and_the_margin(rig):
+    plan = rig[0]
+    traj = plan_points(plan, 0.05, lead_in=1.0)
+    executor = DriverTrajectoryExecutor(_StuckController(), result_margin_s=2.0)
+    assert executor.execute(traj, 10.0) == ""
+    deadline = 10.0 + traj.duration_s + 2.0
+    assert not executor.finished(deadline - 0.01) and executor.aborted == ""
+    assert executor.finished(deadline + 0.01)
+    assert "no final phase for trajectory 'scout 1'" in executor.aborted
+    assert f"within {traj.duration_s + 2.0:.1f} s" in executor.aborted and "phase 'running'" in executor.aborted

@@ -27,7 +27,7 @@ The planner (`ScoutPlanner`, a callable ScoutSpec -> ScoutPlan) does every check
 moves: the FBSR planner's own (ZMP inside U at every sample, joint limits, head above after a
 transfer), the plan.json contract's (plan_io.problems) and the driver's velocity limit on both
 trajectories. The executor (`TrajectoryExecutor`) is the path to the joints: the batch simulator's
-`sim.scout_executor.DriverTrajectoryExecutor` (the driver's trajectory
+`runs.scout_executor.DriverTrajectoryExecutor` (the driver's trajectory
 execution in the batch simulator), the ROS side's `nodes.scout_trajectory.TopicTrajectoryExecutor`.
 """
 import math

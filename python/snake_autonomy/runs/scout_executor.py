@@ -5,9 +5,13 @@ simulator's DriverController (runs/batch.py LockStepDriver, the C++ loop driver_
 with `command_trajectory` (driver::TrajectorySource: refused whole with every reason; cubic Hermite
 from the present goals; the same slew limit and clamp as the gait's; the last point held, state
 holding). The ROS side's executor publishes on driver/joint_trajectory (nodes/scout_trajectory.py).
+As that one, it never waits forever: a trajectory with no final phase within its duration +
+``result_margin_s`` of being handed over (a driver that stopped stepping, or never ends it) counts as
+finished with `aborted` saying so.
 """
 import numpy as np
 
+from snake_autonomy.missions.scout import RESULT_MARGIN_S
 from snake_autonomy.planning.fbsr.trajectory import driver_joint_names
 
 
@@ -19,8 +23,10 @@ class DriverTrajectoryExecutor:
     next update(); `finished` once the driver reports it done (holding its last point) or aborted
     (`aborted` says why). A gait command ends a trajectory in the driver: `release` only forgets it."""
 
-    def __init__(self, controller):
+    def __init__(self, controller, result_margin_s: float = RESULT_MARGIN_S):
         self.controller = controller
+        self.result_margin_s = float(result_margin_s)
+        self._deadline_s = 0.0
         self.names = driver_joint_names(len(controller.ids))
         self._sequence = None               # the driver's progress sequence of ours, once taken
         self._before = 0
@@ -41,6 +47,7 @@ class DriverTrajectoryExecutor:
         if why:
             return why
         self._sequence, self.aborted = self._before + 1, ""
+        self._deadline_s = t_s + times[-1] + self.result_margin_s
         self.sent.append((t_s, trajectory))
         return ""
 
@@ -48,10 +55,14 @@ class DriverTrajectoryExecutor:
         if self._sequence is None:
             return True
         p = self.controller.trajectory_progress
-        if p["sequence"] < self._sequence:
-            return False                    # not taken yet
-        if p["sequence"] == self._sequence and p["phase"] == "running":
-            return False
+        waiting = p["sequence"] < self._sequence or (p["sequence"] == self._sequence and p["phase"] == "running")
+        if waiting and t_s > self._deadline_s:
+            self.aborted = (f"no final phase for trajectory 'scout {len(self.sent)}' within "
+                            f"{self._deadline_s - self.sent[-1][0]:.1f} s of handing it over "
+                            f"(the driver is at phase '{p['phase']}' of sequence {p['sequence']})")
+            return True
+        if waiting:
+            return False                    # not taken yet, or running
         if p["phase"] == "aborted":
             self.aborted = f"{p['abort']}: {p['reason']}"
         return True
