@@ -112,3 +112,4 @@ def test_a_trajectory_the_driver_never_ends_is_given_up_after_its_duration_and_t
     assert executor.finished(deadline + 0.01)
     assert "no final phase for trajectory 'scout 1'" in executor.aborted
     assert f"within {traj.duration_s + 2.0:.1f} s" in executor.aborted and "phase 'running'" in executor.aborted
+    assert executor.gave_up

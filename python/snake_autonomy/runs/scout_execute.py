@@ -160,10 +160,9 @@ def send_through_driver(plant: Plant, plan: Plan, sample_period_s: float,
     robot = plant.robot
     driver = LockStepDriver(robot, _core.GaitLibrary.from_yaml(str(config_path("gaits.yaml"))), plant,
                             load_driver_config(config_path("driver.yaml")))
-    executor = DriverTrajectoryExecutor(driver.controller)
+    executor = DriverTrajectoryExecutor(driver.controller, result_margin_s)
     trajectory = plan_points(plan, sample_period_s)
     duration_s = trajectory.duration_s
-    wait_s = duration_s + result_margin_s
     t0 = plant.time_s
     why = executor.execute(trajectory, t0)
     if why:
@@ -174,12 +173,12 @@ def send_through_driver(plant: Plant, plan: Plan, sample_period_s: float,
         plant.step_to(t0 + t + period_s)
         on_step(t)
         t += period_s
-        if executor.finished(t0 + t):
+        if executor.finished(t0 + t):          # done, aborted, or given up after duration + margin
             break
-        if t > wait_s:
-            raise TimeoutError(f"the driver reported no end of the plan's trajectory within {wait_s:.1f} s of "
-                               f"handing it over ({duration_s:.1f} s trajectory + {result_margin_s:.1f} s, "
-                               f"plant time)")
+    if executor.gave_up:
+        raise TimeoutError(f"the driver reported no end of the plan's trajectory within "
+                           f"{duration_s + result_margin_s:.1f} s of handing it over ({duration_s:.1f} s "
+                           f"trajectory + {result_margin_s:.1f} s, plant time)")
     if executor.aborted:
         raise ValueError(f"the driver aborted the plan's trajectory: {executor.aborted}")
 

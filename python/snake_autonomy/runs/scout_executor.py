@@ -32,6 +32,7 @@ class DriverTrajectoryExecutor:
         self._before = 0
         self.sent = []                      # (t_s, trajectory) accepted, in order
         self.aborted = ""
+        self.gave_up = False                # the last trajectory's end never came (aborted says so)
 
     def execute(self, trajectory, t_s: float) -> str:
         if not trajectory.points:
@@ -46,7 +47,7 @@ class DriverTrajectoryExecutor:
                                                  id=f"scout {len(self.sent) + 1}")
         if why:
             return why
-        self._sequence, self.aborted = self._before + 1, ""
+        self._sequence, self.aborted, self.gave_up = self._before + 1, "", False
         self._deadline_s = t_s + times[-1] + self.result_margin_s
         self.sent.append((t_s, trajectory))
         return ""
@@ -57,6 +58,7 @@ class DriverTrajectoryExecutor:
         p = self.controller.trajectory_progress
         waiting = p["sequence"] < self._sequence or (p["sequence"] == self._sequence and p["phase"] == "running")
         if waiting and t_s > self._deadline_s:
+            self.gave_up = True
             self.aborted = (f"no final phase for trajectory 'scout {len(self.sent)}' within "
                             f"{self._deadline_s - self.sent[-1][0]:.1f} s of handing it over "
                             f"(the driver is at phase '{p['phase']}' of sequence {p['sequence']})")
