@@ -7,8 +7,7 @@ import pytest
 
 from nav_scenes import CFG, COBRA, K, T_GC, WALL, drawn_mask
 from snake_autonomy.planning.rectilinear.body_sweep import BodySweep, SweepParams, sweep_bounds
-from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
-from snake_autonomy.planning.rectilinear.config import NavConfig, NavConfigError, nav_config_path
+from snake_autonomy.planning.rectilinear.config import NavConfig, NavConfigError
 from snake_autonomy.planning.rectilinear.critics import Candidate, CriticParams, score
 from snake_autonomy.planning.rectilinear.follower import BACK_OFF, FOLLOW, RecedingHorizonFollower
 from snake_autonomy.planning.rectilinear.grid_route import GridRoute
@@ -149,33 +148,6 @@ def test_body_sweep_lets_a_body_beside_an_obstacle_move_away():
     chk = sweep.check(sweep.sweep(0.0, 0.0, 0.3), m, np.eye(4))
     assert chk.free_m == pytest.approx(0.3)        # straight on: it keeps its distance, not nearer
     assert sweep_bounds(np.array([-1.0, 0.0, 1.0]), np.array([True, True, False]), 1) == (-1.0, 0.0)
-
-
-def test_body_sweep_slewed_backs_the_tail_off_along_its_present_shape():
-    """The follower reaches a new kappa at its rate limit while the gait runs: the 12-link robot
-    (0.2 /m/s at 0.0112 m/s) backing off 0.12 m from +1 towards -2 /m first takes its tail on along
-    the tail's present tangent; the instant reshape swings the tail aside before it crawls and finds
-    the way clear past an obstacle 0.12 m behind it."""
-    cfg = NavConfig.from_yaml(nav_config_path("chang_rectilinear"))
-    sweep = BodySweep(BodyGeometry(half_length_m=0.42, width_m=0.051), cfg.follower, cfg.body_sweep)
-    now = sweep.body_now(1.0)
-    back = (now[0] - now[1]) / np.linalg.norm(now[0] - now[1])
-    m = _map_with([now[0] + 0.12 * back])
-    assert sweep.check(sweep.sweep(1.0, -2.0, -0.12), m, np.eye(4)).free_m == pytest.approx(0.12)
-    slewed = sweep.sweep_slewed(1.0, -2.0, -0.12)
-    assert sweep.check(slewed, m, np.eye(4)).free_m < 0.12
-    np.testing.assert_allclose(slewed.rows[0], now, atol=1e-12)
-    np.testing.assert_allclose(slewed.travel_m[-1], 0.12)
-    # far behind, both clear
-    assert sweep.check(slewed, _map_with([now[0] + 0.3 * back]), np.eye(4)).free_m == pytest.approx(0.12)
-
-
-def test_body_sweep_slewed_at_a_fast_rate_ends_where_reshape_then_crawl_does():
-    fast = dataclasses.replace(CFG.follower, kappa_rate_per_m_s=1e6)
-    sweep = BodySweep(COBRA, fast, SweepParams(reshape_keeps_centroid=False))
-    for k0, k1, travel in ((0.0, 1.5, 0.3), (1.0, -2.0, -0.12), (-0.5, 0.5, 0.1)):
-        np.testing.assert_allclose(sweep.sweep_slewed(k0, k1, travel).rows[-1], sweep.sweep(k0, k1, travel).rows[-1],
-                                   atol=2e-3)
 
 
 def _cand(c, free, clearance=1.0, kappa=None):

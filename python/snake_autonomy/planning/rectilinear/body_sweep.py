@@ -106,37 +106,6 @@ class BodySweep:
             travel.append(np.linspace(0.0, travel_m, len(path) + 1)[1:])
         return Sweep(np.concatenate(rows), np.abs(np.concatenate(travel)), len(RESHAPE_FRACTIONS))
 
-    def sweep_slewed(self, kappa_now: float, kappa_new: float, travel_m: float) -> Sweep:
-        """As `sweep`, with the body reshaping while it crawls, as the follower commands it: kappa moves
-        from kappa_now towards kappa_new at the follower's kappa_rate_per_m_s while the gait runs at its
-        speed (kappa_rate / speed per metre of travel), the middle turning at the gait map's omega of
-        the kappa of the moment. A back-off or a turn in place reshapes over most of its replan (the
-        12-link robot from +1 to -2 /m: 15 s at 0.2 /m/s), so its leading end first goes on along its
-        present shape, not the new one. The reshape's rows are the crawl's up to where kappa_new is
-        reached (all of them if it is not within travel_m): as in `sweep`, a reshape that is not clear
-        makes the whole motion invalid."""
-        g, p = self.geometry, self.params
-        rate = self.fp.kappa_rate_per_m_s
-        if not rate > 0:
-            return self.sweep(kappa_now, kappa_new, travel_m)
-        n = max(1, int(np.ceil(abs(travel_m) / p.step_m)))
-        s = np.linspace(0.0, travel_m, n + 1)
-        dk = kappa_new - kappa_now
-        ks = kappa_now + np.sign(dk) * np.minimum(rate / self.fp.speed_m_s * np.abs(s), abs(dk))
-        x, y, th = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
-        mids = [(x, y, th)]
-        for j in range(1, n + 1):           # each step an arc at the kappa reached by its end
-            x, y, th = arc_poses(self.turn_rate(ks[j]) / self.fp.speed_m_s, s[j] - s[j - 1], p.step_m,
-                                 start=(x, y, th))[-1]
-            mids.append((x, y, th))
-        local = _uniform_shapes((0.0, 0.0, 0.0), ks, self._s, p.reshape_keeps_centroid)   # (n+1, N, 3)
-        mids = np.array(mids)
-        c, sn = np.cos(mids[:, 2])[:, None], np.sin(mids[:, 2])[:, None]
-        xs = mids[:, 0:1] + c * local[:, :, 0] - sn * local[:, :, 1]
-        ys = mids[:, 1:2] + sn * local[:, :, 0] + c * local[:, :, 1]
-        reached = np.nonzero(np.abs(ks - kappa_new) < 1e-9)[0]
-        return Sweep(np.stack([xs, ys], axis=-1), np.abs(s), int(reached[0]) if len(reached) else n)
-
     def check(self, sweep: Sweep, local_map, T_world_g: np.ndarray, known: bool = False) -> SweepCheck:
         """How far the sweep is clear of the map's occupied cells (T_world_g: the ground frame in the
         world, 4x4). known: the body must also stay on cells the map knows (seen or lain on): no station

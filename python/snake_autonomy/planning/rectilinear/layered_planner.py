@@ -127,7 +127,7 @@ class LayeredPlanner:
         seen = self.map.seen_free(head) | self._unchecked
         head_free = prefix_length(ok & seen, s)
         why = "head" if head_free < p.horizon_m else ""
-        chk = self.sweep.check(self.sweep.sweep_slewed(kappa_now, kappa, p.horizon_m), self.map, T_world_g)
+        chk = self.sweep.check(self.sweep.sweep(kappa_now, kappa, p.horizon_m), self.map, T_world_g)
         free = head_free
         if chk.free_m < free:
             free, why = max(0.0, chk.free_m), "body"
@@ -220,7 +220,7 @@ class LayeredPlanner:
         else:
             order = steer + ((0.0, kappa_now) if rp.back_off_steer else (kappa_now,))
         for kappa in order:
-            chk = self.sweep.check(self.sweep.sweep_slewed(kappa_now, kappa, -rp.back_off_m), self.map, T_world_g,
+            chk = self.sweep.check(self.sweep.sweep(kappa_now, kappa, -rp.back_off_m), self.map, T_world_g,
                                    rp.known_only)
             if chk.free_m >= rp.back_off_m - 1e-9:
                 return kappa
@@ -232,8 +232,8 @@ class LayeredPlanner:
         fp, rp = self.follower.params, self.cfg.recovery
         for side in (self.recovery.side, -self.recovery.side):
             for k in (fp.kappa_turn_per_m, 0.5 * fp.kappa_turn_per_m):
-                chk = self.sweep.check(self.sweep.sweep_slewed(kappa_now, side * k, rp.turn_crawl_m), self.map,
-                                       T_world_g, rp.known_only)
+                chk = self.sweep.check(self.sweep.sweep(kappa_now, side * k, rp.turn_crawl_m), self.map, T_world_g,
+                                       rp.known_only)
                 if chk.free_m >= rp.turn_crawl_m - 1e-9:
                     return side * k
         return None
