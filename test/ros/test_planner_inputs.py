@@ -17,7 +17,7 @@ import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseWithCovarianceStamped
-from sensor_msgs.msg import CameraInfo, Image
+from sensor_msgs.msg import CameraInfo, Image, JointState
 from snake_autonomy.msg import GaitCommand
 from snake_autonomy.nodes.image_msgs import to_camera_info, to_image
 
@@ -53,6 +53,7 @@ class PlannerInputsTest(unittest.TestCase):
         cls.pub_info = rospy.Publisher("camera/color/camera_info", CameraInfo, queue_size=2)
         cls.pub_depth = rospy.Publisher("camera/depth/image_rect_raw", Image, queue_size=2)
         cls.pub_pose = rospy.Publisher("base_pose", PoseWithCovarianceStamped, queue_size=5)
+        cls.pub_joints = rospy.Publisher("joint_states", JointState, queue_size=5)
         rospy.Subscriber("gait_command", GaitCommand, cls.on_cmd, queue_size=50)
         rospy.Subscriber("/diagnostics", DiagnosticArray, cls.on_diagnostics, queue_size=20)
         cls.poses_on, cls.frames_on, cls.nan_poses = False, False, 0
@@ -151,6 +152,16 @@ class PlannerInputsTest(unittest.TestCase):
         # a NaN pose: refused, counted
         type(self).nan_poses = 3
         self.until(lambda: int(self.diag("refused_pose")) >= 3, 10.0, "3 refused poses")
+        # joint_states naming too few joints: refused, named, counted (the body sweep keeps the last good ones)
+        joints = JointState(name=[f"joint_{i}" for i in range(1, 11)], position=[0.0] * 10)
+
+        def sent_and_counted():
+            joints.header.stamp = rospy.Time.now()
+            self.pub_joints.publish(joints)
+            time.sleep(0.3)
+            return int(self.diag("refused_joints")) >= 1
+        self.until(sent_and_counted, 15.0, "a refused joint_states")
+        self.assertIn("joint_11", self.diag("last_refusal", ""))
         # frames the planner cannot use: another size than camera_info, an unknown encoding, too few bytes.
         # Each is sent until its refusal is counted: the depth subscriber keeps only the newest frame, so
         # one of the stream's good frames may replace it before the planner reads it

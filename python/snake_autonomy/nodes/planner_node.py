@@ -7,7 +7,9 @@ Subscribes  base_pose (geometry_msgs/PoseWithCovarianceStamped): base_link's pos
             start at base_link (the head, where the camera is) and the camera's pose is base_link's
             times the mount; com_pose is the body's centre of mass and virtual-chassis heading.
             camera/color/image_raw + camera/color/camera_info (sensor_msgs; the intrinsics come from
-            the first camera_info), camera/depth/image_rect_raw (32FC1 m or 16UC1 mm; ~perception depth).
+            the first camera_info), camera/depth/image_rect_raw (32FC1 m or 16UC1 mm; ~perception depth),
+            joint_states (sensor_msgs/JointState, the driver's: the body sweep starts from the body as
+            its joints lie, body_chain.py; without them, from the shape of the curvature commanded).
 Publishes   gait_command (snake_autonomy/GaitCommand at ~rate_hz: ~gait with curve=true and kappa;
             ~stop_gait keeping the last kappa while waiting for an input, with no free arc and once
             the goal is reached or while there is none; the straight hold before camera_info arrives),
@@ -64,7 +66,7 @@ import rospy
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Point, PoseStamped, PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Path
-from sensor_msgs.msg import CameraInfo, Image
+from sensor_msgs.msg import CameraInfo, Image, JointState
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -77,7 +79,7 @@ from snake_autonomy.nodes.planner_goals import PARAMETER, Goal, GoalServer
 from snake_autonomy.paths import config_path, resolve_world_path
 from snake_autonomy.perception.block_classifier import BlockClassifier
 from snake_autonomy.perception.depth_traversability import DepthTraversability
-from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
+from snake_autonomy.planning.rectilinear.body_chain import BodyChain
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m
 from snake_autonomy.planning.rectilinear.nav_loop import (ERROR, FOLLOWING, GOAL_REACHED, NO_FREE_ARC, NO_GOAL, STALE,
@@ -98,6 +100,8 @@ class PlannerNode:
         self.cfg = NavConfig.from_yaml(rospy.get_param("~nav_config", str(config_path("nav.yaml"))))
         self.robot_yaml = rospy.get_param("~robot_config", str(config_path("robots", "cobra.yaml")))
         self.head_width_m = head_width_m(self.robot_yaml)
+        self.robot = _core.RobotModel.from_yaml(self.robot_yaml)
+        self.joint_index = {name: i for i, name in enumerate(self.robot.joint_names)}
         self.perception = rospy.get_param("~perception", "depth")
         if self.perception not in ("depth", "mono"):
             raise ValueError(f"~perception: expected depth or mono, got {self.perception!r}")
@@ -154,6 +158,7 @@ class PlannerNode:
         g = self.guarded
         rospy.Subscriber("camera/color/camera_info", CameraInfo, g(self.on_info, "camera_info"), queue_size=1)
         rospy.Subscriber("base_pose", PoseWithCovarianceStamped, g(self.on_pose, "base_pose"), queue_size=5)
+        rospy.Subscriber("joint_states", JointState, g(self.on_joints, "joint_states"), queue_size=5)
         rospy.Subscriber("camera/color/image_raw", Image, g(self.on_colour, "colour image"), queue_size=1,
                          buff_size=2 ** 24)
         if self.perception == "depth":
@@ -227,7 +232,7 @@ class PlannerNode:
                                            f"{self.intrinsics.fx:g}): restart the planner to change cameras")
             return
         cfg = dataclasses.replace(self.cfg, intrinsics=intr)
-        robot = _core.RobotModel.from_yaml(self.robot_yaml)
+        robot = self.robot
         if self.perception == "depth":
             perceive = DepthTraversability(intr, T_ground_camera(cfg.mount, robot.link_radius_m), cfg.depth).classify
         else:
@@ -235,7 +240,7 @@ class PlannerNode:
             perceive = lambda rgb: clf.traversable(rgb, margin)
         loop = NavLoop(cfg, self.head_width_m, perceive, None, self.goal_radius_m,   # the tick sets the goal
                        self.on_no_free_arc, self.pose_timeout_s,
-                       BodyGeometry.of_robot(robot), frame_timeout_s=self.frame_timeout_s)
+                       BodyChain(robot), frame_timeout_s=self.frame_timeout_s)
         self.intrinsics, self.loop = intr, loop
         rospy.loginfo(f"planner: camera {intr.width}x{intr.height}, fx {intr.fx:g} (camera_info)")
 
@@ -257,6 +262,24 @@ class PlannerNode:
                 self.report_refusal("pose", why)
                 return
         self.base_pose = PoseStamped(header=msg.header, pose=msg.pose.pose)
+
+    def on_joints(self, msg):
+        """joint_states: every joint of the robot by name (in any order), else dropped and counted."""
+        if len(msg.name) != len(msg.position):
+            self.refuse("joints", f"{len(msg.name)} names, {len(msg.position)} positions")
+            return
+        q = np.zeros(len(self.joint_index))
+        given = {n: v for n, v in zip(msg.name, msg.position) if n in self.joint_index}
+        for name, v in given.items():
+            q[self.joint_index[name]] = v
+        missing = [n for n in self.joint_index if n not in given]
+        if missing:
+            self.refuse("joints", f"no position for {', '.join(missing)}")
+            return
+        if self.loop is not None:
+            why = self.loop.on_joints(msg.header.stamp.to_sec(), q)
+            if why is not None:
+                self.report_refusal("joints", why)
 
     def on_image(self, msg, kind: str):
         try:
@@ -410,7 +433,7 @@ class PlannerNode:
     def diagnose(self, stat):
         t, loop = self.last_tick, self.loop
         refused = self.refused + (loop.refused if loop is not None else Counter())
-        for kind in ("camera_info", "pose", "depth", "colour", "frame"):
+        for kind in ("camera_info", "pose", "joints", "depth", "colour", "frame"):
             stat.add(f"refused_{kind}", str(refused.get(kind, 0)))
         stat.add("last_refusal", self.last_refusal or "none")
         stat.add("tick_errors", str(loop.errors if loop is not None else 0))
@@ -431,6 +454,7 @@ class PlannerNode:
         stat.add("state", t.state)
         stat.add("replans", str(loop.replans))
         stat.add("stops_no_free_arc", str(loop.stops_no_free_arc))
+        stat.add("replans_without_joints", str(loop.replans_without_joints))    # on the commanded shape
         stat.add("kappa_per_m", f"{t.kappa_per_m:.3f}")
         stat.add("follower_mode", loop.planner.follower.mode)   # a recorded run's contacts are tagged with it
         stat.add("distance_to_goal_m", "unknown" if d is None else f"{d:.3f}")

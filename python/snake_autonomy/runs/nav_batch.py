@@ -24,6 +24,8 @@ returns to the driver as driver_node would get it.
   "perfect" (or depth_noise.enabled is false and depth_model is not "noisy"). A frame is rendered
   when the loop first reads it, from a copy of the plant's state at its stamp: the same image as a
   render at the stamp, and a frame the loop drops unread costs nothing.
+- Joint angles: the driver's measured positions (what driver_node publishes on joint_states) every
+  control period, undelayed (the layered planner's body sweep places the body by them).
 - Commands: NavLoop.tick every command_period_s (planner_node's ~rate_hz 2) -> hold, or the nav
   config's forward / reverse gait with curve + kappa, through the driver (runs/gait_driver.py: the
   DriverController driver_node runs, whose CPG ramps the wave in from the hold posture).
@@ -55,7 +57,7 @@ from snake_autonomy import _core
 from snake_autonomy.paths import config_path, robot_yaml
 from snake_autonomy.perception.block_classifier import BlockClassifier, truth_traversable
 from snake_autonomy.perception.depth_traversability import DepthTraversability
-from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
+from snake_autonomy.planning.rectilinear.body_chain import BodyChain
 from snake_autonomy.planning.rectilinear.collision_check import PerceptionCollisionChecker
 from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera, head_width_m, nav_config_path
 from snake_autonomy.planning.rectilinear.nav_loop import GOAL_REACHED, STALE, NavLoop, checked_positive
@@ -281,7 +283,7 @@ class NavRun:
         frame_timeout = spec.frame_timeout_s or max(5.0, 3.0 / spec.camera_rate_hz)
         self.loop = NavLoop(cfg, head_width_m(ry), lambda f: perceive(f.render()), spec.world.goal,
                             spec.world.goal_radius_m, on_no_free_arc, spec.pose_timeout_s,
-                            BodyGeometry.of_robot(self.robot), frame_timeout_s=frame_timeout,
+                            BodyChain(self.robot), frame_timeout_s=frame_timeout,
                             obstacle_map=truth_map)
 
     def _perception(self):
@@ -324,6 +326,7 @@ class NavRun:
             while poses and poses[0][0] <= t + 1e-9:
                 _, stamp, T = poses.popleft()
                 loop.on_pose(stamp, T)
+            loop.on_joints(t, self.drive.driver.controller.position_rad)     # joint_states: the servos' positions
             while camera_frames and camera_frames[0][0] <= t + 1e-9:
                 _, stamp, f = camera_frames.popleft()
                 loop.on_frame(stamp, f)

@@ -13,19 +13,24 @@ The sweep is every station of the body (every `station_m` from tail to head) in 
 at every `step_m` of the crawl. A sweep is clear up to the travel where a station first comes nearer
 an occupied cell of the local map than half the body's width + `margin_m` -- or, when the body already
 lies nearer than that (beside an obstacle), more than SLACK_M nearer than its nearest station is now:
-it may move along the obstacle or away. The model places the body as a uniform arc through base_link;
-a body that has just changed its curvature lies elsewhere, and a modelled station can overlap an
-obstacle the real body is clear of: the occupied cells under the modelled body now are the model's (or
-the map's) error and do not count for this body (LocalMap.distance_clearing).
+it may move along the obstacle or away. With the robot's joint chain (body_chain.py, what the
+navigation loop runs) the body now is where its measured joint angles put it, and the reshape moves
+the yaw joints linearly to the biases the driver commands for the new curvature (the pitch joints'
+wave kept), each shape by the forward kinematics; without joints, from the biases of the curvature
+commanded. Without a chain the shapes are uniform arcs through base_link (body_model.py), 5-10 cm off
+the body at its tail for the 12-link robot (bench/nav_body_model_error). A modelled station can still
+overlap an obstacle the real body is clear of (the pose's error, the map's): the occupied cells under
+the modelled body now do not count for this body (LocalMap.distance_clearing).
 A reshape that is not clear makes the whole motion invalid (free travel 0).
 One model for every motion the planner asks about: the candidate arcs, the follower's curvature
 bounds, backing off and turning in place (recovery.py).
 """
 from dataclasses import dataclass
-from typing import List, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 
+from .body_chain import BodyChain, BodyState
 from .body_model import RESHAPE_FRACTIONS, BodyGeometry, middle_pose
 from .unicycle import arc_poses
 
@@ -64,8 +69,10 @@ class SweepCheck:
 
 
 class BodySweep:
-    def __init__(self, geometry: BodyGeometry, follower_params, params: SweepParams = SweepParams()):
-        self.geometry, self.fp, self.params = geometry, follower_params, params
+    def __init__(self, geometry: BodyGeometry, follower_params, params: SweepParams = SweepParams(),
+                 chain: Optional[BodyChain] = None):
+        """chain: the robot's joint chain (body_chain.py): the shapes from joint angles; None: uniform arcs."""
+        self.geometry, self.fp, self.params, self.chain = geometry, follower_params, params, chain
         self.need_m = 0.5 * geometry.width_m + params.margin_m
         # the stations' arc lengths from the middle, tail to head (as body_model.body_poses places them)
         h, n = geometry.half_length_m, max(1, int(np.ceil(geometry.half_length_m / params.station_m)))
@@ -76,25 +83,51 @@ class BodySweep:
         k = np.sign(kappa) * max(0.0, abs(kappa) - self.params.dead_band_per_m)
         return self.fp.omega(float(k))
 
-    def body_now(self, kappa_now: float) -> np.ndarray:
+    def body_now(self, kappa_now: float, body: Optional[BodyState] = None) -> np.ndarray:
         """(N, 2) the body's stations now (base_link at the ground frame's origin, heading 0): a sweep's
         row 0, without its reshape and crawl."""
-        middle = middle_pose((0.0, 0.0, 0.0), kappa_now, self.geometry.half_length_m)
-        return _uniform_shapes(middle, np.array([kappa_now]), self._s, self.params.reshape_keeps_centroid)[0, :, :2]
+        return self._shapes(kappa_now, kappa_now, body, (0.0,))[0][0]
 
-    def sweep(self, kappa_now: float, kappa_new: float, travel_m: float) -> Sweep:
-        """The body's stations from its shape now (base_link at the ground frame's origin, heading 0)
-        through the reshape to kappa_new and travel_m of crawl (negative: backwards)."""
+    def _shapes(self, kappa_now: float, kappa_new: float, body: Optional[BodyState], fractions):
+        """((K, N, 2) the body in each shape from now (fraction 0) to kappa_new (fraction 1), the last
+        shape's middle pose (x, y, heading)). With a chain: the joints' angles (body, or without it the
+        biases of kappa_now) moved linearly to kappa_new's biases, each shape by the forward kinematics,
+        placed so that its middle keeps the first's heading and its middle (or centroid) the first's
+        place. Without: uniform arcs through base_link (body_model.py)."""
         g, p = self.geometry, self.params
-        middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
-        ks = kappa_now + np.array([0.0, *RESHAPE_FRACTIONS]) * (kappa_new - kappa_now)
-        shapes = _uniform_shapes(middle, ks, self._s, p.reshape_keeps_centroid)      # (4, N, 3)
+        f = np.asarray(fractions, float)
+        if self.chain is None:
+            middle = middle_pose((0.0, 0.0, 0.0), kappa_now, g.half_length_m)
+            shapes = _uniform_shapes(middle, kappa_now + f * (kappa_new - kappa_now), self._s, p.reshape_keeps_centroid)
+            return shapes[:, :, :2], tuple(shapes[-1][len(self._s) // 2])
+        if body is None:
+            q0, R = self.chain.bent(np.zeros(self.chain.num_joints), kappa_now), np.eye(3)
+        else:
+            q0, R = np.asarray(body.q, float), np.asarray(body.T_ground_base, float)[:3, :3]
+        q1 = self.chain.bent(q0, kappa_new)
+        arc = g.half_length_m - self._s
+        shapes = np.stack([self.chain.stations(q0 + fi * (q1 - q0), R, arc) for fi in f])
+        m = len(self._s) // 2
+        heading = np.arctan2(*(shapes[:, m + 1] - shapes[:, m - 1])[:, ::-1].T)
+        turn = heading[0] - heading
+        c, sn = np.cos(turn)[:, None], np.sin(turn)[:, None]
+        d = shapes - shapes[:, m:m + 1]
+        shapes = shapes[0, m] + np.stack([c * d[..., 0] - sn * d[..., 1], sn * d[..., 0] + c * d[..., 1]], axis=-1)
+        if p.reshape_keeps_centroid:
+            shapes += shapes[0:1].mean(axis=1, keepdims=True) - shapes.mean(axis=1, keepdims=True)
+        return shapes, (*shapes[-1, m], float(heading[0]))
+
+    def sweep(self, kappa_now: float, kappa_new: float, travel_m: float, body: Optional[BodyState] = None) -> Sweep:
+        """The body's stations from its shape now (base_link at the ground frame's origin, heading 0)
+        through the reshape to kappa_new and travel_m of crawl (negative: backwards). body: the joints'
+        angles now (with a chain; None: the shape of kappa_now)."""
+        p = self.params
+        shapes, mid = self._shapes(kappa_now, kappa_new, body, (0.0, *RESHAPE_FRACTIONS))     # (4, N, 2)
         final = shapes[-1]
-        mid = final[len(final) // 2]
         c0, s0 = np.cos(mid[2]), np.sin(mid[2])
-        d = final[:, :2] - mid[:2]
+        d = final - np.asarray(mid[:2])
         rel = np.column_stack([c0 * d[:, 0] + s0 * d[:, 1], -s0 * d[:, 0] + c0 * d[:, 1]])
-        rows = [shapes[:, :, :2]]
+        rows = [shapes]
         travel = [np.zeros(len(shapes))]
         if abs(travel_m) > 0:
             path = arc_poses(self.turn_rate(kappa_new) / self.fp.speed_m_s, travel_m, p.step_m,

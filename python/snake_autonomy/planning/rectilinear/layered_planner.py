@@ -24,6 +24,7 @@ from typing import Optional
 
 import numpy as np
 
+from .body_chain import BodyChain, BodyState
 from .body_sweep import BodySweep, sweep_bounds
 from .critics import Candidate, score
 from .follower import RecedingHorizonFollower
@@ -38,14 +39,19 @@ from .sampler import Arc, Selection, candidate_arcs
 class LayeredPlanner:
     def __init__(self, intrinsics, head_width_m: float, cfg, follower: RecedingHorizonFollower, body):
         """cfg: the NavConfig (its sampler, local_map, body_sweep, critics, recovery sections); body: the
-        robot's BodyGeometry (body_model.py)."""
+        robot's BodyChain (body_chain.py: the body as its joints lie) or its BodyGeometry (body_model.py:
+        uniform arcs of the commanded curvature)."""
         if body is None:
-            raise ValueError("body: the layered planner needs the robot's body geometry (BodyGeometry.of_robot)")
+            raise ValueError("body: the layered planner needs the robot's body (BodyChain(robot) or "
+                             "BodyGeometry.of_robot)")
+        chain = body if isinstance(body, BodyChain) else None
+        body = body.geometry if chain is not None else body
         self.intrinsics, self.cfg, self.follower = intrinsics, cfg, follower
         self.sp = cfg.sampler
         self.head_need_m = 0.5 * head_width_m + self.sp.lateral_margin_m
         self.map = LocalMap(cfg.local_map)
-        self.sweep = BodySweep(body, follower.params, cfg.body_sweep)
+        self.sweep = BodySweep(body, follower.params, cfg.body_sweep, chain)
+        self._body = None                    # the replan's BodyState (the joints' angles), None: kappa_now's
         lm = cfg.local_map
         cp = cfg.critics
         rp = cfg.recovery
@@ -70,8 +76,11 @@ class LayeredPlanner:
         return 2.0 * self.head_need_m
 
     def replan(self, t_s: float, ground: np.ndarray, T_ground_camera: np.ndarray, pose,
-               goal_xy=None, goal_radius_m: float = 0.0, unknown=None) -> Replan:
-        """unknown: the image's unmeasured pixels (ground_region.Traversability), None for a classifier's."""
+               goal_xy=None, goal_radius_m: float = 0.0, unknown=None, body: Optional[BodyState] = None) -> Replan:
+        """unknown: the image's unmeasured pixels (ground_region.Traversability), None for a classifier's.
+        body: the joints' angles at the frame's time (with a BodyChain; None: the shape of the curvature
+        commanded)."""
+        self._body = body
         T_world_g = T_world_ground(pose)
         T_world_camera = T_world_g @ np.asarray(T_ground_camera, float)
         if self.obstacle_map is not None:             # map.source truth: the simulator's diagnostic
@@ -79,7 +88,7 @@ class LayeredPlanner:
         else:
             self.map.add_view(ground, self.intrinsics.K(), T_world_camera, unknown)
         kappa_now = self.follower.kappa_per_m
-        body_now = self.sweep.body_now(kappa_now)
+        body_now = self.sweep.body_now(kappa_now, body)
         half = 0.5 * self.sweep.geometry.width_m
         self.map.mark_body(world_xy(T_world_g, body_now),
                            half + (self.cfg.local_map.start_free_m if self.map.updates == 1 else 0.0))
@@ -127,7 +136,7 @@ class LayeredPlanner:
         seen = self.map.seen_free(head) | self._unchecked
         head_free = prefix_length(ok & seen, s)
         why = "head" if head_free < p.horizon_m else ""
-        chk = self.sweep.check(self.sweep.sweep(kappa_now, kappa, p.horizon_m), self.map, T_world_g)
+        chk = self.sweep.check(self.sweep.sweep(kappa_now, kappa, p.horizon_m, self._body), self.map, T_world_g)
         free = head_free
         if chk.free_m < free:
             free, why = max(0.0, chk.free_m), "body"
@@ -220,7 +229,7 @@ class LayeredPlanner:
         else:
             order = steer + ((0.0, kappa_now) if rp.back_off_steer else (kappa_now,))
         for kappa in order:
-            chk = self.sweep.check(self.sweep.sweep(kappa_now, kappa, -rp.back_off_m), self.map, T_world_g,
+            chk = self.sweep.check(self.sweep.sweep(kappa_now, kappa, -rp.back_off_m, self._body), self.map, T_world_g,
                                    rp.known_only)
             if chk.free_m >= rp.back_off_m - 1e-9:
                 return kappa
@@ -232,8 +241,8 @@ class LayeredPlanner:
         fp, rp = self.follower.params, self.cfg.recovery
         for side in (self.recovery.side, -self.recovery.side):
             for k in (fp.kappa_turn_per_m, 0.5 * fp.kappa_turn_per_m):
-                chk = self.sweep.check(self.sweep.sweep(kappa_now, side * k, rp.turn_crawl_m), self.map, T_world_g,
-                                       rp.known_only)
+                sweep = self.sweep.sweep(kappa_now, side * k, rp.turn_crawl_m, self._body)
+                chk = self.sweep.check(sweep, self.map, T_world_g, rp.known_only)
                 if chk.free_m >= rp.turn_crawl_m - 1e-9:
                     return side * k
         return None

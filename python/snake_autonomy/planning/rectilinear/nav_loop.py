@@ -6,6 +6,7 @@ out. planner_node (nodes/planner_node.py) only converts messages and calls this;
                    goal_xy=(1.4, 0.0), goal_radius_m=0.15)
     loop.on_pose(t, T_world_base)             # base_pose (4x4 of base_link in the world)
     loop.on_frame(t, depth_m)                 # the latest camera frame (depth in m, or colour for mono)
+    loop.on_joints(t, q)                      # joint_states (with body=BodyChain(robot): the body as it lies)
     out = loop.tick(t)                        # at the follower's rate: NavTick
 
 Every replan_period_s (config/nav.yaml follower.replan_period_s) the latest frame with the pose
@@ -16,7 +17,10 @@ mount of config/nav.yaml camera: (the head bobs with the gait: the mount is the 
 
 Inputs are checked where they enter (on_pose, on_frame return the reason of a refusal, counted in
 `refused`): a pose must be finite, a rotation, inside POSE_WORKSPACE_M and not older than the last one;
-a frame must be the camera's size (cfg.intrinsics) with a finite stamp not older than the last one.
+a frame must be the camera's size (cfg.intrinsics) with a finite stamp not older than the last one;
+joints must be finite, one per joint of the chain, stamps in order. A replan places the body by the
+joints nearest its frame's stamp; with none within pose_timeout_s of it, by the curvature commanded
+(counted in replans_without_joints).
 A pose older than pose_timeout_s or a frame older than frame_timeout_s (or either stamped more than
 FUTURE_TOLERANCE_S ahead of the clock) holds the robot (state STALE) until fresh ones arrive; the
 first fresh frame after that is replanned at once. tick() never raises: an exception inside it
@@ -41,6 +45,7 @@ from typing import Callable, Optional, Tuple
 import numpy as np
 
 from ...perception.ground_region import Traversability
+from .body_chain import BodyChain, BodyState
 from .follower import BACK_OFF, RecedingHorizonFollower
 from .layered_planner import LayeredPlanner
 from .planner import NavPlanner, Replan, T_world_ground, ground_frame
@@ -79,7 +84,8 @@ def make_planner(cfg, head_width_m: float, body):
     follower = RecedingHorizonFollower(cfg.follower)
     if cfg.planner.kind == "layered":
         return LayeredPlanner(cfg.intrinsics, head_width_m, cfg, follower, body)
-    return NavPlanner(cfg.intrinsics, head_width_m, cfg.sampler, follower, body, cfg.map)
+    geometry = body.geometry if isinstance(body, BodyChain) else body
+    return NavPlanner(cfg.intrinsics, head_width_m, cfg.sampler, follower, geometry, cfg.map)
 
 
 @dataclass
@@ -104,7 +110,8 @@ class NavLoop:
                  frame_timeout_s: float = 5.0, obstacle_map=None):
         """perception: a frame -> its traversability image (bool) or a ground_region.Traversability
         (with the pixels it did not measure: DepthTraversability.classify).
-        body: the robot's BodyGeometry (body_model.py: the guards' body stations).
+        body: the robot's BodyChain (body_chain.py: with on_joints, the layered planner's body sweep
+        starts from the body as its joints lie) or BodyGeometry (body_model.py: uniform arcs).
         pose_timeout_s, frame_timeout_s: the oldest pose / camera frame the loop still moves on.
         obstacle_map: with map.source truth only, the map given in advance (the simulator's
         diagnostic: ObstacleMap.from_world of the world's obstacles)."""
@@ -127,6 +134,7 @@ class NavLoop:
                              "obstacle_map); a robot's planner maps the faces it sees: use faces or none"
                              if obstacle_map is None else "obstacle_map: given only with map.source truth")
         self.planner = make_planner(dataclasses.replace(cfg, follower=follower), head_width_m, body)
+        self.chain = body if isinstance(body, BodyChain) else None
         if obstacle_map is not None:
             self.planner.obstacle_map = obstacle_map
         self.replan_period_s = float(cfg.replan_period_s)
@@ -134,9 +142,11 @@ class NavLoop:
         self._pose_t = None
         self._history = deque(maxlen=POSE_HISTORY)     # (t_s, T_world_base), in arrival order
         self._frame = None
+        self._joints = deque(maxlen=POSE_HISTORY)      # (t_s, q), in arrival order
         self._next_replan = None
         self.state = WAITING if self.goal_xy is not None else NO_GOAL
         self.replans = 0
+        self.replans_without_joints = 0    # with a chain: replans on the commanded shape (no fresh joints)
         self.stops_no_free_arc = 0
         self.refused = Counter()           # input kind ("pose", "frame") -> refusals
         self.last_refusal = ""
@@ -209,6 +219,35 @@ class NavLoop:
             return self.refuse("frame", f"stamp {t_s:.3f} s older than the last frame's {self._frame[0]:.3f} s")
         self._frame = (float(t_s), image)
         return None
+
+    def on_joints(self, t_s: float, q) -> Optional[str]:
+        """The joints' measured angles at t_s (rad, joint_1 .. joint_N: joint_states). None when taken,
+        else why it was refused (nothing changes then). Without a BodyChain they are refused."""
+        chain = self.chain
+        if chain is None:
+            return self.refuse("joints", "this loop has no body chain (body: BodyChain) to place them on")
+        q = np.asarray(q, float)
+        if q.shape != (chain.num_joints,):
+            return self.refuse("joints", f"shape {q.shape}, expected ({chain.num_joints},)")
+        if not (math.isfinite(t_s) and np.all(np.isfinite(q))):
+            return self.refuse("joints", "not finite")
+        if self._joints and t_s < self._joints[-1][0]:
+            return self.refuse("joints", f"stamp {t_s:.3f} s older than the last joints' {self._joints[-1][0]:.3f} s")
+        self._joints.append((float(t_s), q))
+        return None
+
+    def body_at(self, t_s: float, T_world_base: np.ndarray) -> Optional[BodyState]:
+        """The body as its joints lay nearest t_s (base_link at T_world_base), None without joints
+        younger than pose_timeout_s there."""
+        if not self._joints:
+            return None
+        times = [j[0] for j in self._joints]
+        i = bisect.bisect_left(times, t_s)
+        j = min((k for k in (i - 1, i) if 0 <= k < len(times)), key=lambda k: abs(times[k] - t_s))
+        if abs(times[j] - t_s) > self.pose_timeout_s:
+            return None
+        T_wg = T_world_ground(ground_frame(T_world_base))
+        return BodyState(self._joints[j][1], np.linalg.inv(T_wg) @ T_world_base)
 
     @property
     def pose(self):
@@ -295,7 +334,10 @@ class NavLoop:
         T_wb = self.pose_at(t_frame)           # where the camera was when it took the frame
         pose = ground_frame(T_wb)
         T_gc = np.linalg.inv(T_world_ground(pose)) @ T_wb @ self.T_base_optical
-        r = self.planner.replan(t_s, ground, T_gc, pose, self.goal_xy, self.goal_radius_m, unknown)
+        body = self.body_at(t_frame, T_wb)
+        if body is None and self.chain is not None:
+            self.replans_without_joints += 1
+        r = self.planner.replan(t_s, ground, T_gc, pose, self.goal_xy, self.goal_radius_m, unknown, body)
         self.replans += 1
         if r.path_world is None:
             self.stops_no_free_arc += 1

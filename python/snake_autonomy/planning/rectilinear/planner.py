@@ -134,9 +134,10 @@ class NavPlanner:
         return width + 2.0 * self.sampler_params.lateral_margin_m
 
     def replan(self, t_s: float, ground_image: np.ndarray, T_ground_camera: np.ndarray, pose,
-               goal_xy=None, goal_radius_m: float = 0.0, unknown=None) -> Replan:
+               goal_xy=None, goal_radius_m: float = 0.0, unknown=None, body=None) -> Replan:
         """unknown (the image's unmeasured pixels) is not read: this planner takes the region's edge as
-        the obstacle's, wherever it is."""
+        the obstacle's, wherever it is; nor is body (the joints' angles: its guards place the body as
+        uniform arcs)."""
         sp = self.sampler_params
         T_world_g = T_world_ground(pose)
         T_g_world = np.linalg.inv(T_world_g)
