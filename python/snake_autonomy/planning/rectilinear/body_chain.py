@@ -43,6 +43,9 @@ class BodyChain:
         self._kin = _core.Kinematics(robot)
         self._steer = _core.CurvatureSteering(robot)
         self._yaw = np.asarray(self._steer.yaw_joints, int)
+        # each frame's arc length from base_link: the links are rigid, whatever the joints
+        straight = self.frames(np.zeros(self.num_joints))
+        self._along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(straight, axis=0), axis=1))])
 
     def bent(self, q: np.ndarray, kappa_per_m: float) -> np.ndarray:
         """q with its yaw joints at the biases the driver commands for kappa_per_m (the pitch joints kept)."""
@@ -56,10 +59,15 @@ class BodyChain:
         quat = matrix_to_quat(np.eye(3) if R_ground_base is None else np.asarray(R_ground_base, float))
         return np.asarray(self._kin.compute(np.zeros(3), quat, np.asarray(q, float)).link_positions)
 
-    def stations(self, q: np.ndarray, R_ground_base: np.ndarray, arc_m: np.ndarray) -> np.ndarray:
+    def stations(self, q: np.ndarray, R_ground_base: Optional[np.ndarray], arc_m: np.ndarray) -> np.ndarray:
         """(N, 2) the points of the body at arc lengths arc_m from base_link along the chain, on the
-        floor (the links are straight between the frames)."""
-        p = self.frames(q, R_ground_base)
-        along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
-        a = np.clip(arc_m, 0.0, along[-1])
-        return np.column_stack([np.interp(a, along, p[:, 0]), np.interp(a, along, p[:, 1])])
+        floor (the links are straight between the frames); q (K, num_joints): (K, N, 2), one body each."""
+        q = np.asarray(q, float)
+        quat = matrix_to_quat(np.eye(3) if R_ground_base is None else np.asarray(R_ground_base, float))
+        p = np.stack([np.asarray(self._kin.compute(np.zeros(3), quat, qk).link_positions)[:, :2]
+                      for qk in np.atleast_2d(q)])                                   # (K, F, 2)
+        x = np.interp(np.clip(arc_m, 0.0, self._along[-1]), self._along, np.arange(len(self._along)))
+        i = np.minimum(x.astype(int), len(self._along) - 2)
+        f = (x - i)[None, :, None]
+        out = p[:, i] * (1.0 - f) + p[:, i + 1] * f
+        return out if q.ndim == 2 else out[0]

@@ -106,7 +106,7 @@ class BodySweep:
             q0, R = np.asarray(body.q, float), np.asarray(body.T_ground_base, float)[:3, :3]
         q1 = self.chain.bent(q0, kappa_new)
         arc = g.half_length_m - self._s
-        shapes = np.stack([self.chain.stations(q0 + fi * (q1 - q0), R, arc) for fi in f])
+        shapes = self.chain.stations(q0[None, :] + f[:, None] * (q1 - q0)[None, :], R, arc)
         m = len(self._s) // 2
         heading = np.arctan2(*(shapes[:, m + 1] - shapes[:, m - 1])[:, ::-1].T)
         turn = heading[0] - heading
