@@ -77,6 +77,7 @@ class BodySweep:
         # the stations' arc lengths from the middle, tail to head (as body_model.body_poses places them)
         h, n = geometry.half_length_m, max(1, int(np.ceil(geometry.half_length_m / params.station_m)))
         self._s = np.concatenate([np.linspace(-h, 0.0, n + 1), np.linspace(0.0, h, n + 1)[1:]])
+        self._from_base = h - self._s      # the same stations' arc lengths from base_link (the chain's)
 
     def turn_rate(self, kappa: float) -> float:
         """The body's turn rate at kappa (rad/s): the gait map's omega beyond the dead band."""
@@ -105,8 +106,7 @@ class BodySweep:
         else:
             q0, R = np.asarray(body.q, float), np.asarray(body.T_ground_base, float)[:3, :3]
         q1 = self.chain.bent(q0, kappa_new)
-        arc = g.half_length_m - self._s
-        shapes = self.chain.stations(q0[None, :] + f[:, None] * (q1 - q0)[None, :], R, arc)
+        shapes = self.chain.stations(q0[None, :] + f[:, None] * (q1 - q0)[None, :], R, self._from_base)
         m = len(self._s) // 2
         heading = np.arctan2(*(shapes[:, m + 1] - shapes[:, m - 1])[:, ::-1].T)
         turn = heading[0] - heading

@@ -68,6 +68,13 @@ def checked_positive(key: str, v) -> float:
     return float(v)
 
 
+def _nearest(history, t_s: float):
+    """The (t_s, value) of a non-empty history (stamps in order) whose stamp is nearest t_s."""
+    times = [h[0] for h in history]
+    i = bisect.bisect_left(times, t_s)
+    return history[min((j for j in (i - 1, i) if 0 <= j < len(times)), key=lambda j: abs(times[j] - t_s))]
+
+
 def _checked_goal(goal_xy) -> Tuple[float, float]:
     """(x, y) as floats when both are finite, else ValueError naming the value."""
     try:
@@ -200,10 +207,7 @@ class NavLoop:
         """base_link's pose nearest t_s among the recent ones (the latest when the history is empty)."""
         if not self._history:
             return self._T_wb
-        times = [h[0] for h in self._history]
-        i = bisect.bisect_left(times, t_s)
-        near = [j for j in (i - 1, i) if 0 <= j < len(times)]
-        return self._history[min(near, key=lambda j: abs(times[j] - t_s))][1]
+        return _nearest(self._history, t_s)[1]
 
     def on_frame(self, t_s: float, image: np.ndarray) -> Optional[str]:
         """The latest camera frame (what the perception reads: depth in m or colour, the size of
@@ -236,18 +240,13 @@ class NavLoop:
         self._joints.append((float(t_s), q))
         return None
 
-    def body_at(self, t_s: float, T_world_base: np.ndarray) -> Optional[BodyState]:
-        """The body as its joints lay nearest t_s (base_link at T_world_base), None without joints
-        younger than pose_timeout_s there."""
+    def body_at(self, t_s: float, T_ground_base: np.ndarray) -> Optional[BodyState]:
+        """The body as its joints lay nearest t_s (base_link at T_ground_base in the replan's ground
+        frame), None without joints within pose_timeout_s of t_s."""
         if not self._joints:
             return None
-        times = [j[0] for j in self._joints]
-        i = bisect.bisect_left(times, t_s)
-        j = min((k for k in (i - 1, i) if 0 <= k < len(times)), key=lambda k: abs(times[k] - t_s))
-        if abs(times[j] - t_s) > self.pose_timeout_s:
-            return None
-        T_wg = T_world_ground(ground_frame(T_world_base))
-        return BodyState(self._joints[j][1], np.linalg.inv(T_wg) @ T_world_base)
+        t_joints, q = _nearest(self._joints, t_s)
+        return BodyState(q, T_ground_base) if abs(t_joints - t_s) <= self.pose_timeout_s else None
 
     @property
     def pose(self):
@@ -333,8 +332,9 @@ class NavLoop:
         ground = np.asarray(ground, bool)
         T_wb = self.pose_at(t_frame)           # where the camera was when it took the frame
         pose = ground_frame(T_wb)
-        T_gc = np.linalg.inv(T_world_ground(pose)) @ T_wb @ self.T_base_optical
-        body = self.body_at(t_frame, T_wb)
+        T_gb = np.linalg.inv(T_world_ground(pose)) @ T_wb
+        T_gc = T_gb @ self.T_base_optical
+        body = self.body_at(t_frame, T_gb)
         if body is None and self.chain is not None:
             self.replans_without_joints += 1
         r = self.planner.replan(t_s, ground, T_gc, pose, self.goal_xy, self.goal_radius_m, unknown, body)
