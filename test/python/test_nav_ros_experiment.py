@@ -67,13 +67,15 @@ def test_the_watch_ends_after_settling_at_the_goal_and_decides_by_the_final_pose
     assert w.step(20.0) is None and w.t_move is None
     w.on_command(21.0, "rectilinear")
     w.on_planner(80.0, {"state": "goal_reached"})
-    w.on_planner(85.0, {"state": "goal_reached"})
+    assert w.result(82.0)["replans_without_joints"] is None
+    w.on_planner(85.0, {"state": "goal_reached", "replans": "7", "replans_without_joints": "2"})
     assert w.step(89.0) is None
     w.on_truth(0.9, 0.05)
     w.on_sim({"obstacle_contacts": "0", "min_clearance_m": "0.120"})
     assert w.step(90.0) == "goal_reached"
     r = w.result(90.5)
     assert (r["goal_reached"], r["loop_reached"], r["time_s"], r["collisions"]) == (True, True, 59.0, 0)
+    assert (r["replans"], r["replans_without_joints"]) == (7, 2)
     w.on_truth(1.3, 0.0)                           # the hold left the disc: not reached
     assert w.result(91.0)["goal_reached"] is False
 

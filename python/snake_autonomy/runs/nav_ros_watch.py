@@ -139,7 +139,8 @@ class Watch:
 
     def result(self, now: float) -> Dict:
         """metrics.json's ROS part: goal_reached (the loop said so and base_link ends inside the goal's
-        disc), loop_reached, time_s, final_distance_m, collisions (sim_node's contact episodes)."""
+        disc), loop_reached, time_s, final_distance_m, collisions (sim_node's contact episodes), the planner's
+        replans and replans_without_joints (None before its first status)."""
         with self.lock:
             d = self.distance_m()
             loop_reached = self.t_reached is not None
@@ -153,6 +154,8 @@ class Watch:
                     "state": self.planner.get("state", "none"),
                     "replans": _int(self.planner.get("replans")),
                     "stops_no_free_arc": _int(self.planner.get("stops_no_free_arc")),
+                    # replans on the commanded shape: no joint_states within the pose timeout
+                    "replans_without_joints": _int(self.planner.get("replans_without_joints")),
                     "started_after_s": None if self.t_move is None else round(self.t_move - self.t0, 1),
                     "end": self.end or "running",
                     "watched_s": round(now - self.t0, 1),
