@@ -68,6 +68,31 @@ def test_the_reshape_ends_in_the_commanded_shape_about_the_middle():
     assert np.abs(pairwise(final) - pairwise(s.rows[0])).max() > 0.02
 
 
+def test_while_crawling_each_reshape_shape_is_where_the_crawl_has_carried_it():
+    fp = dataclasses.replace(CFG.follower, kappa_rate_per_m_s=0.2)
+    in_place = BodySweep(CHAIN.geometry, fp, SweepParams(dead_band_per_m=0.0), CHAIN)
+    crawling = BodySweep(CHAIN.geometry, fp, SweepParams(dead_band_per_m=0.0, reshape_while_crawling=True), CHAIN)
+    reshape_m = fp.speed_m_s * 1.0 / 0.2                  # kappa 0 -> 1 at 0.2 /m/s, the gait on at speed_m_s
+    for travel in (0.3, -0.1):
+        a, b = in_place.sweep(0.0, 1.0, travel), crawling.sweep(0.0, 1.0, travel)
+        assert a.travel_m[:a.reshape_rows + 1].max() == 0.0                       # reshaped where it lies
+        np.testing.assert_allclose(b.travel_m[:b.reshape_rows + 1], reshape_m * np.array([0, 1 / 3, 2 / 3, 1]))
+        assert b.travel_m[-1] == pytest.approx(abs(travel))
+        m = a.rows.shape[1] // 2
+        ahead = b.rows[b.reshape_rows, m, 0] - a.rows[a.reshape_rows, m, 0]     # the middle, the last shape
+        assert ahead == pytest.approx(np.sign(travel) * reshape_m, abs=0.01)
+        # the same shape (its stations' mutual distances), only carried
+        d = [np.linalg.norm(s.rows[s.reshape_rows][:, None] - s.rows[s.reshape_rows][None], axis=-1) for s in (a, b)]
+        np.testing.assert_allclose(d[0], d[1], atol=1e-9)
+    # a motion shorter than the reshape ends in the shape it reached by then: a third of the way
+    short = crawling.sweep(0.0, 1.0, reshape_m / 3)
+    np.testing.assert_allclose(short.travel_m, reshape_m / 3 * np.array([0, 1 / 3, 2 / 3, 1]))
+    third = crawling.sweep(0.0, 1.0 / 3, reshape_m / 3)
+    np.testing.assert_allclose(short.rows, third.rows, atol=1e-9)           # as if a third had been asked
+    same = crawling.sweep(0.7, 0.7, 0.3)                   # no reshape: nothing to crawl through
+    np.testing.assert_allclose(same.rows, in_place.sweep(0.7, 0.7, 0.3).rows, atol=1e-12)
+
+
 def _loop():
     cfg = dataclasses.replace(CFG, planner=dataclasses.replace(CFG.planner, kind="layered"))
     k = cfg.intrinsics

@@ -149,6 +149,9 @@ def test_the_crawl_guards_keys_are_validated(key):
 def test_reshape_keeps_centroid_is_validated():
     with pytest.raises(NavConfigError, match=r"sampler.reshape_keeps_centroid: must be true or false, got 'yes'"):
         NavConfig.from_dict({"sampler": {"reshape_keeps_centroid": "yes"}})
+    with pytest.raises(NavConfigError, match=r"body_sweep.reshape_while_crawling: must be true or false, got 1"):
+        NavConfig.from_dict({"body_sweep": {"reshape_while_crawling": 1}})
+    assert not NavConfig.from_yaml(nav_config_path("chang_rectilinear")).body_sweep.reshape_while_crawling
 
 
 def test_cobras_nav_config_turns_on_the_tail_body_and_crawl_guards():

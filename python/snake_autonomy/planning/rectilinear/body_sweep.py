@@ -9,6 +9,10 @@ test/python/test_nav_body_model.py):
    tangent, turning at the gait map's omega(kappa) (none within `dead_band_per_m`: below it the
    measured body translates, it does not turn), forwards or (backing off, the reverse gait)
    backwards.
+With `reshape_while_crawling` the two overlap as the robot moves: the follower reaches the new
+curvature at its rate limit while the gait crawls on, so each reshape shape is checked where the
+crawl has carried it by then (bench/nav_body_model_error: closer to the plant's body at the next
+replan; not the default, docs/navigation_measured.md).
 The sweep is every station of the body (every `station_m` from tail to head) in each reshape shape and
 at every `step_m` of the crawl. A sweep is clear up to the travel where a station first comes nearer
 an occupied cell of the local map than half the body's width + `margin_m` -- or, when the body already
@@ -32,7 +36,7 @@ import numpy as np
 
 from .body_chain import BodyChain, BodyState
 from .body_model import RESHAPE_FRACTIONS, BodyGeometry, middle_pose
-from .unicycle import arc_poses
+from .unicycle import arc_poses, predict
 
 SLACK_M = 0.02              # the body may come this much nearer than it is now (half a station spacing)
 
@@ -45,13 +49,14 @@ class SweepParams:
     step_m: float = 0.05                  # crawl samples
     reshape_keeps_centroid: bool = True   # COBRA's measured body; the 12-link robot's: about the middle
     dead_band_per_m: float = 0.35         # the body does not turn below this curvature (COBRA)
+    reshape_while_crawling: bool = False  # the reshape at the follower's rate limit while the gait crawls on
 
     def validate(self) -> List[str]:
         p = [f"{k}: must be > 0, got {getattr(self, k)}" for k in ("station_m", "step_m") if not getattr(self, k) > 0]
         p += [f"{k}: must be >= 0, got {getattr(self, k)}" for k in ("margin_m", "dead_band_per_m")
               if not getattr(self, k) >= 0]
-        if not isinstance(self.reshape_keeps_centroid, bool):
-            p.append(f"reshape_keeps_centroid: must be true or false, got {self.reshape_keeps_centroid!r}")
+        p += [f"{k}: must be true or false, got {getattr(self, k)!r}"
+              for k in ("reshape_keeps_centroid", "reshape_while_crawling") if not isinstance(getattr(self, k), bool)]
         return p
 
 
@@ -120,24 +125,52 @@ class BodySweep:
     def sweep(self, kappa_now: float, kappa_new: float, travel_m: float, body: Optional[BodyState] = None) -> Sweep:
         """The body's stations from its shape now (base_link at the ground frame's origin, heading 0)
         through the reshape to kappa_new and travel_m of crawl (negative: backwards). body: the joints'
-        angles now (with a chain; None: the shape of kappa_now)."""
+        angles now (with a chain; None: the shape of kappa_now). With reshape_while_crawling the body
+        crawls on while it reshapes (the follower's curvature reaches kappa_new at kappa_rate_per_m_s,
+        the gait keeps its speed: DWB's trajectory generator ramping to a velocity at its acceleration
+        limit): each reshape shape is where the crawl has carried it by then, turning at the curvature
+        of the moment; the crawl after it holds kappa_new. A travel shorter than the reshape's ends
+        in the shape reached by then."""
         p = self.params
-        shapes, mid = self._shapes(kappa_now, kappa_new, body, (0.0, *RESHAPE_FRACTIONS))     # (4, N, 2)
-        final = shapes[-1]
-        c0, s0 = np.cos(mid[2]), np.sin(mid[2])
-        d = final - np.asarray(mid[:2])
-        rel = np.column_stack([c0 * d[:, 0] + s0 * d[:, 1], -s0 * d[:, 0] + c0 * d[:, 1]])
-        rows = [shapes]
-        travel = [np.zeros(len(shapes))]
-        if abs(travel_m) > 0:
-            path = arc_poses(self.turn_rate(kappa_new) / self.fp.speed_m_s, travel_m, p.step_m,
-                             start=tuple(mid))[1:]
-            c, s = np.cos(path[:, 2])[:, None], np.sin(path[:, 2])[:, None]
-            xs = path[:, 0:1] + c * rel[None, :, 0] - s * rel[None, :, 1]
-            ys = path[:, 1:2] + s * rel[None, :, 0] + c * rel[None, :, 1]
-            rows.append(np.stack([xs, ys], axis=-1))
-            travel.append(np.linspace(0.0, travel_m, len(path) + 1)[1:])
-        return Sweep(np.concatenate(rows), np.abs(np.concatenate(travel)), len(RESHAPE_FRACTIONS))
+        sign = -1.0 if travel_m < 0 else 1.0
+        reach = abs(travel_m)
+        rate = self.fp.kappa_rate_per_m_s
+        reshape_m = (self.fp.speed_m_s * abs(kappa_new - kappa_now) / rate
+                     if p.reshape_while_crawling and rate > 0 and reach > 0 else 0.0)
+        # a motion shorter than the reshape ends part of the way to kappa_new (the next replan goes on)
+        part = min(1.0, reach / reshape_m) if reshape_m > 0 else 1.0
+        fractions = part * np.array([0.0, *RESHAPE_FRACTIONS])
+        kappa_end = kappa_now + part * (kappa_new - kappa_now)
+        shapes, mid = self._shapes(kappa_now, kappa_new, body, fractions)     # (4, N, 2)
+        middles = shapes[:, len(self._s) // 2]                                # each shape's middle
+        h0 = mid[2]
+        at = fractions * reshape_m                                          # travel at each reshape shape
+        done = at[-1]
+        # the middle's path (start frame: the first middle, heading h0): each reshape segment at its mean
+        # curvature, then the crawl at the curvature reached
+        ks = kappa_now + 0.5 * (fractions[:-1] + fractions[1:]) * (kappa_new - kappa_now)
+        poses = [(0.0, 0.0, 0.0)]
+        for k, a, b in zip(ks, at[:-1], at[1:]):
+            poses.append(predict(poses[-1], sign, sign * self.turn_rate(k) / self.fp.speed_m_s, b - a))
+        path = np.array(poses)
+        travel = at
+        if reach > done + 1e-9:
+            crawl = arc_poses(self.turn_rate(kappa_end) / self.fp.speed_m_s, sign * (reach - done), p.step_m,
+                              start=poses[-1])[1:]
+            path = np.vstack([path, crawl])
+            travel = np.concatenate([at, np.linspace(done, reach, len(crawl) + 1)[1:]])
+        n = len(path) - len(at)
+        which = np.concatenate([np.arange(len(fractions)), np.full(n, len(fractions) - 1)])
+        c0, s0 = np.cos(h0), np.sin(h0)
+        d = shapes[which] - middles[which][:, None, :]
+        rel = np.stack([c0 * d[..., 0] + s0 * d[..., 1], -s0 * d[..., 0] + c0 * d[..., 1]], axis=-1)
+        heading = h0 + path[:, 2]
+        ox = middles[which, 0] + c0 * path[:, 0] - s0 * path[:, 1]
+        oy = middles[which, 1] + s0 * path[:, 0] + c0 * path[:, 1]
+        c, sn = np.cos(heading)[:, None], np.sin(heading)[:, None]
+        rows = np.stack([ox[:, None] + c * rel[..., 0] - sn * rel[..., 1],
+                         oy[:, None] + sn * rel[..., 0] + c * rel[..., 1]], axis=-1)
+        return Sweep(rows, travel, len(RESHAPE_FRACTIONS))
 
     def check(self, sweep: Sweep, local_map, T_world_g: np.ndarray, known: bool = False) -> SweepCheck:
         """How far the sweep is clear of the map's occupied cells (T_world_g: the ground frame in the
