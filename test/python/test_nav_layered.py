@@ -304,6 +304,18 @@ def test_body_sweep_keeps_the_body_on_known_cells_when_asked():
     assert sweep.check(back, m, np.eye(4), known=True).free_m == pytest.approx(0.1)
 
 
+def test_a_body_beside_unknown_cells_backs_off_along_its_track_but_does_not_swing_into_them():
+    sweep = BodySweep(COBRA, CFG.follower, SweepParams(reshape_keeps_centroid=False))
+    m = _map_with([[3.0, 3.0]])
+    body = sweep.sweep(0.0, 0.0, 0.0).rows[0]
+    m.mark_body(np.vstack([body - [dx, 0.0] for dx in np.arange(0.0, 0.3, 0.02)]), 0.02)   # a narrow track
+    along, steered = sweep.sweep(0.0, 0.0, -0.1), sweep.sweep(0.0, 2.0, -0.1)
+    assert m.unknown_distance(along.rows[0]).min() < 0.5 * COBRA.width_m   # unknown cells right beside it
+    assert sweep.check(along, m, np.eye(4), known=True).free_m == pytest.approx(0.1)
+    assert sweep.check(steered, m, np.eye(4), known=True).free_m < 0       # the reshape swings the ends off it
+    assert sweep.check(steered, m, np.eye(4)).free_m == pytest.approx(0.1)  # no obstacle: only the unknown
+
+
 def test_the_simulators_truth_map_sets_every_cell_the_views_never_showed(root):
     """map.source truth (a diagnostic): the layered planner's local map is the world's, occupied at an
     obstacle behind the camera that no view shows, free elsewhere, whatever the view says."""

@@ -63,7 +63,7 @@ class SweepParams:
 @dataclass
 class Sweep:
     rows: np.ndarray         # (R, N, 2) stations in the ground frame: row 0 the body now, then the reshape, the crawl
-    travel_m: np.ndarray     # (R,) the crawl's travel at each row (0 for the reshape's rows)
+    travel_m: np.ndarray     # (R,) the crawl's travel at each row (the reshape's rows: 0, or where it has crawled to)
     reshape_rows: int        # rows 1..reshape_rows are the reshape
 
 
@@ -175,7 +175,8 @@ class BodySweep:
     def check(self, sweep: Sweep, local_map, T_world_g: np.ndarray, known: bool = False) -> SweepCheck:
         """How far the sweep is clear of the map's occupied cells (T_world_g: the ground frame in the
         world, 4x4). known: the body must also stay on cells the map knows (seen or lain on): no station
-        comes nearer an unknown cell than half the width, or than SLACK_M nearer than the body is now."""
+        comes nearer an unknown cell than half the width, or than SLACK_M nearer than the body is now,
+        and none that lies on a known cell enters an unknown one."""
         R, N, _ = sweep.rows.shape
         pts = sweep.rows.reshape(-1, 2) @ T_world_g[:2, :2].T + T_world_g[:2, 3]
         d = local_map.distance(pts).reshape(R, N)
@@ -189,7 +190,10 @@ class BodySweep:
         if known:
             du = local_map.unknown_distance(pts).reshape(R, N)
             half_u = min(half, float(du[0].min()) - SLACK_M) if N else half
-            ok &= (du >= half_u).all(axis=1)
+            # and no station on a known cell now enters an unknown one (du 0: inside an unknown cell): the
+            # allowance above is void when the body already lies beside unknown cells, as the 12-link robot's
+            # 5 cm body on 4 cm cells always does (backing off, its tail swung into blocks nobody saw)
+            ok &= (du >= half_u).all(axis=1) & ((du > 0) | (du[0] <= 0)[None, :]).all(axis=1)
         margin = (d - 0.5 * self.geometry.width_m).min(axis=1)
         if not ok[:sweep.reshape_rows + 1].all():
             return SweepCheck(-1.0, float(margin[:sweep.reshape_rows + 1].min()))
