@@ -301,8 +301,8 @@ def run_experiment(worlds: Sequence[Tuple[World, str]], seeds: Sequence[int], ou
             print(f"[ros] {world.name} seed {seed}: sim.launch, time limit {limit:.0f} s", flush=True)
             ros = run_ros(world, world_file, seed, limit, run_dir, robot, perception, classifier, nav_config)
             print(f"[ros] {world.name} seed {seed}: {ros['end']}, reached {ros['goal_reached']}, contacts "
-                  f"{ros['collisions']}, time {ros['time_s']} s, replans {ros['replans']} "
-                  f"({ros['replans_without_joints']} without joint_states), wall {ros['wall_s']} s, shutdown "
+                  f"{ros['collisions']}, time {ros['time_s']} s, replans {ros.get('replans')} "
+                  f"({ros.get('replans_without_joints')} without joint_states), wall {ros['wall_s']} s, shutdown "
                   f"{ros['shutdown']} ({ros['shutdown_s']} s)", flush=True)
             if ros["survivors"]:
                 raise RuntimeError(f"processes {ros['survivors']} of the launch outlived SIGKILL (see "
