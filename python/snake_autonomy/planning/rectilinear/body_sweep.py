@@ -162,8 +162,8 @@ class BodySweep:
         n = len(path) - len(at)
         which = np.concatenate([np.arange(len(fractions)), np.full(n, len(fractions) - 1)])
         c0, s0 = np.cos(h0), np.sin(h0)
-        d = shapes[which] - middles[which][:, None, :]
-        rel = np.stack([c0 * d[..., 0] + s0 * d[..., 1], -s0 * d[..., 0] + c0 * d[..., 1]], axis=-1)
+        d = shapes - middles[:, None, :]                                   # each shape about its middle, once
+        rel = np.stack([c0 * d[..., 0] + s0 * d[..., 1], -s0 * d[..., 0] + c0 * d[..., 1]], axis=-1)[which]
         heading = h0 + path[:, 2]
         ox = middles[which, 0] + c0 * path[:, 0] - s0 * path[:, 1]
         oy = middles[which, 1] + s0 * path[:, 0] + c0 * path[:, 1]
