@@ -5,6 +5,7 @@ ahead, and does not back off when the tail's track meets what the obstacle map h
 circle continued."""
 import dataclasses
 
+import numpy as np
 import pytest
 from shapely.geometry import Point
 
@@ -98,3 +99,16 @@ def test_the_tail_track_follows_the_body_curvature():
     mode, reason = stop_with((-1.0, 1.06, 0.03), kappa_per_m=1.0)
     assert mode == "turn_in_place", reason
     assert stop_with((-1.0, 1.06, 0.03), kappa_per_m=-1.0)[0] == "back_off"
+
+
+def test_the_follower_reports_the_curvature_its_recovery_steers_to():
+    f = RecedingHorizonFollower()
+    assert f.recovery_kappa() is None
+    f.back_off_now(0.7)
+    assert f.recovery_kappa() == pytest.approx(0.7)
+    f.back_off_now()                                    # the body's curvature held: the last commanded one
+    assert f.recovery_kappa() == pytest.approx(f.kappa_per_m)
+    f.stop_and_turn(-1.0, 2.5)
+    assert f.recovery_kappa() == pytest.approx(-2.5)
+    f.set_path(np.zeros((2, 2)), 0.0)
+    assert f.recovery_kappa() is None

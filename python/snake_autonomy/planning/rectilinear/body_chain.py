@@ -56,18 +56,23 @@ class BodyChain:
     def frames(self, q: np.ndarray, R_ground_base: Optional[np.ndarray] = None) -> np.ndarray:
         """(F, 3) the chain's frame origins, base_link to the tail's end, with base_link at the origin
         tilted by R_ground_base (None: level)."""
-        quat = matrix_to_quat(np.eye(3) if R_ground_base is None else np.asarray(R_ground_base, float))
-        return np.asarray(self._kin.compute(np.zeros(3), quat, np.asarray(q, float)).link_positions)
+        return self._frames(np.asarray(q, float), _quat(R_ground_base))
 
     def stations(self, q: np.ndarray, R_ground_base: Optional[np.ndarray], arc_m: np.ndarray) -> np.ndarray:
         """(N, 2) the points of the body at arc lengths arc_m from base_link along the chain, on the
         floor (the links are straight between the frames); q (K, num_joints): (K, N, 2), one body each."""
         q = np.asarray(q, float)
-        quat = matrix_to_quat(np.eye(3) if R_ground_base is None else np.asarray(R_ground_base, float))
-        p = np.stack([np.asarray(self._kin.compute(np.zeros(3), quat, qk).link_positions)[:, :2]
-                      for qk in np.atleast_2d(q)])                                   # (K, F, 2)
+        quat = _quat(R_ground_base)
+        p = np.stack([self._frames(qk, quat)[:, :2] for qk in np.atleast_2d(q)])     # (K, F, 2)
         x = np.interp(np.clip(arc_m, 0.0, self._along[-1]), self._along, np.arange(len(self._along)))
         i = np.minimum(x.astype(int), len(self._along) - 2)
         f = (x - i)[None, :, None]
         out = p[:, i] * (1.0 - f) + p[:, i + 1] * f
         return out if q.ndim == 2 else out[0]
+
+    def _frames(self, q: np.ndarray, quat) -> np.ndarray:
+        return np.asarray(self._kin.compute(np.zeros(3), quat, q).link_positions)
+
+
+def _quat(R_ground_base: Optional[np.ndarray]):
+    return matrix_to_quat(np.eye(3) if R_ground_base is None else np.asarray(R_ground_base, float))

@@ -84,6 +84,11 @@ class BodySweep:
         self._s = np.concatenate([np.linspace(-h, 0.0, n + 1), np.linspace(0.0, h, n + 1)[1:]])
         self._from_base = h - self._s      # the same stations' arc lengths from base_link (the chain's)
 
+    @property
+    def stations_from_base(self) -> np.ndarray:
+        """The stations' arc lengths from base_link (m), tail to head: the rows of every shape."""
+        return self._from_base
+
     def turn_rate(self, kappa: float) -> float:
         """The body's turn rate at kappa (rad/s): the gait map's omega beyond the dead band."""
         k = np.sign(kappa) * max(0.0, abs(kappa) - self.params.dead_band_per_m)

@@ -121,6 +121,15 @@ class RecedingHorizonFollower:
         """The last commanded (rate-limited) body curvature."""
         return self._kappa
 
+    def recovery_kappa(self) -> Optional[float]:
+        """The curvature the running recovery steers towards (signed; backing off with the body's
+        curvature held: the last commanded one); None when no recovery runs."""
+        if self.mode == TURN_IN_PLACE:
+            return self.turn_direction * self._turn_kappa
+        if self.mode == BACK_OFF:
+            return self._kappa if self._back_kappa is None else self._back_kappa
+        return None
+
     def set_path(self, path_world: np.ndarray, curvature_per_m: float,
                  kappa_bounds: Optional[Tuple[float, float]] = None) -> None:
         """kappa_bounds: (lo, hi) body curvature while following this path (the planner's swing
