@@ -169,10 +169,10 @@ class RecedingHorizonFollower:
             frac = self._turn_kappa / p.kappa_turn_per_m
             self._v, self._omega = 0.0, self.turn_direction * p.turn_in_place_rad_s * frac
             side = "left" if self.turn_direction > 0 else "right"
-            return Command(TURN_IN_PLACE, self._limit(self.turn_direction * self._turn_kappa, elapsed),
+            return Command(TURN_IN_PLACE, self._limit(self.recovery_kappa(), elapsed),
                            reason=f"no collision-free arc: stopped, turning in place {side}")
         if self.mode == BACK_OFF:
-            kappa = self._limit(self._kappa if self._back_kappa is None else self._back_kappa, elapsed)
+            kappa = self._limit(self.recovery_kappa(), elapsed)
             self._v, self._omega = -p.speed_m_s, -p.omega(kappa)
             return Command(BACK_OFF, kappa,
                            reason="no collision-free arc: backing off along the track")
