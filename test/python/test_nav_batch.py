@@ -36,6 +36,7 @@ def test_nav_run_writes_the_metrics_contract(root, tmp_path):
     for r in rows:
         arcs = dict(tuple(map(float, a.split(":"))) for a in r["arcs"].split())
         assert len(arcs) == 5 and all(0.0 <= free <= 1.2 for free in arcs.values())
+        assert r["arc_limits"] == "-----"      # a letter per arc; the perception-space planner does not tell
         chosen = float(r["chosen_curvature_per_m"])
         # the chosen arc's row matches its pair, within goal_tie_m (0.3) of the longest
         assert float(r["chosen_free_m"]) == arcs[chosen] >= max(arcs.values()) - 0.3

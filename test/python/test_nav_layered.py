@@ -204,6 +204,8 @@ def test_layered_planner_goes_round_an_obstacle_ahead():
     assert r.path_world is not None and pl.follower.mode == FOLLOW
     assert r.selection.arc.curvature_per_m != 0.0
     assert "body sweep" in r.reason
+    straight = next(a for a in r.selection.arcs if a.curvature_per_m == 0.0)
+    assert straight.limit == "obstacle" and straight.free_m < 0.9      # the disc ends it, not the horizon
 
 
 def test_layered_planner_backs_off_from_a_wall():
@@ -227,6 +229,7 @@ def test_the_12_link_robots_tightest_arcs_leave_its_cameras_view_beyond_its_seen
         return pl.replan(0.0, drawn_mask(), T_gc, (0.0, 0.0, 0.0), (0.1, 0.45), 0.2)     # the goal beside it
     cut = replan(0.3).selection
     assert max(a.free_m for a in cut.arcs if abs(a.curvature_per_m) >= 3.0) < 0.25      # left the view at ~0.2 m
+    assert {a.limit for a in cut.arcs if abs(a.curvature_per_m) >= 3.0} == {"unseen"}    # no obstacle drawn
     assert cut.arc.curvature_per_m < 3.0
     assert chang.sampler.known_free_m <= 0.2
     r = replan(chang.sampler.known_free_m)

@@ -183,16 +183,20 @@ class NavResult:
 
     def _write_replans(self, path) -> None:
         """One row per replan: base_link's pose, the candidate arcs as curvature:free_m pairs (path
-        curvature 1/m, free prefix m), the chosen arc's (empty when none was free) and the planner's
-        reason (back off, turn in place, ...): why a run went where it did, without re-running it."""
+        curvature 1/m, free prefix m), what ended each arc's prefix (arc_limits, a letter per arc: o an
+        obstacle near the head's path, u the head leaving the floor the views showed, b the body sweep,
+        - the horizon or a planner that does not tell), the chosen arc's (empty when none was free) and
+        the planner's reason (back off, turn in place, ...): why a run went where it did, without
+        re-running it."""
         with open(path, "w", newline="") as f:
             w = csv.writer(f)
-            w.writerow(["t_s", "x_m", "y_m", "heading_deg", "arcs", "chosen_curvature_per_m", "chosen_free_m",
-                        "reason"])
+            w.writerow(["t_s", "x_m", "y_m", "heading_deg", "arcs", "arc_limits", "chosen_curvature_per_m",
+                        "chosen_free_m", "reason"])
             for r in self.replans:
                 arc = r.selection.arc
                 w.writerow([f"{r.t_s:.2f}", f"{r.pose[0]:.4f}", f"{r.pose[1]:.4f}", f"{math.degrees(r.pose[2]):.1f}",
                             " ".join(f"{a.curvature_per_m:+.2f}:{a.free_m:.2f}" for a in r.selection.arcs),
+                            "".join(a.limit[:1] or "-" for a in r.selection.arcs),
                             "" if arc is None else f"{arc.curvature_per_m:+.2f}",
                             "" if arc is None else f"{arc.free_m:.2f}", r.reason])
 

@@ -97,7 +97,7 @@ class LayeredPlanner:
             self.route.update(self.map, pose[:2], goal_xy)
             route_path = self.route.path
         cands = [self._candidate(c, poses, s, kappa_now, T_world_g) for c, poses, s in self._arcs]
-        sel = Selection([Arc(c.curvature_per_m, c.poses, c.s_m, c.free_m) for c in cands], None)
+        sel = Selection([Arc(c.curvature_per_m, c.poses, c.s_m, c.free_m, c.why) for c in cands], None)
         if self._escape is not None:
             out = self._escaping(t_s, pose, sel, T_world_g, route_path)
             if out is not None:
@@ -135,7 +135,7 @@ class LayeredPlanner:
         ok = d >= np.minimum(self._head_need, d[0] - 1e-3)
         seen = self.map.seen_free(head) | self._unchecked
         head_free = prefix_length(ok & seen, s)
-        why = "head" if head_free < p.horizon_m else ""
+        why = "" if head_free >= p.horizon_m else ("obstacle" if prefix_length(ok, s) <= head_free else "unseen")
         chk = self.sweep.check(self.sweep.sweep(kappa_now, kappa, p.horizon_m, self._body), self.map, T_world_g)
         free = head_free
         if chk.free_m < free:

@@ -165,6 +165,8 @@ class Arc:
     poses: np.ndarray          # (N, 3) the head's path in the ground frame of the planning pose
     s_m: np.ndarray            # (N,) arc length of each pose
     free_m: float = 0.0        # collision-free prefix
+    limit: str = ""            # what ends it (layered planner): obstacle, unseen (the head leaves the floor
+                               # the views showed), body (the body sweep); "" the horizon or not told
 
 
 @dataclass
