@@ -26,6 +26,21 @@ def test_barn_worlds_are_the_family_sized_by_the_robots_nav_config_and_length():
     assert pairs[0][0].to_dict() == expected.to_dict()
 
 
+def test_a_nav_config_being_tuned_does_not_change_the_generated_worlds(tmp_path):
+    """An experiment's --config (here a footprint half the robot's) plans differently on the same worlds."""
+    from snake_autonomy.cli import main as cli_main
+    from snake_autonomy.paths import config_path
+    overlay = tmp_path / "narrow.yaml"
+    overlay.write_text(f"base: {config_path('nav.yaml')}\nsampler:\n  body_clearance_m: 0.125\n")
+    out = tmp_path / "exp"
+    assert cli_main(["nav", "experiment", "--family", "barn", "--first-world", "100", "--worlds", "1",
+                     "--seeds", "0", "--time-limit", "1", "--engine", "serial", "--no-progress",
+                     "--config", str(overlay), "--out", str(out)]) == 0
+    written = yaml.safe_load((out / "worlds" / "barn_100.yaml").read_text())
+    expected = barn_world(100, 0.25, body_length_m=body_length_m("cobra"))     # config/nav.yaml's 0.25
+    assert written == yaml.safe_load(yaml.safe_dump(expected.to_dict(), sort_keys=False))
+
+
 def test_corridors_have_gaps_from_the_robots_body_width():
     ry = robot_yaml("cobra")
     body = max(head_width_m(ry), 2.0 * RobotModel.from_yaml(str(ry)).link_radius_m)

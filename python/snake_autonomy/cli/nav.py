@@ -136,8 +136,10 @@ def add_arguments(parser):
     rx.add_argument("--no-progress", action="store_true", help="no progress bar (ROS + batch runs, on stderr)")
     for p in (tr, ev, run, ex, wd, rx):
         p.add_argument("--robot", default="cobra", help="robot name (config/robots/NAME.yaml) or YAML file")
+    for p in (tr, ev, run, ex, rx):        # not `worlds`: a world depends on the robot only
         p.add_argument("--config", default=None,
-                       help="nav config (default: config/nav_ROBOT.yaml if it exists, else config/nav.yaml)")
+                       help="nav config (default: config/nav_ROBOT.yaml if it exists, else config/nav.yaml); "
+                       "generated worlds do not depend on it")
 
 
 def _setup(args):
@@ -375,8 +377,8 @@ WORLDS_CONVENTION = ("World indices: tune on worlds 0-19 (--first-world 0 --worl
 
 
 def _generated(args, family: str):
-    """generated_worlds of `family` for the parsed --first-world, --worlds, --robot and --config."""
-    return generated_worlds(family, args.first_world, args.worlds, args.robot, args.config)
+    """generated_worlds of `family` for the parsed --first-world, --worlds and --robot."""
+    return generated_worlds(family, args.first_world, args.worlds, args.robot)
 
 
 def _chosen_worlds(args) -> list:

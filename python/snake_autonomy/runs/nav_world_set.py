@@ -19,12 +19,13 @@ from snake_autonomy.sim.nav_worlds import BarnLayout, barn_layout, random_corrid
 from snake_autonomy.sim.world_file import World, WorldError, load_world
 
 
-def generated_worlds(family: str, first_world: int, worlds: int, robot: str,
-                     nav_config: Optional[str] = None) -> List[Tuple[World, Optional[BarnLayout]]]:
+def generated_worlds(family: str, first_world: int, worlds: int,
+                     robot: str) -> List[Tuple[World, Optional[BarnLayout]]]:
     """[(world, BarnLayout or None)] of the family's worlds first_world .. first_world + worlds - 1,
-    for the robot: corridors' gaps from its body width, barn's footprint from its nav config's
-    sampler.body_clearance_m (nav_config, else the robot's) and the body's length behind base_link
-    from the robot model."""
+    for the robot: corridors' gaps from its body width, barn's footprint from the robot's own nav
+    config's sampler.body_clearance_m (config/nav_ROBOT.yaml, else nav.yaml: never a --config being
+    tuned, whose worlds would then change with it) and the body's length behind base_link from the
+    robot model."""
     if worlds < 1:
         raise ValueError(f"--worlds must be >= 1, got {worlds}")
     if first_world < 0:
@@ -35,7 +36,7 @@ def generated_worlds(family: str, first_world: int, worlds: int, robot: str,
     if family == "corridors":
         body = max(head_width_m(ry), 2.0 * model.link_radius_m)
         return [(random_corridor(k, body_width_m=body), None) for k in indices]
-    clearance = NavConfig.from_yaml(nav_config or nav_config_path(robot)).sampler.body_clearance_m
+    clearance = NavConfig.from_yaml(nav_config_path(robot)).sampler.body_clearance_m
     length = model.head_length_m + model.num_joints * model.link_length_m + model.link_radius_m
     layouts = [barn_layout(k, clearance, body_length_m=length) for k in indices]
     return [(b.world, b) for b in layouts]
