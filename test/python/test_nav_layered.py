@@ -208,6 +208,22 @@ def test_layered_planner_goes_round_an_obstacle_ahead():
     assert straight.limit == "obstacle" and straight.free_m < 0.9      # the disc ends it, not the horizon
 
 
+def test_cobras_layered_config_drives_through_a_passage_its_body_sweep_finds_clear(root):
+    """config/nav_layered.yaml leaves the body's reach to the body sweep: the straight arc goes through a
+    0.5 m passage (the BARN-like fields' narrowest for COBRA); the head's footprint widened to nav.yaml's
+    body_clearance_m 0.25 ends every arc before it."""
+    passage = drawn_mask(boxes=[(0.4, 1.0, 0.25, 0.6), (0.4, 1.0, -0.6, -0.25)])
+
+    def straight(cfg):
+        f = RecedingHorizonFollower(dataclasses.replace(cfg.follower, kappa_rate_per_m_s=0.0))
+        r = LayeredPlanner(K, 0.09, cfg, f, COBRA).replan(0.0, passage, T_GC, (0.0, 0.0, 0.0), (1.5, 0.0), 0.2)
+        return next(a for a in r.selection.arcs if a.curvature_per_m == 0.0)
+    through = straight(NavConfig.from_yaml(root / "config" / "nav_layered.yaml"))
+    assert through.limit == "" and through.free_m == pytest.approx(1.1)
+    widened = straight(LAYERED)
+    assert widened.limit == "obstacle" and widened.free_m < 0.4
+
+
 def test_layered_planner_backs_off_from_a_wall():
     pl = layered()
     r = pl.replan(0.0, drawn_mask(**WALL), T_GC, (0.0, 0.0, 0.0), (1.5, 0.0), 0.2)
