@@ -204,24 +204,22 @@ def test_layered_planner_goes_round_an_obstacle_ahead():
     assert r.path_world is not None and pl.follower.mode == FOLLOW
     assert r.selection.arc.curvature_per_m != 0.0
     assert "body sweep" in r.reason
-    straight = next(a for a in r.selection.arcs if a.curvature_per_m == 0.0)
-    assert straight.limit == "obstacle" and straight.free_m < 0.9      # the disc ends it, not the horizon
+    limits = {a.curvature_per_m: (a.limit, a.free_m) for a in r.selection.arcs}
+    assert limits[0.75][0] == "obstacle" and limits[0.75][1] < 0.9     # the disc ends the arc past it
+    assert limits[-3.0] == ("", pytest.approx(1.1))                    # the horizon, less margin_m, ends this one
 
 
-def test_cobras_layered_config_drives_through_a_passage_its_body_sweep_finds_clear(root):
-    """config/nav_layered.yaml leaves the body's reach to the body sweep: the straight arc goes through a
-    0.5 m passage (the BARN-like fields' narrowest for COBRA); the head's footprint widened to nav.yaml's
-    body_clearance_m 0.25 ends every arc before it."""
+def test_the_layered_planner_leaves_the_bodys_reach_to_the_body_sweep(root):
+    """The straight arc goes through a 0.5 m passage (the BARN-like fields' narrowest for COBRA) with
+    nav.yaml's body_clearance_m 0.25: the head's footprint is not widened to the body's reach (widened, it
+    ended every arc before the passage), the body sweep alone judges the body."""
     passage = drawn_mask(boxes=[(0.4, 1.0, 0.25, 0.6), (0.4, 1.0, -0.6, -0.25)])
-
-    def straight(cfg):
+    assert LAYERED.sampler.body_clearance_m == pytest.approx(0.25)
+    for cfg in (LAYERED, NavConfig.from_yaml(root / "config" / "nav_layered.yaml")):
         f = RecedingHorizonFollower(dataclasses.replace(cfg.follower, kappa_rate_per_m_s=0.0))
         r = LayeredPlanner(K, 0.09, cfg, f, COBRA).replan(0.0, passage, T_GC, (0.0, 0.0, 0.0), (1.5, 0.0), 0.2)
-        return next(a for a in r.selection.arcs if a.curvature_per_m == 0.0)
-    through = straight(NavConfig.from_yaml(root / "config" / "nav_layered.yaml"))
-    assert through.limit == "" and through.free_m == pytest.approx(1.1)
-    widened = straight(LAYERED)
-    assert widened.limit == "obstacle" and widened.free_m < 0.4
+        straight = next(a for a in r.selection.arcs if a.curvature_per_m == 0.0)
+        assert straight.limit == "" and straight.free_m == pytest.approx(1.1)
 
 
 def test_layered_planner_backs_off_from_a_wall():

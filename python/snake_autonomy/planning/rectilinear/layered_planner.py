@@ -10,12 +10,14 @@
       -> the follower (follower.py: receding-horizon pursuit of the chosen arc, its curvature bounded to
          the run of candidates whose reshape the sweep found clear)
 
-An arc's free prefix ends where the head's footprint (its width + lateral_margin_m a side, growing
-to sampler.body_clearance_m a side over the first footprint_taper_m: the body's reach beyond the
-head's path) comes nearer an occupied cell than it already is at the start, where the head's path leaves the floor the
+An arc's free prefix ends where the head's footprint (its width + lateral_margin_m a side) comes
+nearer an occupied cell than it already is at the start, where the head's path leaves the floor the
 views showed within its first known_free_m (the camera's blind near field, blind_m, excepted: the
 floor under the head was seen before), or where the body's sweep is no longer clear; margin_m (the
-head cap ahead of base_link and a safety distance) comes off it. Valid arcs are at least min_free_m
+head cap ahead of base_link and a safety distance) comes off it. The body's reach beyond the head's
+path is the body sweep's alone: the perception-space planner's widening of the head's footprint to
+sampler.body_clearance_m (over footprint_taper_m) is not applied here (with it COBRA's arcs ended at
+0.1-0.3 m in the BARN-like fields' 0.5 m passages; docs/navigation_measured.md). Valid arcs are at least min_free_m
 long (resume_free_m after a stop). The ground frame of a replan: base_link on the floor (x, y,
 heading).
 """
@@ -65,10 +67,7 @@ class LayeredPlanner:
                                              # obstacles, the local map set from them every replan
         p = self.sp
         self._arcs = candidate_arcs(p)
-        # the head's footprint, growing from its own width to the body's reach over footprint_taper_m
         s = self._arcs[0][2]
-        ramp = np.clip(s / p.footprint_taper_m, 0.0, 1.0) if p.footprint_taper_m > 0 else np.ones_like(s)
-        self._head_need = self.head_need_m + ramp * (max(self.head_need_m, p.body_clearance_m) - self.head_need_m)
         self._unchecked = (s < cfg.local_map.blind_m) | (s > p.known_free_m)   # need not be seen as floor
 
     @property
@@ -132,7 +131,7 @@ class LayeredPlanner:
         kappa = fp.kappa(fp.speed_m_s * c)
         head = world_xy(T_world_g, poses[:, :2])
         d = self.map.distance(head)
-        ok = d >= np.minimum(self._head_need, d[0] - 1e-3)
+        ok = d >= min(self.head_need_m, d[0] - 1e-3)
         seen = self.map.seen_free(head) | self._unchecked
         head_free = prefix_length(ok & seen, s)
         why = "" if head_free >= p.horizon_m else ("obstacle" if prefix_length(ok, s) <= head_free else "unseen")
