@@ -59,7 +59,7 @@ class Candidate:
     free_m: float = 0.0              # the valid prefix (head and body sweep), margin taken off
     clearance_m: float = np.inf      # the sweep's least distance to an obstacle beyond half the width
     reshape_clear: bool = True       # the body can reshape to kappa_per_m
-    why: str = ""                    # what ends the prefix: obstacle, unseen, body ("" the horizon)
+    limit: str = ""                  # what ends the prefix: obstacle, unseen, body ("" the horizon)
     scores: Dict[str, float] = field(default_factory=dict)
 
 

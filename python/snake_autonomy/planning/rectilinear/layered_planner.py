@@ -96,7 +96,7 @@ class LayeredPlanner:
             self.route.update(self.map, pose[:2], goal_xy)
             route_path = self.route.path
         cands = [self._candidate(c, poses, s, kappa_now, T_world_g) for c, poses, s in self._arcs]
-        sel = Selection([Arc(c.curvature_per_m, c.poses, c.s_m, c.free_m, c.why) for c in cands], None)
+        sel = Selection([Arc(c.curvature_per_m, c.poses, c.s_m, c.free_m, c.limit) for c in cands], None)
         if self._escape is not None:
             out = self._escaping(t_s, pose, sel, T_world_g, route_path)
             if out is not None:
@@ -134,12 +134,12 @@ class LayeredPlanner:
         ok = d >= min(self.head_need_m, d[0] - 1e-3)
         seen = self.map.seen_free(head) | self._unchecked
         head_free = prefix_length(ok & seen, s)
-        why = "" if head_free >= p.horizon_m else ("obstacle" if prefix_length(ok, s) <= head_free else "unseen")
+        limit = "" if head_free >= p.horizon_m else ("obstacle" if prefix_length(ok, s) <= head_free else "unseen")
         chk = self.sweep.check(self.sweep.sweep(kappa_now, kappa, p.horizon_m, self._body), self.map, T_world_g)
         free = head_free
         if chk.free_m < free:
-            free, why = max(0.0, chk.free_m), "body"
-        return Candidate(c, kappa, poses, s, max(0.0, free - p.margin_m), chk.clearance_m, chk.free_m >= 0, why)
+            free, limit = max(0.0, chk.free_m), "body"
+        return Candidate(c, kappa, poses, s, max(0.0, free - p.margin_m), chk.clearance_m, chk.free_m >= 0, limit)
 
     def _route_cost(self, cands, valid, T_world_g, goal_xy, goal_radius_m):
         """Per valid candidate, the route's cost to go at the end of its free prefix, or (a prefix
