@@ -157,7 +157,7 @@ class NavResult:
     frames: List[np.ndarray] = field(default_factory=list)   # overlays at each replan
     world: Optional[World] = None
     contacts: list = field(default_factory=list)     # (collisions.ContactEpisode, the follower's mode)
-    obstacle_map: Any = None                          # the planner's map at the end (shapely; map.source)
+    obstacle_map: Any = None                          # the planner's map at the end (shapely; _planner_map)
     commands: list = field(default_factory=list)      # (t_s, gait, kappa_per_m, loop state) each command sent
 
     def write(self, out_dir) -> None:
@@ -216,7 +216,7 @@ class NavResult:
             polys = [g for g in getattr(self.obstacle_map, "geoms", [self.obstacle_map]) if g.geom_type == "Polygon"]
             for i, poly in enumerate(polys):
                 ax.add_patch(Polygon(np.asarray(poly.exterior.coords), color="r", alpha=0.25, lw=0,
-                                     label="obstacle map at the end (map.source)" if i == 0 else None))
+                                     label="the planner's map at the end" if i == 0 else None))
         ax.add_patch(Circle(w.goal, w.goal_radius_m, fill=False, color="g", lw=2))
         ax.plot(self.trajectory[:, 1], self.trajectory[:, 2], "b-", lw=1.5, label="base_link")
         routes = [r.route_world for r in self.replans if r.route_world is not None]
@@ -395,12 +395,19 @@ class NavRun:
         metrics.update(self.poses.metrics(), pose_latency_s=self.pose_latency_s, depth_model=self.depth_model,
                        ticks_stale=sum(1 for c in commands if c[3] == STALE))
         contacts = [(e, m) for e, m in zip(self.collisions.episodes, self._contact_modes)]
-        omap = loop.planner.obstacle_map
-        return NavResult(metrics, traj, replans, frames, world, contacts,
-                         None if omap is None else omap.geometry(), commands)
+        return NavResult(metrics, traj, replans, frames, world, contacts, _planner_map(loop.planner), commands)
 
     def _count_contacts(self, clearance: bool) -> None:
         """New contact episodes, each tagged with what the follower was doing (FOLLOW,
         TURN_IN_PLACE, BACK_OFF, IDLE)."""
         new = self.collisions.update(self.plant.data, clearance=clearance)
         self._contact_modes += [self.loop.planner.follower.mode] * new
+
+
+def _planner_map(planner):
+    """The planner's map at the end of a run as shapely geometry: the layered planner's local map's
+    occupied cells, the perception-space planner's obstacle map (None: it keeps none)."""
+    local = getattr(planner, "map", None)
+    if local is not None:
+        return local.geometry()
+    return None if planner.obstacle_map is None else planner.obstacle_map.geometry()

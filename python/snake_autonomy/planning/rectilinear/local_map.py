@@ -286,6 +286,17 @@ class LocalMap:
         d = self._unknown_dist[i, j] - 0.5 * self.params.cell_m
         return np.where(inside, np.maximum(d, 0.0), 0.0)
 
+    def geometry(self):
+        """The occupied cells as one shapely geometry in the world frame (empty: none, or not placed):
+        what a run's top view draws."""
+        from shapely.geometry import box
+        from shapely.ops import unary_union
+        if self.origin is None:
+            return unary_union([])
+        xs, ys = self.centres()
+        h = 0.5 * self.params.cell_m
+        return unary_union([box(xs[i] - h, ys[j] - h, xs[i] + h, ys[j] + h) for i, j in np.argwhere(self.occupied())])
+
     def grid(self) -> np.ndarray:
         """(n, n) int8 OCCUPIED / FREE / UNKNOWN, [i, j] = x, y (nav_msgs/OccupancyGrid's values)."""
         out = np.full(self.log_odds.shape, UNKNOWN, np.int8)
