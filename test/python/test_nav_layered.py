@@ -215,7 +215,7 @@ def test_the_layered_planner_leaves_the_bodys_reach_to_the_body_sweep(root):
     ended every arc before the passage), the body sweep alone judges the body."""
     passage = drawn_mask(boxes=[(0.4, 1.0, 0.25, 0.6), (0.4, 1.0, -0.6, -0.25)])
     assert LAYERED.sampler.body_clearance_m == pytest.approx(0.25)
-    for cfg in (LAYERED, NavConfig.from_yaml(root / "config" / "nav_layered.yaml")):
+    for cfg in (LAYERED, NavConfig.from_yaml(root / "config" / "nav.yaml")):
         f = RecedingHorizonFollower(dataclasses.replace(cfg.follower, kappa_rate_per_m_s=0.0))
         r = LayeredPlanner(K, 0.09, cfg, f, COBRA).replan(0.0, passage, T_GC, (0.0, 0.0, 0.0), (1.5, 0.0), 0.2)
         straight = next(a for a in r.selection.arcs if a.curvature_per_m == 0.0)
@@ -277,7 +277,7 @@ def test_body_sweep_lets_a_modelled_station_inside_an_obstacle_move_but_not_deep
     assert sweep.check(sweep.sweep(0.0, 0.0, 0.3), m2, np.eye(4)).free_m < 0.3
 
 
-@pytest.mark.parametrize("name", ["nav_layered.yaml", "nav_chang_rectilinear.yaml"])
+@pytest.mark.parametrize("name", ["nav.yaml", "nav_chang_rectilinear.yaml"])
 def test_the_loop_runs_the_layered_planner_its_config_names(root, name):
     from snake_autonomy.planning.rectilinear.nav_loop import FOLLOWING, NO_FREE_ARC, NavLoop
     cfg = NavConfig.from_yaml(root / "config" / name)
@@ -339,7 +339,7 @@ def test_the_simulators_truth_map_sets_every_cell_the_views_never_showed(root):
     from shapely.geometry import Point
     from snake_autonomy.planning.rectilinear.nav_loop import NavLoop
     from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
-    cfg = NavConfig.from_yaml(root / "config" / "nav_layered.yaml")
+    cfg = NavConfig.from_yaml(root / "config" / "nav.yaml")
     cfg = dataclasses.replace(cfg, map=dataclasses.replace(cfg.map, source="truth"))
     world = ObstacleMap(Point(-0.6, 0.0).buffer(0.1))             # behind the robot: never in view
     loop = NavLoop(cfg, 0.09, lambda img: np.zeros((K.height, K.width), bool), goal_xy=(2.0, 0.0),

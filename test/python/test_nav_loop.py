@@ -1,14 +1,20 @@
 """planner_node's ROS-free logic (planning/rectilinear/nav_loop.py): replans from the latest frame
-and pose, hold while waiting, with no free arc and at the goal; the image message conversions."""
+and pose, hold while waiting, with no free arc and at the goal; the image message conversions. The loop's
+rules are the same for either planner: these tests run the perception-space one (no body needed, a
+traversability image decides each arc); the layered one's loop: test_nav_layered.py."""
 import dataclasses
 import math
 
 import numpy as np
 import pytest
 
+from snake_autonomy.paths import config_path
 from snake_autonomy.planning.rectilinear.config import NavConfig
 from snake_autonomy.planning.rectilinear.nav_loop import (ERROR, FOLLOWING, GOAL_REACHED, NO_FREE_ARC, NO_GOAL,
                                                           STALE, WAITING, NavLoop)
+
+
+PERCEPTION_SPACE = config_path("nav_perception_space.yaml")
 
 
 def _pose(x, y, th, z=0.045):
@@ -19,7 +25,7 @@ def _pose(x, y, th, z=0.045):
 
 
 def _loop(ground_value, **kw):
-    cfg = NavConfig.from_yaml()
+    cfg = NavConfig.from_yaml(PERCEPTION_SPACE)
     # the footprint's near field (hidden under the view) counts as free: ask for more than it
     cfg = dataclasses.replace(cfg, sampler=dataclasses.replace(cfg.sampler, min_free_m=0.5))
     k = cfg.intrinsics
@@ -219,7 +225,7 @@ def test_a_stale_pose_or_a_stamp_ahead_of_the_clock_holds():
 
 
 def test_an_exception_in_the_tick_holds_and_the_next_tick_works():
-    cfg = dataclasses.replace(NavConfig.from_yaml())
+    cfg = dataclasses.replace(NavConfig.from_yaml(PERCEPTION_SPACE))
     cfg = dataclasses.replace(cfg, sampler=dataclasses.replace(cfg.sampler, min_free_m=0.5))
     k, calls = cfg.intrinsics, []
 

@@ -192,8 +192,9 @@ class PlannerInputsTest(unittest.TestCase):
 
 
     def test_map_and_traversability_mask_show_a_wall_ahead(self):
-        """nav/map (OccupancyGrid in the pose's frame, map.cell_m cells) marks cells near a wall the depth
-        frames show 0.5 m ahead; nav/traversability_mask is mono8 of the camera's size, 0 on the wall."""
+        """nav/map (OccupancyGrid in the pose's frame: the default layered planner's local map, local_map.cell_m
+        cells, occupied / free / unknown) marks cells near a wall the depth frames show 0.5 m ahead, and only
+        there; nav/traversability_mask is mono8 of the camera's size, 0 on the wall."""
         from nav_msgs.msg import OccupancyGrid
         from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera
         cfg = NavConfig.from_yaml()
@@ -225,10 +226,10 @@ class PlannerInputsTest(unittest.TestCase):
                 sub.unregister()
         m = got["nav/map"]
         self.assertEqual(m.header.frame_id, "map")
-        self.assertAlmostEqual(m.info.resolution, cfg.map.cell_m, places=6)
+        self.assertAlmostEqual(m.info.resolution, cfg.local_map.cell_m, places=6)
         self.assertEqual(len(m.data), m.info.width * m.info.height)
         grid = np.array(m.data, np.int8).reshape(m.info.height, m.info.width)
-        self.assertTrue(set(np.unique(grid)) <= {0, 100})
+        self.assertTrue(set(np.unique(grid)) <= {-1, 0, 100} and 0 in grid, np.unique(grid))
         j, i = np.nonzero(grid == 100)
         x = m.info.origin.position.x + (i + 0.5) * m.info.resolution
         self.assertTrue(np.all((x > 0.2) & (x < 1.0)), f"occupied cells at x {x.min():.2f}..{x.max():.2f} m")

@@ -44,7 +44,7 @@ SLACK_M = 0.02              # the body may come this much nearer than it is now 
 @dataclass(frozen=True)
 class SweepParams:
     """config/nav.yaml `body_sweep:`; the defaults are its values (COBRA's)."""
-    margin_m: float = 0.06                # clearance beyond half the body's width
+    margin_m: float = 0.05                # clearance beyond half the body's width
     station_m: float = 0.04               # body stations, tail to head
     step_m: float = 0.05                  # crawl samples
     reshape_keeps_centroid: bool = True   # COBRA's measured body; the 12-link robot's: about the middle

@@ -128,7 +128,7 @@ PLANNERS = ("perception_space", "layered")
 @dataclass(frozen=True)
 class PlannerChoice:
     """config/nav.yaml `planner:`: which local planner the loop runs."""
-    kind: str = "perception_space"      # perception_space (planner.py) | layered (layered_planner.py)
+    kind: str = "layered"               # layered (layered_planner.py) | perception_space (planner.py)
 
     def validate(self) -> List[str]:
         return [] if self.kind in PLANNERS else [f"kind: expected one of {', '.join(PLANNERS)}, got {self.kind!r}"]

@@ -46,7 +46,7 @@ from .unicycle import arc_poses
 class SamplerParams:
     """config/nav.yaml `sampler:`; the defaults are its values (COBRA's). The paper's planner: the
     keys marked "off" at 0, false or inf."""
-    num_arcs: int = 5
+    num_arcs: int = 13
     max_curvature_per_m: float = 3.0      # path curvature c = omega / v (from the gait map's range)
     horizon_m: float = 1.2                # length of each candidate arc
     spacing_m: float = 0.02               # poses along an arc
