@@ -6,14 +6,15 @@ import dataclasses
 import numpy as np
 from shapely.geometry import Point
 
+from snake_autonomy.paths import config_path
 from snake_autonomy.perception.ground_region import grow_from_bottom
 from snake_autonomy.planning.rectilinear.body_model import BodyGeometry
-from snake_autonomy.planning.rectilinear.config import NAV_YAML, NavConfig, T_ground_camera
+from snake_autonomy.planning.rectilinear.config import NavConfig, T_ground_camera
 from snake_autonomy.planning.rectilinear.follower import RecedingHorizonFollower
 from snake_autonomy.planning.rectilinear.obstacle_map import ObstacleMap
 from snake_autonomy.planning.rectilinear.planner import NavPlanner
 
-CFG = NavConfig.from_yaml(NAV_YAML.parent / "nav_perception_space.yaml")   # COBRA, the perception-space planner
+CFG = NavConfig.from_yaml(config_path("nav_perception_space.yaml"))   # COBRA, the perception-space planner
 K = CFG.intrinsics
 T_GC = T_ground_camera(CFG.mount, 0.046)        # the camera 4.6 cm above the floor
 HALF_LENGTH_M = 0.755                           # COBRA: (head 0.1565 + 11 x 0.123) / 2, BodyGeometry.of_robot

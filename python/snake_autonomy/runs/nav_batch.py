@@ -157,7 +157,7 @@ class NavResult:
     frames: List[np.ndarray] = field(default_factory=list)   # overlays at each replan
     world: Optional[World] = None
     contacts: list = field(default_factory=list)     # (collisions.ContactEpisode, the follower's mode)
-    obstacle_map: Any = None                          # the planner's map at the end (shapely; _planner_map)
+    obstacle_map: Any = None                          # the planner's map at the end (shapely; map_geometry)
     commands: list = field(default_factory=list)      # (t_s, gait, kappa_per_m, loop state) each command sent
 
     def write(self, out_dir) -> None:
@@ -395,19 +395,10 @@ class NavRun:
         metrics.update(self.poses.metrics(), pose_latency_s=self.pose_latency_s, depth_model=self.depth_model,
                        ticks_stale=sum(1 for c in commands if c[3] == STALE))
         contacts = [(e, m) for e, m in zip(self.collisions.episodes, self._contact_modes)]
-        return NavResult(metrics, traj, replans, frames, world, contacts, _planner_map(loop.planner), commands)
+        return NavResult(metrics, traj, replans, frames, world, contacts, loop.planner.map_geometry(), commands)
 
     def _count_contacts(self, clearance: bool) -> None:
         """New contact episodes, each tagged with what the follower was doing (FOLLOW,
         TURN_IN_PLACE, BACK_OFF, IDLE)."""
         new = self.collisions.update(self.plant.data, clearance=clearance)
         self._contact_modes += [self.loop.planner.follower.mode] * new
-
-
-def _planner_map(planner):
-    """The planner's map at the end of a run as shapely geometry: the layered planner's local map's
-    occupied cells, the perception-space planner's obstacle map (None: it keeps none)."""
-    local = getattr(planner, "map", None)
-    if local is not None:
-        return local.geometry()
-    return None if planner.obstacle_map is None else planner.obstacle_map.geometry()

@@ -246,6 +246,10 @@ class LayeredPlanner:
                     return side * k
         return None
 
+    def map_geometry(self):
+        """The local map's occupied cells as shapely geometry: what a run's top view draws."""
+        return self.map.geometry()
+
     def command(self, t_s: float, pose=None):
         return self.follower.update(t_s, pose)
 

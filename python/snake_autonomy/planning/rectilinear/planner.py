@@ -430,6 +430,10 @@ class NavPlanner:
                     return side * k
         return None
 
+    def map_geometry(self):
+        """The obstacle map as shapely geometry (None: map.source keeps none): what a run's top view draws."""
+        return None if self.obstacle_map is None else self.obstacle_map.geometry()
+
     def command(self, t_s: float, pose=None) -> Command:
         """pose: base_link's (x, y, theta) on the floor, or None to predict."""
         return self.follower.update(t_s, pose)
