@@ -400,9 +400,9 @@ class PlannerNode:
         self.pub_trav.publish(to_image(self.overlay(tick), "rgb8", stamp, "camera_color_optical_frame"))
         self.pub_mask.publish(traversability_mask(tick.ground, stamp, "camera_color_optical_frame"))
         omap = self.loop.planner.obstacle_map
-        if hasattr(self.loop.planner, "map"):                 # the layered planner's local map
+        if self.loop.cfg.planner.kind == "layered":           # its local map: occupied, seen free, unknown
             self.pub_map.publish(local_grid(self.loop.planner.map, stamp, self.world_frame))
-        elif omap is not None:
+        elif omap is not None:                               # the perception-space planner's obstacle map
             mp = self.loop.cfg.map
             self.pub_map.publish(occupancy(omap.geometry(), r.pose[:2], self.loop.goal_xy, mp.cell_m, mp.pad_m,
                                            stamp, self.world_frame))
